@@ -1,0 +1,242 @@
+// sim._core: the pybind11 face of the engine. The Python layer (sim/*.py) validates user input and
+// converts scenes and cameras into these arrays; see sim/_core.pyi for the documented signatures.
+#include <pybind11/functional.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <optional>
+#include <random>
+#include <stdexcept>
+#include <string>
+
+#include "rast5d/counters.h"
+#include "rast5d/kernel_costs.h"
+#include "rast5d/probe.h"
+#include "rast5d/render.h"
+
+namespace py = pybind11;
+using namespace rast5d;
+
+namespace {
+
+using FArr = py::array_t<float, py::array::c_style | py::array::forcecast>;
+using IArr = py::array_t<std::int32_t, py::array::c_style | py::array::forcecast>;
+
+void require_shape(const py::array& a, std::initializer_list<py::ssize_t> shape, const char* name) {
+  bool ok = a.ndim() == static_cast<py::ssize_t>(shape.size());
+  int k = 0;
+  for (py::ssize_t d : shape) {
+    if (!ok) break;
+    if (d >= 0 && a.shape(k) != d) ok = false;
+    ++k;
+  }
+  if (!ok) {
+    std::string got = "(";
+    for (py::ssize_t i = 0; i < a.ndim(); ++i) {
+      if (i) got.append(", ");
+      got.append(std::to_string(a.shape(i)));
+    }
+    got.append(")");
+    throw std::invalid_argument(std::string(name).append(": unexpected shape ").append(got));
+  }
+}
+
+SampleTable make_table(const FArr& samples, int grid, const IArr& lens_index, const FArr& lens_uv) {
+  require_shape(samples, {-1, -1, -1, 5}, "samples");
+  const int P = static_cast<int>(samples.shape(0));
+  if (samples.shape(1) != P) throw std::invalid_argument("samples: the table must be P x P pixels");
+  const int spp = static_cast<int>(samples.shape(2));
+  const bool inter = lens_index.size() > 0;
+  if (inter) require_shape(lens_index, {P, P, spp}, "lens_index");
+  if (inter) require_shape(lens_uv, {-1, 2}, "lens_uv");
+  return SampleTable(P, spp, samples.data(), grid, inter ? lens_index.data() : nullptr,
+                     inter ? static_cast<int>(lens_uv.shape(0)) : 0, inter ? lens_uv.data() : nullptr);
+}
+
+py::dict counters_to_dict(const Counters& c) {
+  py::dict d;
+  for (int i = 0; i < kNumCounters; ++i)
+    d[py::str(std::string(kCounterInfo[i].name))] = py::int_(c.v[i]);
+  return d;
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_core, m) {
+  m.doc() = "rast5d engine: a functional, operation-counting 5D stochastic rasterizer";
+
+  py::enum_<LensShape>(m, "LensShape")
+      .value("square", LensShape::kSquare)
+      .value("disk", LensShape::kDisk)
+      .value("hexagon", LensShape::kHexagon);
+
+  py::class_<RenderParams>(m, "RenderParams")
+      .def(py::init<>())
+      .def_readwrite("width", &RenderParams::width)
+      .def_readwrite("height", &RenderParams::height)
+      .def_readwrite("coc_x_px", &RenderParams::coc_x_px)
+      .def_readwrite("coc_y_px", &RenderParams::coc_y_px)
+      .def_readwrite("focus_w", &RenderParams::focus_w)
+      .def_readwrite("near_w", &RenderParams::near_w)
+      .def_readwrite("lens_shape", &RenderParams::lens_shape)
+      .def_readwrite("algorithm", &RenderParams::algorithm)
+      .def_readwrite("tile_size", &RenderParams::tile_size)
+      .def_readwrite("lens_grid", &RenderParams::lens_grid)
+      .def_readwrite("hinterleave_tile", &RenderParams::hinterleave_tile)
+      .def_readwrite("threads", &RenderParams::threads)
+      .def_readwrite("bin_size", &RenderParams::bin_size)
+      .def_readwrite("halfspace_h", &RenderParams::halfspace_h)
+      .def_readwrite("halfspace_H", &RenderParams::halfspace_H)
+      .def_readwrite("selective_H", &RenderParams::selective_H)
+      .def_readwrite("oracle_full", &RenderParams::oracle_full)
+      .def_readwrite("c_sample", &RenderParams::c_sample)
+      .def_readwrite("c_tile", &RenderParams::c_tile)
+      .def_readwrite("backface_cull", &RenderParams::backface_cull)
+      .def_readwrite("exact_ops", &RenderParams::exact_ops)
+      .def_readwrite("count_optimal", &RenderParams::count_optimal)
+      .def_readwrite("table_has_lens", &RenderParams::table_has_lens)
+      .def_readwrite("table_has_time", &RenderParams::table_has_time);
+
+  m.def(
+      "render",
+      [](const RenderParams& p, const FArr& v0, const FArr& v1, const FArr& colors, const FArr& samples,
+         const IArr& lens_index, const FArr& lens_uv, bool export_samples) {
+        require_shape(v0, {-1, 3, 3}, "v0");
+        const py::ssize_t n = v0.shape(0);
+        require_shape(v1, {n, 3, 3}, "v1");
+        require_shape(colors, {n, 3, 3}, "colors");
+        SampleTable table = make_table(samples, p.lens_grid, lens_index, lens_uv);
+        SceneArrays scene{static_cast<int>(n), v0.data(), v1.data(), colors.data()};
+        std::optional<py::error_already_set> pending;
+        RenderResult res;
+        {
+          py::gil_scoped_release release;
+          res = render(
+              p, scene, table,
+              [&pending]() {
+                py::gil_scoped_acquire acquire;
+                if (PyErr_CheckSignals() != 0) {
+                  pending.emplace();
+                  return true;
+                }
+                return false;
+              },
+              export_samples);
+        }
+        if (pending) throw *pending;
+        py::array_t<float> image({p.height, p.width, 3});
+        std::copy(res.image.begin(), res.image.end(), image.mutable_data());
+        py::dict out;
+        out["image"] = image;
+        out["counters"] = counters_to_dict(res.counters);
+        if (export_samples) {
+          const py::ssize_t spp = table.spp();
+          py::array_t<float> depth({static_cast<py::ssize_t>(p.height), static_cast<py::ssize_t>(p.width), spp});
+          py::array_t<std::int32_t> tri({static_cast<py::ssize_t>(p.height), static_cast<py::ssize_t>(p.width), spp});
+          std::copy(res.sample_depth.begin(), res.sample_depth.end(), depth.mutable_data());
+          std::copy(res.sample_triangle.begin(), res.sample_triangle.end(), tri.mutable_data());
+          out["sample_depth"] = depth;
+          out["sample_triangle"] = tri;
+        }
+        return out;
+      },
+      py::arg("params"), py::arg("v0"), py::arg("v1"), py::arg("colors"), py::arg("samples"),
+      py::arg("lens_index"), py::arg("lens_uv"), py::arg("export_samples") = false,
+      "Render pixel-homogeneous triangles; returns {'image', 'counters'[, 'sample_depth', "
+      "'sample_triangle']}. The GIL is released; Ctrl-C interrupts.");
+
+  m.def(
+      "validate",
+      [](const RenderParams& p, const FArr& samples, const IArr& lens_index, const FArr& lens_uv) {
+        SampleTable table = make_table(samples, p.lens_grid, lens_index, lens_uv);
+        validate_params(p, table);
+      },
+      py::arg("params"), py::arg("samples"), py::arg("lens_index"), py::arg("lens_uv"),
+      "Raise ValueError if the parameters are invalid for this sample table.");
+
+  m.def(
+      "lens_grid_buckets",
+      [](const FArr& samples, int grid) {
+        if (grid < 1 || grid > 64) throw std::invalid_argument("grid: expected 1..64");
+        SampleTable t = make_table(samples, grid, IArr(), FArr());
+        const py::ssize_t P = t.period(), S = t.spp(), C = static_cast<py::ssize_t>(grid) * grid;
+        py::array_t<std::int32_t> order({P, P, S}), counts({P, P, C}), offsets({P, P, C});
+        auto o = order.mutable_unchecked<3>();
+        auto cn = counts.mutable_unchecked<3>();
+        auto of = offsets.mutable_unchecked<3>();
+        for (int y = 0; y < P; ++y)
+          for (int x = 0; x < P; ++x) {
+            const PixelSamples ps = t.pixel(x, y);
+            for (int s = 0; s < S; ++s) o(y, x, s) = ps.cell_order[s];
+            for (int c = 0; c < C; ++c) {
+              of(y, x, c) = ps.cell_offsets[c];
+              cn(y, x, c) = ps.cell_offsets[c + 1] - ps.cell_offsets[c];
+            }
+          }
+        return py::make_tuple(order, counts, offsets);
+      },
+      py::arg("samples"), py::arg("grid"),
+      "Lens-grid buckets (001 Fig. 10): (order (P,P,spp), counts (P,P,G*G), offsets (P,P,G*G)).");
+
+  m.def(
+      "probe",
+      [](const RenderParams& p, const FArr& v0, const FArr& v1, const FArr& points, bool force_general) {
+        require_shape(v0, {3, 3}, "v0");
+        require_shape(v1, {3, 3}, "v1");
+        require_shape(points, {-1, 5}, "points");
+        const int m_pts = static_cast<int>(points.shape(0));
+        ProbeResult r = probe_samples(p, v0.data(), v1.data(), points.data(), m_pts, force_general);
+        py::dict out;
+        py::array_t<bool> covered(m_pts), hit(m_pts);
+        py::array_t<float> depth(m_pts), w_hit(m_pts);
+        for (int i = 0; i < m_pts; ++i) {
+          covered.mutable_data()[i] = r.covered[i];
+          hit.mutable_data()[i] = r.hit[i];
+          depth.mutable_data()[i] = r.depth[i];
+          w_hit.mutable_data()[i] = r.w_hit[i];
+        }
+        out["dim_class"] = r.dim_class;
+        out["covered"] = covered;
+        out["hit"] = hit;
+        out["depth"] = depth;
+        out["w_hit"] = w_hit;
+        return out;
+      },
+      py::arg("params"), py::arg("v0"), py::arg("v1"), py::arg("points"), py::arg("force_general") = false,
+      "Evaluate the exact sample test of one triangle at points (M, 5) = (sx, sy, u, v, t).");
+
+  m.def("counter_docs", []() {
+    py::dict d;
+    for (const auto& info : kCounterInfo)
+      d[py::str(std::string(info.name))] =
+          py::make_tuple(std::string(info.unit), std::string(info.description));
+    return d;
+  });
+
+  m.def("algorithms", []() {
+    py::list l;
+    for (const auto& a : algorithms())
+      l.append(py::make_tuple(a.name, a.description, a.needs_interleaved_table));
+    return l;
+  });
+
+  m.def(
+      "measure_kernel_costs",
+      [](int trials, std::uint64_t seed) {
+        py::dict d;
+        std::mt19937_64 g(seed);
+        for (auto& [name, e] : KernelCostRegistry::entries()) {
+          std::uint64_t lo = ~0ull, hi = 0;
+          for (int i = 0; i < trials; ++i) {
+            const std::uint64_t n = e.run_counted(g);
+            lo = std::min(lo, n);
+            hi = std::max(hi, n);
+          }
+          d[py::str(name)] = py::make_tuple(e.documented, lo, hi);
+        }
+        return d;
+      },
+      py::arg("trials") = 100, py::arg("seed") = 1,
+      "Run every registered kernel on the counting scalar type: {name: (documented, min, max)}.");
+}

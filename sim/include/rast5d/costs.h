@@ -1,0 +1,36 @@
+// Documented operation costs of every kernel (ops per executed kernel; ADD, MUL, MADD, CMP, MIN,
+// MAX and RCP count one each, 001_3248aaf17c219d5e.txt §6.2). The fast path charges these
+// constants; tests/test_op_costs.py runs each kernel on the counting scalar type and checks that
+// the tallies equal them, and test_invariants checks whole renders in both modes agree.
+// docs/op_costs.md explains each figure.
+#pragma once
+
+#include <cstdint>
+
+namespace rast5d::cost {
+
+// ---- sample test (sample_test.h) ----
+inline constexpr std::uint64_t kEdges = 18;      // 6 MADD relative coords, 3x(2 MUL + SUB), det 3
+inline constexpr std::uint64_t kSigns = 4;       // sign(det), 3 sign(e_i)
+inline constexpr std::uint64_t kShear = 6;       // 6 MADD
+inline constexpr std::uint64_t kLerp = 9;        // 9 MADD
+inline constexpr std::uint64_t kShearMoving = 12;  // 6 MADD coefficients + 6 MADD shear
+inline constexpr std::uint64_t kTieBreak = 12;   // per zero edge: 4 MADD, 2x(2 MUL + SUB), 2 CMP
+
+inline constexpr std::uint64_t kInside2D = kEdges + kSigns;                        // 22
+inline constexpr std::uint64_t kInside3D = kLerp + kEdges + kSigns;                // 31
+inline constexpr std::uint64_t kInside4D = kShear + kEdges + kSigns;               // 28
+inline constexpr std::uint64_t kInside5D = kLerp + kShearMoving + kEdges + kSigns;  // 43
+
+// ---- covered samples (same for all algorithms; ops.interp) ----
+inline constexpr std::uint64_t kDepth = 6;      // 2 ADD, RCP, MUL, MADD, CMP (near plane)
+inline constexpr std::uint64_t kDepthTest = 1;  // CMP against the depth buffer
+inline constexpr std::uint64_t kColor = 13;     // RCP, 3 MUL, 3x(MUL + 2 MADD)
+
+// ---- triangle setup (setup.h) ----
+inline constexpr std::uint64_t kSetupMotion = 9;       // dX, dY, dW: 9 SUB
+inline constexpr std::uint64_t kSetupShear = 6;        // static cx, cy: 6 MADD
+inline constexpr std::uint64_t kBoundsPoint = 7;       // RCP, 2 MUL, 2 MIN, 2 MAX
+inline constexpr std::uint64_t kBoundsPointLens = 14;  // RCP, 2 MUL, MADD, 2 MUL, 4 ADD, 2 MIN, 2 MAX
+
+}  // namespace rast5d::cost

@@ -1,0 +1,43 @@
+// Render parameters handed from Python (sim/pipeline.py validates them first).
+#pragma once
+
+#include <string>
+
+namespace rast5d {
+
+enum class LensShape : int { kSquare = 0, kDisk = 1, kHexagon = 2 };
+
+struct RenderParams {
+  // Image.
+  int width = 0;
+  int height = 0;
+  // Camera, in the engine's pixel-homogeneous clip space (see docs/conventions.md):
+  // X_h = (x_clip + w) * width / 2, Y_h = (w - y_clip) * height / 2, W = w.
+  // Depth of field is the shear X'_h = X_h + u * coc_x_px * (W - F), Y'_h = Y_h + v * coc_y_px * (W - F).
+  double coc_x_px = 0.0;  // CoC radius at infinity in pixels (signed shear coefficient for u)
+  double coc_y_px = 0.0;  // same for v (negative: image rows grow downwards, lens v points up)
+  double focus_w = 1.0;   // F: view depth of the focus plane
+  double near_w = 0.01;   // near plane: samples whose hit point has W < near_w are rejected
+  LensShape lens_shape = LensShape::kDisk;
+  // Pipeline.
+  std::string algorithm = "bruteforce";
+  int tile_size = 2;       // tile edge in pixels: 1, 2, 4 or 8
+  int lens_grid = 4;       // G: G x G lens-grid cells over [-1, 1]^2
+  int hinterleave_tile = 8;
+  int threads = 0;         // 0: all hardware threads
+  int bin_size = 64;       // screen bin edge in pixels (multiple of 8)
+  bool halfspace_h = true;  // 001 Table 2 switches
+  bool halfspace_H = true;
+  bool selective_H = true;  // 001 Appendix A oracle
+  bool oracle_full = false; // Eq. 11-12 instead of the simplified Eq. 15
+  double c_sample = -1.0;   // oracle sample-test cost (ops); < 0: the documented 4D sample-test cost
+  double c_tile = -1.0;     // oracle cost of one H_j line against one tile; < 0: documented
+  bool backface_cull = false;
+  bool exact_ops = false;   // run kernels on the counting scalar type
+  bool count_optimal = true;  // instrument tile.samples_optimal
+  // Sample table facts (filled by sim.render from the table).
+  bool table_has_lens = true;
+  bool table_has_time = true;
+};
+
+}  // namespace rast5d
