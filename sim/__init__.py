@@ -1,4 +1,35 @@
-"""rast5d engine: a functional, operation-counting 5D stochastic rasterizer (C++ via pybind11)."""
+"""rast5d engine: a functional, operation-counting 5D stochastic rasterizer (C++ via pybind11).
+
+Public contract (ARCHITECTURE.md §Public contract)::
+
+    camera = sim.Camera(width=256, height=256, fov_y_deg=45, focus_distance=5.0, coc_px=10)
+    table  = sim.SampleTable.stratified(spp=16, seed=1)
+    result = sim.render(scene, camera, table, sim.PipelineConfig(algorithm="tile", tile_size=2))
+    result.image, result.stats, result.flat_stats
+"""
 from . import _core
 
-__all__ = ["_core"]
+from .errors import ConfigError, SceneInputError
+from .pipeline import PipelineConfig, algorithm_docs, algorithm_names
+from .png import linear_to_srgb8, write_png
+
+from .camera import Camera
+from .render import Result, memory_estimate, render
+from .sample_table import SampleTable
+from .stats import counter_docs
+
+__all__ = [
+    "Camera",
+    "ConfigError",
+    "PipelineConfig",
+    "Result",
+    "SampleTable",
+    "SceneInputError",
+    "algorithm_docs",
+    "algorithm_names",
+    "counter_docs",
+    "linear_to_srgb8",
+    "memory_estimate",
+    "render",
+    "write_png",
+]

@@ -197,6 +197,7 @@ bool setup_triangle(const float* v0, const float* v1, const float* col, std::uin
     if (!(v < limit)) return limit;
     return v < 0.0 ? 0 : static_cast<int>(v);
   };
+  o.lo_x = lo_x, o.hi_x = hi_x, o.lo_y = lo_y, o.hi_y = hi_y;
   o.bx0 = to_lo(lo_x, p.width);
   o.bx1 = to_hi(hi_x, p.width);
   o.by0 = to_lo(lo_y, p.height);

@@ -33,4 +33,25 @@ inline constexpr std::uint64_t kSetupShear = 6;        // static cx, cy: 6 MADD
 inline constexpr std::uint64_t kBoundsPoint = 7;       // RCP, 2 MUL, 2 MIN, 2 MAX
 inline constexpr std::uint64_t kBoundsPointLens = 14;  // RCP, 2 MUL, MADD, 2 MUL, 4 ADD, 2 MIN, 2 MAX
 
+// ---- tile tests (tile_tests.h) ----
+inline constexpr std::uint64_t kLensVertex = 10;        // RCP, 2 MUL, MADD, 2 MUL, 2 RCP, 2 MUL
+inline constexpr std::uint64_t kLensVertexInFocus = 6;  // W == F: no reciprocal of b
+inline constexpr std::uint64_t kGapVertex = 4;          // per vertex per axis: 2 MADD, MIN, MAX
+inline constexpr std::uint64_t kGapVertexInFocus = 2;   // 2 CMP
+inline constexpr std::uint64_t kAxisSetGap = 5;         // 5 CMP per gap that is not blocked
+// axis_cells: 1 MADD per finite cut end (= AxisSet::n_cmp); per-sample axis_pass: n_cmp CMP
+inline constexpr std::uint64_t kBoxDisk = 7;            // 2 MIN, 2 MAX, MUL, MADD, CMP
+inline constexpr std::uint64_t kBoxHexagon = 14;        // 4 MUL, 4 MADD, 6 CMP
+inline constexpr std::uint64_t kEdgeSetup = 25;         // q x r, d, line constants, v
+inline constexpr std::uint64_t kEdgeSetupParallel = 17; // d_w == 0: no focus-plane intersection
+inline constexpr std::uint64_t kTangentCorners = 4;     // 4 CMP (0 for parallel edges)
+inline constexpr std::uint64_t kLineAtCorner = 4;       // 4 MADD
+inline constexpr std::uint64_t kLineCellsBase = 7;      // 2 CMP, 2 MUL, 2 MADD, ADD; + rows + 2/cell
+inline constexpr std::uint64_t kEdges2DSetup = 28;      // 3 edges x 3 x (MUL + MADD), det 3, CMP, 6 CMP
+inline constexpr std::uint64_t kTile2D = 9;             // 3 x (2 MADD + CMP)
+inline constexpr std::uint64_t kBBoxTile = 4;           // 4 CMP against the triangle's bounds
+inline constexpr std::uint64_t kOrientation = 45;       // 3 det (9 each), 2 MUL, 4 corners x (2 ADD, 2 CMP)
+inline constexpr std::uint64_t kOracleSimplified = 6;   // per edge: 2 SUB, 3 MUL, CMP (001 Eq. 15, 13)
+inline constexpr std::uint64_t kOracleFull = 18;        // per edge: 4 SUB, 2 x F(a,b) (5 each), 3 MUL, CMP
+
 }  // namespace rast5d::cost

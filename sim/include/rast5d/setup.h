@@ -40,8 +40,10 @@ struct TriSetup {
   float dX[3], dY[3], dW[3];
   float cx[3], cy[3];
   float color[3][3];
-  // Conservative pixel bounds, clipped to the image: [bx0, bx1) x [by0, by1).
+  // Conservative pixel bounds, clipped to the image: [bx0, bx1) x [by0, by1), and the unrounded
+  // bounds they came from (before widening and clipping).
   int bx0 = 0, by0 = 0, bx1 = 0, by1 = 0;
+  double lo_x = 0, hi_x = 0, lo_y = 0, hi_y = 0;
   // Footprint for tile tests, in double: a convex polygon with W >= near (static triangles: the
   // triangle or its near-clipped polygon, 3 or 4 vertices; moving triangles: poly_n = 0).
   int poly_n = 0;

@@ -1,0 +1,195 @@
+// Per-triangle tile-test setup shared by the tile-based algorithms (tile, tile_interleaved, laine):
+// the lens projection of the footprint vertices (h_i lines), the triangle's orientation over the
+// lens, the per-edge H_j constants and the selective-H oracle (001 Appendix A).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+
+#include "rast5d/costs.h"
+#include "rast5d/setup.h"
+#include "rast5d/tile_tests.h"
+#include "rast5d/traversal.h"
+
+namespace rast5d {
+
+struct Footprint {
+  // Vertices whose lens projections bound the triangle: the static footprint polygon (3 or 4), or
+  // the 6 shutter-end vertices of a moving triangle (h_i lines only), all with W > 0.
+  int n = 0;
+  tiletest::LensVertex lv[6];
+  double P[6][3];
+  bool h_valid = false;  // false: moving and may cross the near plane (no tile test possible)
+  // H_j lines (static triangles only).
+  int sigma = 0;         // orientation over the lens, 0 if it changes sign (no H_j culling)
+  int n_edges = 0;
+  tiletest::EdgeH edges[4];
+  int edges_enabled = 0, edges_disabled = 0;
+};
+
+// Determinant of three columns (9 ops: cross product 6, dot 3).
+template <class D>
+inline D det3_columns(const D a[3], const D b[3], const D c[3]) {
+  // rows are vertices; columns a, b, c: det = a . (b x c) over the vertex index
+  const D x0 = madd(b[1], c[2], -(b[2] * c[1]));
+  const D x1 = madd(b[2], c[0], -(b[0] * c[2]));
+  const D x2 = madd(b[0], c[1], -(b[1] * c[0]));
+  return madd(a[0], x0, madd(a[1], x1, a[2] * x2));
+}
+
+// Orientation of the (static) triangle seen from the lens-square corners: det(u, v) = D0 + u Du +
+// v Dv (the u v term vanishes). Returns +1/-1 if the sign is the same (clearly) at all four
+// corners, else 0. Cost: cost::kOrientation.
+template <class D>
+inline int lens_orientation(const TriSetup& tri, const FrameConst& fc) {
+  D X[3], Y[3], W[3], one[3];
+  for (int j = 0; j < 3; ++j) X[j] = D(tri.X[j]), Y[j] = D(tri.Y[j]), W[j] = D(tri.W[j]), one[j] = D(1.0);
+  const D d0 = det3_columns(X, Y, W);
+  const D du = det3_columns(one, Y, W) * D(-(fc.kx_d * fc.focus_d));
+  const D dv = det3_columns(X, one, W) * D(-(fc.ky_d * fc.focus_d));
+  const double scale = std::fabs(raw(d0)) + std::fabs(raw(du)) + std::fabs(raw(dv));
+  int pos = 0, neg = 0;
+  for (int k = 0; k < 4; ++k) {
+    const D su = (k & 1) ? du : -du, sv = (k & 2) ? dv : -dv;
+    const D val = d0 + su + sv;
+    const double thr = 1e-9 * scale;
+    const bool p = val > D(thr);
+    const bool q = val < D(-thr);
+    pos += p, neg += q;
+  }
+  return pos == 4 ? 1 : (neg == 4 ? -1 : 0);
+}
+
+// Build the footprint. Operations go to `ops` (the caller charges them to ops.setup only in the
+// triangle's first bin). with_H: also set up H_j lines and the oracle.
+template <class A>
+inline Footprint build_footprint(const TriSetup& tri, const Frame& f, bool with_H, std::uint64_t& ops) {
+  using D = typename A::f64;
+  const FrameConst& fc = f.fc;
+  const RenderParams& p = f.p;
+  Footprint fp;
+  const D neg_f(-fc.focus_d), kx(fc.kx_d), ky(fc.ky_d);
+  auto add_vertex = [&](double X, double Y, double W) {
+    fp.P[fp.n][0] = X, fp.P[fp.n][1] = Y, fp.P[fp.n][2] = W;
+    fp.lv[fp.n] = tiletest::lens_vertex(D(X), D(Y), D(W), neg_f, kx, ky);
+    charge<A>(ops, fp.lv[fp.n].kx == 0 && fp.lv[fp.n].ky == 0 ? cost::kLensVertexInFocus : cost::kLensVertex);
+    ++fp.n;
+  };
+  if (!tri.moving) {
+    for (int j = 0; j < tri.poly_n; ++j) add_vertex(tri.poly[j][0], tri.poly[j][1], tri.poly[j][2]);
+    fp.h_valid = true;
+  } else if (!tri.full_bounds) {
+    for (int e = 0; e < 2; ++e)
+      for (int j = 0; j < 3; ++j)
+        add_vertex(static_cast<double>(tri.X[j]) + (e ? static_cast<double>(tri.dX[j]) : 0.0),
+                   static_cast<double>(tri.Y[j]) + (e ? static_cast<double>(tri.dY[j]) : 0.0),
+                   static_cast<double>(tri.W[j]) + (e ? static_cast<double>(tri.dW[j]) : 0.0));
+    fp.h_valid = true;
+  }
+  if (!with_H || tri.moving) return fp;
+
+  fp.sigma = lens_orientation<D>(tri, fc);
+  charge<A>(ops, cost::kOrientation);
+  if (fp.sigma == 0) return fp;
+  // Selective H_j oracle (001 Appendix A): N_samples * C_sample < N_tiles * C_tile disables.
+  const int T = p.tile_size, G = p.lens_grid;
+  const double n_tiles = static_cast<double>((tri.bx1 - 1) / T - tri.bx0 / T + 1) *
+                         static_cast<double>((tri.by1 - 1) / T - tri.by0 / T + 1);
+  const double c_sample = p.c_sample >= 0 ? p.c_sample : static_cast<double>(cost::kInside4D);
+  const double c_tile = p.c_tile >= 0 ? p.c_tile
+                                      : static_cast<double>(cost::kTangentCorners +
+                                                            2 * (cost::kLineAtCorner + cost::kLineCellsBase + G +
+                                                                 2 * G * G));
+  D tile_budget(0.0);
+  if (p.selective_H) {
+    tile_budget = D(n_tiles) * D(c_tile);
+    charge<A>(ops, 1);
+  }
+  const double spp = f.table.spp();
+  fp.n_edges = fp.n;
+  for (int i = 0; i < fp.n; ++i) {
+    const int k = (i + 1) % fp.n;
+    fp.edges[i] = tiletest::edge_setup(fp.P[i], fp.P[k], D(fc.focus_d), kx, ky);
+    charge<A>(ops, fp.edges[i].parallel ? cost::kEdgeSetupParallel : cost::kEdgeSetup);
+    if (!fp.edges[i].active) continue;
+    if (p.selective_H) {
+      const tiletest::LensVertex &a = fp.lv[i], &b = fp.lv[k];
+      D n_samples;
+      if (!p.oracle_full) {  // Eq. 15: N = R_S / 2 |X_q - X_p| |Y_q - Y_p|
+        const D dx = D(b.ax) - D(a.ax), dy = D(b.ay) - D(a.ay);
+        n_samples = (vabs(dx) * vabs(dy)) * D(0.5 * spp);
+      } else {  // Eq. 9-12: N = R_S / 8 F(a, b) F(c, d)
+        const D da = D(b.ax) - D(a.ax), db = D(b.bx) - D(a.bx);
+        const D dc = D(b.ay) - D(a.ay), dd = D(b.by) - D(a.by);
+        auto Ffun = [](D x, D y) {
+          const bool big = vabs(x) >= vabs(y);
+          const D f1 = vabs(x) * D(2.0);
+          const D f2 = madd(x * x, rcp(vabs(y)), vabs(y));
+          return big ? f1 : f2;
+        };
+        n_samples = (Ffun(da, db) * Ffun(dc, dd)) * D(spp / 8.0);
+      }
+      const bool keep = !(n_samples * D(c_sample) < tile_budget);
+      charge<A>(ops, p.oracle_full ? cost::kOracleFull : cost::kOracleSimplified);
+      if (!keep) {
+        fp.edges[i].active = false;
+        ++fp.edges_disabled;
+        continue;
+      }
+    }
+    ++fp.edges_enabled;
+  }
+  return fp;
+}
+
+// h_i lines of one tile: the active u and v sets. Returns false if either is empty.
+// Charges the tile-stage operations to `ops`.
+template <class A>
+inline bool tile_h_sets(const Footprint& fp, double x0, double x1, double y0, double y1,
+                        tiletest::AxisSet& sx, tiletest::AxisSet& sy, std::uint64_t& ops) {
+  using D = typename A::f64;
+  std::uint64_t doc = 0;
+  for (int j = 0; j < fp.n; ++j) {
+    doc += fp.lv[j].kx ? cost::kGapVertex : cost::kGapVertexInFocus;
+    doc += fp.lv[j].ky ? cost::kGapVertex : cost::kGapVertexInFocus;
+  }
+  const tiletest::Gaps gx = tiletest::axis_gaps(fp.lv, fp.n, false, D(x0), D(x1));
+  const tiletest::Gaps gy = tiletest::axis_gaps(fp.lv, fp.n, true, D(y0), D(y1));
+  sx = tiletest::axis_set<D>(gx);
+  sy = tiletest::axis_set<D>(gy);
+  for (int k = 0; k < 2; ++k) doc += (gx.blocked[k] ? 0 : cost::kAxisSetGap) + (gy.blocked[k] ? 0 : cost::kAxisSetGap);
+  charge<A>(ops, doc);
+  return !sx.empty && !sy.empty;
+}
+
+// Is the sample's (u, v, t) inside the exact active region of the (unexpanded) tile
+// [tx, tx + T) x [ty, ty + T)? Instrumentation for tile.samples_optimal (uncounted).
+inline bool in_exact_region(const TriSetup& tri, const Footprint& fp, const FrameConst& fc,
+                            const PixelSamples& ps, int s, int tx, int ty, int T) {
+  const double u = ps.u[s], v = ps.v[s];
+  if (!tri.moving)
+    return tiletest::footprint_overlaps_tile(fp.P, fp.n, fc.kx_d, fc.ky_d, fc.focus_d, u, v, tx, tx + T, ty,
+                                             ty + T);
+  const double t = ps.t[s];
+  double P[3][3];
+  for (int j = 0; j < 3; ++j) {
+    P[j][0] = tri.X[j] + t * static_cast<double>(tri.dX[j]);
+    P[j][1] = tri.Y[j] + t * static_cast<double>(tri.dY[j]);
+    P[j][2] = tri.W[j] + t * static_cast<double>(tri.dW[j]);
+    if (!(P[j][2] > fc.near_d)) return true;  // crosses the near plane at t: not evaluated
+  }
+  return tiletest::footprint_overlaps_tile(P, 3, fc.kx_d, fc.ky_d, fc.focus_d, u, v, tx, tx + T, ty, ty + T);
+}
+
+// Lens-grid cells that intersect the lens shape (a sample can only live in those).
+inline tiletest::CellMask lens_cells(LensShape shape, int grid) {
+  tiletest::CellMask m;
+  for (int j = 0; j < grid; ++j)
+    for (int i = 0; i < grid; ++i)
+      if (tiletest::box_overlaps_lens<double>(shape, SampleTable::cell_lo(i, grid), SampleTable::cell_hi(i, grid),
+                                              SampleTable::cell_lo(j, grid), SampleTable::cell_hi(j, grid)))
+        m.set(j * grid + i);
+  return m;
+}
+
+}  // namespace rast5d

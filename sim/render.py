@@ -1,0 +1,163 @@
+"""sim.render: hand a scene, a camera and a sample table to the engine, get a Result."""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import _core
+from .camera import Camera
+from .errors import ConfigError, SceneInputError
+from .pipeline import PipelineConfig
+from .stats import flat_stats, nest
+
+_LENS_ENUM = {"square": _core.LensShape.square, "disk": _core.LensShape.disk, "hexagon": _core.LensShape.hexagon}
+
+
+@dataclass
+class Result:
+    """What a render returns.
+
+    image       (H, W, 3) float32 linear RGB; row 0 is the top; background is black
+    stats       nested dict of counters and derived figures: stats["raster"]["ste"]
+    flat_stats  flat dict: {"raster.samples_tested": ..., "ops.total": ..., "time.wall_s": ...}
+    sample_depth, sample_triangle  (H, W, spp) per-sample depth z = 1 - near/w (+inf empty) and
+                winning triangle index (-1 empty), only with render(..., export_samples=True)
+    """
+
+    image: np.ndarray
+    flat_stats: dict
+    config: dict = field(default_factory=dict)
+    sample_depth: np.ndarray | None = None
+    sample_triangle: np.ndarray | None = None
+
+    @property
+    def stats(self) -> dict:
+        return nest(self.flat_stats)
+
+    def save_png(self, path):
+        from .png import write_png
+
+        return write_png(path, self.image)
+
+
+def _scene_arrays(scene) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Duck-typed scene (models.Scene or any object with these attributes) -> validated arrays."""
+    try:
+        positions = scene.positions
+    except AttributeError:
+        raise SceneInputError(f"scene: expected an object with .positions (e.g. models.Scene), got {type(scene).__name__}") from None
+    positions_t1 = getattr(scene, "positions_t1", None)
+    colors = getattr(scene, "colors", None)
+
+    def arr(name, a, last):
+        try:
+            a = np.asarray(a)
+        except Exception:  # noqa: BLE001 - anything not array-like is a bad input
+            raise SceneInputError(f"scene.{name}: not array-like ({type(a).__name__})") from None
+        if a.dtype.kind not in "fiu":
+            raise SceneInputError(f"scene.{name}: expected a numeric array, got dtype {a.dtype}")
+        if a.ndim != 3 or a.shape[1:] != (3, last):
+            raise SceneInputError(f"scene.{name}: expected shape (N, 3, {last}), got {a.shape}")
+        return a.astype(np.float64, copy=False)
+
+    p0 = arr("positions", positions, 3)
+    n = p0.shape[0]
+    p1 = p0 if positions_t1 is None else arr("positions_t1", positions_t1, 3)
+    if p1.shape[0] != n:
+        raise SceneInputError(f"scene.positions_t1: expected {n} triangles, got {p1.shape[0]}")
+    col = np.full((n, 3, 3), 0.8) if colors is None else arr("colors", colors, 3)
+    if col.shape[0] != n:
+        raise SceneInputError(f"scene.colors: expected {n} triangles, got {col.shape[0]}")
+    for name, a in (("positions", p0), ("positions_t1", p1), ("colors", col)):
+        bad = ~np.isfinite(a)
+        if bad.any():
+            t, v, _ = np.argwhere(bad)[0]
+            raise SceneInputError(f"scene.{name}: triangle {t} vertex {v} is not finite: {a[t, v].tolist()}")
+    return p0, p1, col
+
+
+def memory_estimate(camera: Camera, spp: int, n_triangles: int, config: PipelineConfig, threads: int,
+                    export_samples: bool = False) -> int:
+    """Bytes the engine will allocate (image, per-thread bin buffers, setup, bin lists, exports)."""
+    b = config.bin_size
+    image = camera.width * camera.height * 3 * 4 * 2  # engine buffer + the numpy copy
+    bins = threads * b * b * spp * (4 + 12 + 4)
+    setup = n_triangles * (224 + 1 + 4)
+    bins_x = -(-camera.width // b)
+    bins_y = -(-camera.height // b)
+    bin_lists = n_triangles * 4 * 4 + bins_x * bins_y * 32
+    export = camera.width * camera.height * spp * 8 * 2 if export_samples else 0
+    return int(image + bins + setup + bin_lists + export)
+
+
+def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *,
+           export_samples: bool = False) -> Result:
+    """Render ``scene`` through ``camera`` with sample ``table``. Raises ConfigError/SceneInputError
+    (ValueErrors naming the field and value) for bad input; KeyboardInterrupt on Ctrl-C."""
+    if config is None:
+        config = PipelineConfig()
+    if not isinstance(camera, Camera):
+        raise ConfigError(f"camera: expected sim.Camera, got {type(camera).__name__}")
+    if not isinstance(config, PipelineConfig):
+        raise ConfigError(f"config: expected sim.PipelineConfig, got {type(config).__name__}")
+    p0, p1, col = _scene_arrays(scene)
+    samples = table.samples(camera.lens)
+    spp = int(samples.shape[2])
+    grid = config.resolved_lens_grid(spp)
+    import os
+
+    threads = config.threads or (os.cpu_count() or 1)
+    need = memory_estimate(camera, spp, p0.shape[0], config, threads, export_samples)
+    if need > config.memory_limit_bytes:
+        raise ConfigError(
+            f"memory: estimated {need / 2**30:.2f} GiB exceeds PipelineConfig.memory_limit_bytes="
+            f"{config.memory_limit_bytes / 2**30:.2f} GiB (width={camera.width}, height={camera.height}, "
+            f"spp={spp}, triangles={p0.shape[0]}, threads={threads})"
+        )
+    v0, v1 = camera.engine_vertices(p0, p1)
+    if not (np.all(np.isfinite(v0)) and np.all(np.isfinite(v1))):
+        t = int(np.argwhere(~np.isfinite(v0) | ~np.isfinite(v1))[0][0])
+        raise SceneInputError(f"scene.positions: triangle {t} overflows float32 after projection: {p0[t].tolist()}")
+    params = _core.RenderParams()
+    for k, v in camera.engine_params().items():
+        setattr(params, k, v)
+    params.lens_shape = _LENS_ENUM[camera.lens]
+    params.algorithm = config.algorithm
+    params.tile_size = config.tile_size
+    params.lens_grid = grid
+    params.hinterleave_tile = config.hinterleave_tile
+    params.threads = config.threads
+    params.bin_size = config.bin_size
+    params.halfspace_h = config.halfspace["h"]
+    params.halfspace_H = config.halfspace["H"]
+    params.selective_H = config.selective_H
+    params.oracle_full = config.oracle == "full"
+    params.c_sample = -1.0 if config.c_sample is None else float(config.c_sample)
+    params.c_tile = -1.0 if config.c_tile is None else float(config.c_tile)
+    params.backface_cull = config.backface_cull
+    params.exact_ops = config.op_count == "exact"
+    params.count_optimal = config.count_optimal
+    # The engine skips a dimension only where skipping is exact: every sample has u = v = 0 (no
+    # lens) or t = 0 (no time). A constant non-zero t still places moving triangles at that t.
+    params.table_has_lens = bool(np.any(samples[..., 2:4] != 0))
+    params.table_has_time = bool(np.any(samples[..., 4] != 0))
+    if getattr(table, "n_lens", 0):
+        lens_index = np.ascontiguousarray(table.lens_index, dtype=np.int32)
+        lens_uv = np.ascontiguousarray(table.lens_positions(camera.lens), dtype=np.float32)
+    else:
+        lens_index = np.zeros((0,), np.int32)
+        lens_uv = np.zeros((0, 2), np.float32)
+    col32 = col.astype(np.float32)
+    t0 = time.perf_counter()
+    try:
+        out = _core.render(params, v0, v1, col32, samples, lens_index, lens_uv, export_samples)
+    except ValueError as e:  # invalid_argument from the engine: name it as a config error
+        raise ConfigError(str(e)) from None
+    wall = time.perf_counter() - t0
+    flat = flat_stats(out["counters"], {"time.wall_s": wall})
+    desc = {"camera": camera.describe(), "pipeline": config.describe(),
+            "table": table.describe() if hasattr(table, "describe") else {}, "lens_grid": grid}
+    return Result(image=out["image"], flat_stats=flat, config=desc,
+                  sample_depth=out.get("sample_depth"), sample_triangle=out.get("sample_triangle"))

@@ -1,0 +1,646 @@
+"""The programmable sample table (ARCHITECTURE.md §sample table).
+
+A P×P block of pixels repeats over the screen; pixel (px, py) uses the spp samples of table entry
+[py mod P, px mod P]. Each sample is (x, y, u, v, t): x, y ∈ [0, 1) inside the pixel, (u, v) in the
+lens shape Ω ⊆ [-1, 1]², t ∈ [0, 1). A sample's canonical index s (its position in the table) names
+its depth-buffer slot, whatever order an algorithm visits samples in.
+
+Generated tables are lens-agnostic: they store canonical unit-cube values (x, y, a, b, t) in
+[0, 1)⁵ and map (a, b) onto a lens shape only when asked (`sim.lens.map_to_lens`). Every canonical
+value is float32-representable, so `samples()` reproduces x, y and t exactly and any stratum or
+elementary-interval property of the canonical values holds for the float32 samples too.
+
+Seeding (documented contract): a generator draws every random number from
+``np.random.default_rng(np.random.SeedSequence(entropy=seed,
+spawn_key=(zlib.crc32(name.encode()), period)))``, so a table is a pure function of
+(generator, params) and different generators or periods never share a stream. All dimensions are
+always drawn, even when `lens` or `time` is off, so switching a dimension off leaves the others
+unchanged.
+
+Generators are registered by name with `@_generator(name)` (STYLE.md "one implementation,
+registered by name") and appear as classmethods: ``SampleTable.stratified(spp=16, seed=1)`` is
+``SampleTable.create("stratified", spp=16, seed=1)``. User tables come from
+``SampleTable.from_array``.
+"""
+
+from __future__ import annotations
+
+import math
+import zlib
+from typing import Callable
+
+import numpy as np
+
+from .lens import LENS_SHAPES, check_shape, inside_lens, map_to_lens
+
+MAX_SPP = 4096
+MAX_PERIOD = 256
+LENS_GRID_SIZES = (1, 2, 4, 8, 16)
+
+# name -> (implementation, extra parameter defaults)
+_GENERATORS: dict[str, tuple[Callable[..., "_Draw"], dict[str, object]]] = {}
+_COMMON_DEFAULTS: dict[str, object] = {"seed": 0, "period": 32, "lens": True, "time": True}
+
+
+class SampleTable:
+    """A P×P-periodic table of spp 5D samples per pixel. Build it with a generator classmethod
+    (``random``, ``stratified``, ``stratified_permuted``, ``sobol``, ``interleaved``) or with
+    ``from_array``; see the module docstring."""
+
+    def __init__(
+        self,
+        *,
+        generator: str,
+        period: int,
+        spp: int,
+        seed: int | None,
+        params: dict,
+        has_lens: bool,
+        has_time: bool,
+        unit: np.ndarray | None = None,
+        lens_unit: np.ndarray | None = None,
+        lens_index: np.ndarray | None = None,
+        final: np.ndarray | None = None,
+        final_lens_positions: np.ndarray | None = None,
+        declared_lens: str = "any",
+    ):
+        # Use the classmethods; this constructor trusts its (already validated) arguments.
+        self.generator = generator
+        self.period = period
+        self.spp = spp
+        self.seed = seed
+        self.params = dict(params)
+        self.has_lens = bool(has_lens)
+        self.has_time = bool(has_time)
+        self.unit = _readonly(unit)
+        self.lens_unit = _readonly(lens_unit)
+        self.lens_index = _readonly(lens_index)
+        if lens_index is not None:
+            self.n_lens = int(final_lens_positions.shape[0] if lens_unit is None else lens_unit.shape[0])
+        else:
+            self.n_lens = 0
+        self._final = _readonly(final)  # from_array: the user's float32 samples
+        self._final_lens_positions = _readonly(final_lens_positions)
+        self._declared_lens = declared_lens
+        self._samples_cache: dict[str, np.ndarray] = {}
+        self._positions_cache: dict[str, np.ndarray] = {}
+        self._grid_cache: dict[tuple[int, str], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+
+    # ---------------------------------------------------------------- registry
+
+    @classmethod
+    def generators(cls) -> list[str]:
+        """Names accepted by `create` (procedural generators; `from_array` is separate)."""
+        return list(_GENERATORS)
+
+    @classmethod
+    def create(cls, name: str, **params) -> "SampleTable":
+        """Build a table with generator `name`. Common params: spp (required, 1..4096), seed=0,
+        period=32 (1..256), lens=True, time=True; some generators take more (see their docs)."""
+        if name not in _GENERATORS:
+            raise ValueError(
+                f"generator: unknown sample-table generator {name!r} "
+                f"(known: {', '.join(_GENERATORS)}; user arrays go through SampleTable.from_array)"
+            )
+        impl, extra_defaults = _GENERATORS[name]
+        known = ["spp", *_COMMON_DEFAULTS, *extra_defaults]
+        for key in params:
+            if key not in known:
+                raise ValueError(f"{name}: unknown parameter {key!r} (known: {', '.join(known)})")
+        if "spp" not in params:
+            raise ValueError(f"spp: required by the {name} generator")
+        full = {**_COMMON_DEFAULTS, **extra_defaults, **params}
+        spp = _check_int("spp", full["spp"], 1, MAX_SPP)
+        period = _check_int("period", full["period"], 1, MAX_PERIOD)
+        seed = _check_int("seed", full["seed"], 0, 2**63 - 1)
+        lens = _check_bool("lens", full["lens"])
+        time = _check_bool("time", full["time"])
+        extras = {k: full[k] for k in extra_defaults}
+        rng = np.random.default_rng(
+            np.random.SeedSequence(entropy=seed, spawn_key=(zlib.crc32(name.encode()), period))
+        )
+        spec = _Spec(name=name, spp=spp, period=period, lens=lens, time=time)
+        draw = impl(spec, rng, **extras)
+        unit = draw.unit
+        if not lens:
+            unit[..., 2:4] = 0.5
+        if not time:
+            unit[..., 4] = 0.0
+        params_out = {"spp": spp, "seed": seed, "period": period, "lens": lens, "time": time, **draw.params}
+        return cls(
+            generator=name,
+            period=period,
+            spp=spp,
+            seed=seed,
+            params=params_out,
+            has_lens=lens,
+            has_time=time,
+            unit=unit,
+            lens_unit=draw.lens_unit,
+            lens_index=draw.lens_index,
+        )
+
+    # ---------------------------------------------------------------- user arrays
+
+    @classmethod
+    def from_array(cls, samples, *, lens_index=None, lens_positions=None, lens: str = "any") -> "SampleTable":
+        """A user table in *final* coordinates: shape (spp, 5) (the same samples in every pixel,
+        period 1) or (P, P, spp, 5) indexed [py, px, s]; columns x, y ∈ [0, 1), u, v ∈ [-1, 1],
+        t ∈ [0, 1], checked after conversion to float32 (what the engine sees).
+
+        `lens` declares the aperture the (u, v) were made for: "any" (default) means no shape
+        check at all, and `samples(shape)` returns the values as given for every shape; a shape
+        name means every (u, v) must lie inside it now, and `samples(shape)` / `lens_positions`
+        raise ValueError for a requested shape that some (u, v) lies outside of.
+
+        Interleaved user tables give both `lens_positions` (N, 2) and `lens_index` (same leading
+        shape as samples, values in 0..N-1); each sample's (u, v) must then equal
+        lens_positions[lens_index] bitwise in float32.
+
+        has_lens is False when every u = v = 0; has_time is False when every t is equal (the
+        values are still returned as given). `unit`, `lens_unit` and `seed` are None."""
+        if lens != "any" and lens not in LENS_SHAPES:
+            raise ValueError(f"lens: unknown shape {lens!r} (known: any, {', '.join(LENS_SHAPES)})")
+        arr = np.asarray(samples)
+        if arr.dtype.kind not in "fiu":
+            raise ValueError(f"samples: expected a real numeric array, got dtype {arr.dtype}")
+        if arr.ndim == 2 and arr.shape[1] == 5:
+            broadcast = True  # one pixel's samples, repeated with period 1
+            arr4 = arr[None, None]
+        elif arr.ndim == 4 and arr.shape[3] == 5 and arr.shape[0] == arr.shape[1]:
+            broadcast = False
+            arr4 = arr
+        else:
+            raise ValueError(f"samples: expected shape (spp, 5) or (P, P, spp, 5), got {arr.shape}")
+        period, spp = arr4.shape[0], arr4.shape[2]
+        if not 1 <= spp <= MAX_SPP:
+            raise ValueError(f"samples: spp (axis -2) must be in 1..{MAX_SPP}, got {spp}")
+        if not 1 <= period <= MAX_PERIOD:
+            raise ValueError(f"samples: period (axes 0, 1) must be in 1..{MAX_PERIOD}, got {period}")
+
+        def where(mask4: np.ndarray) -> tuple[int, ...]:
+            """First True index of a (P, P, spp[, ...]) mask, in the user's array shape."""
+            idx = tuple(int(i) for i in np.argwhere(mask4)[0])
+            return idx[2:] if broadcast else idx
+
+        def full_index(i: tuple[int, ...]) -> tuple[int, ...]:
+            return (0, 0) + i if broadcast else i
+
+        as64 = arr4.astype(np.float64)
+        bad = ~np.isfinite(as64)
+        if bad.any():
+            i = where(bad)
+            raise ValueError(f"samples: non-finite value at index {i}: {arr[i]}")
+        final = np.ascontiguousarray(arr4, dtype=np.float32)
+        names = ("x", "y", "u", "v", "t")
+        bounds = ((0.0, 1.0, True), (0.0, 1.0, True), (-1.0, 1.0, False), (-1.0, 1.0, False), (0.0, 1.0, False))
+        for c, (name, (lo, hi, open_hi)) in enumerate(zip(names, bounds)):
+            col = final[..., c]
+            bad = (col < lo) | ((col >= hi) if open_hi else (col > hi))
+            if bad.any():
+                i = where(bad)
+                rng_txt = f"[{lo:g}, {hi:g})" if open_hi else f"[{lo:g}, {hi:g}]"
+                raise ValueError(
+                    f"samples: {name} must be in {rng_txt}; first offending sample at index {i} has "
+                    f"{name} = {float(col[full_index(i)])!r} (as float32)"
+                )
+        if lens != "any":
+            bad = ~inside_lens(final[..., 2], final[..., 3], lens)
+            if bad.any():
+                i = where(bad)
+                k = full_index(i)
+                raise ValueError(
+                    f"samples: (u, v) at index {i} = ({float(final[k][2])!r}, {float(final[k][3])!r}) "
+                    f"is outside the declared {lens!r} lens"
+                )
+
+        positions = index = None
+        if (lens_index is None) != (lens_positions is None):
+            raise ValueError("lens_index: lens_index and lens_positions must be given together")
+        if lens_positions is not None:
+            pos = np.asarray(lens_positions)
+            if pos.dtype.kind not in "fiu" or pos.ndim != 2 or pos.shape[1] != 2 or pos.shape[0] < 1:
+                raise ValueError(
+                    f"lens_positions: expected a real (N, 2) array with N >= 1, got shape {pos.shape} "
+                    f"dtype {pos.dtype}"
+                )
+            positions = np.ascontiguousarray(pos, dtype=np.float32)
+            bad = ~np.isfinite(positions).all(axis=1) | (np.abs(positions) > 1.0).any(axis=1)
+            if lens != "any":
+                bad |= ~inside_lens(positions[:, 0], positions[:, 1], lens)
+            if bad.any():
+                i = int(np.argmax(bad))
+                where_txt = "[-1, 1]^2" if lens == "any" else f"the declared {lens!r} lens"
+                raise ValueError(
+                    f"lens_positions: position {i} = {positions[i].tolist()} is not finite or not in "
+                    f"{where_txt}"
+                )
+            idx = np.asarray(lens_index)
+            expected = arr.shape[:-1]
+            if idx.dtype.kind not in "iu" or idx.shape != expected:
+                raise ValueError(
+                    f"lens_index: expected an integer array of shape {expected}, got shape {idx.shape} "
+                    f"dtype {idx.dtype}"
+                )
+            idx4 = idx.reshape(period, period, spp).astype(np.int64)
+            bad = (idx4 < 0) | (idx4 >= positions.shape[0])
+            if bad.any():
+                i = where(bad)
+                raise ValueError(
+                    f"lens_index: value at index {i} = {int(idx[i])} is not in 0..{positions.shape[0] - 1}"
+                )
+            index = idx4.astype(np.int32)
+            want = positions[index]
+            bad = (want.view(np.uint32) != final[..., 2:4].view(np.uint32)).any(axis=-1)
+            if bad.any():
+                i = where(bad)
+                k = full_index(i)
+                raise ValueError(
+                    f"samples: (u, v) at index {i} = {final[k][2:4].tolist()} is not bitwise equal to "
+                    f"lens_positions[{int(index[k])}] = {positions[index[k]].tolist()}"
+                )
+        has_lens = bool((final[..., 2:4] != 0.0).any())
+        has_time = bool((final[..., 4] != final.reshape(-1, 5)[0, 4]).any())
+        return cls(
+            generator="from_array",
+            period=period,
+            spp=spp,
+            seed=None,
+            params={"lens": lens},
+            has_lens=has_lens,
+            has_time=has_time,
+            lens_index=index,
+            final=final,
+            final_lens_positions=positions,
+            declared_lens=lens,
+        )
+
+    # ---------------------------------------------------------------- views
+
+    def samples(self, lens: str = "disk") -> np.ndarray:
+        """(P, P, spp, 5) float32 [py, px, s, (x, y, u, v, t)] for lens shape `lens` (read-only,
+        cached per shape). Interleaved tables: (u, v) == lens_positions(lens)[lens_index] bitwise."""
+        check_shape(lens)
+        cached = self._samples_cache.get(lens)
+        if cached is not None:
+            return cached
+        if self._final is not None:
+            self._check_declared(self._final[..., 2], self._final[..., 3], lens, "samples")
+            out = self._final
+        else:
+            out = np.empty(self.unit.shape, dtype=np.float32)
+            out[..., 0] = self.unit[..., 0]  # exact: canonical values are float32-representable
+            out[..., 1] = self.unit[..., 1]
+            out[..., 4] = self.unit[..., 4]
+            if not self.has_lens:
+                out[..., 2:4] = 0.0
+            elif self.lens_index is not None:
+                out[..., 2:4] = self.lens_positions(lens)[self.lens_index]
+            else:
+                u, v = map_to_lens(self.unit[..., 2], self.unit[..., 3], lens)
+                out[..., 2] = u
+                out[..., 3] = v
+            out = _readonly(out)
+        self._samples_cache[lens] = out
+        return out
+
+    def lens_positions(self, lens: str = "disk") -> np.ndarray:
+        """(N, 2) float32 discrete lens positions of an interleaved table (read-only)."""
+        check_shape(lens)
+        if self.n_lens == 0:
+            raise ValueError(
+                f"lens_positions: the {self.generator} table has no discrete lens positions "
+                f"(only interleaved tables do)"
+            )
+        cached = self._positions_cache.get(lens)
+        if cached is not None:
+            return cached
+        if self._final_lens_positions is not None:
+            p = self._final_lens_positions
+            self._check_declared(p[:, 0], p[:, 1], lens, "lens_positions")
+        else:
+            u, v = map_to_lens(self.lens_unit[:, 0], self.lens_unit[:, 1], lens)
+            p = _readonly(np.stack([u, v], axis=1).astype(np.float32))
+        self._positions_cache[lens] = p
+        return p
+
+    def lens_grid(self, grid: int, lens: str = "disk") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Lens-grid buckets (001_3248aaf17c219d5e.txt §5.1, Fig. 10) from the engine:
+        (order (P,P,spp), counts (P,P,G*G), offsets (P,P,G*G)), int32; cell = j*G + i."""
+        if isinstance(grid, bool) or not isinstance(grid, (int, np.integer)) or int(grid) not in LENS_GRID_SIZES:
+            raise ValueError(
+                f"lens_grid: grid must be one of {', '.join(map(str, LENS_GRID_SIZES))}, got {grid!r}"
+            )
+        grid = int(grid)
+        key = (grid, check_shape(lens))
+        if key not in self._grid_cache:
+            from . import _core
+
+            order, counts, offsets = _core.lens_grid_buckets(self.samples(lens), grid)
+            self._grid_cache[key] = (_readonly(order), _readonly(counts), _readonly(offsets))
+        return self._grid_cache[key]
+
+    def pixel_samples(self, px: int, py: int, lens: str = "disk") -> np.ndarray:
+        """The (spp, 5) samples of screen pixel (px, py): samples(lens)[py mod P, px mod P]."""
+        return self.samples(lens)[py % self.period, px % self.period]
+
+    def describe(self) -> dict:
+        """A flat dict for stats tables."""
+        return {
+            "generator": self.generator,
+            "spp": self.spp,
+            "period": self.period,
+            "seed": self.seed,
+            "n_lens": self.n_lens,
+            "has_lens": self.has_lens,
+            "has_time": self.has_time,
+        }
+
+    def __repr__(self) -> str:
+        dims = "xy" + ("+uv" if self.has_lens else "") + ("+t" if self.has_time else "")
+        extra = f", n_lens={self.n_lens}" if self.n_lens else ""
+        seed = "" if self.seed is None else f", seed={self.seed}"
+        return f"SampleTable({self.generator}, spp={self.spp}, period={self.period}{seed}{extra}, dims={dims})"
+
+    def _check_declared(self, u: np.ndarray, v: np.ndarray, lens: str, field: str) -> None:
+        if self._declared_lens == "any" or not self.has_lens:
+            return
+        bad = ~inside_lens(u, v, lens)
+        if bad.any():
+            i = tuple(int(k) for k in np.argwhere(bad)[0])
+            raise ValueError(
+                f"{field}: (u, v) at index {i} = ({float(u[i])!r}, {float(v[i])!r}) is outside the "
+                f"requested {lens!r} lens (the table was declared for {self._declared_lens!r})"
+            )
+
+
+# ==================================================================== generators
+
+
+class _Spec:
+    __slots__ = ("name", "spp", "period", "lens", "time")
+
+    def __init__(self, *, name: str, spp: int, period: int, lens: bool, time: bool):
+        self.name, self.spp, self.period, self.lens, self.time = name, spp, period, lens, time
+
+
+class _Draw:
+    """What a generator returns: canonical (P, P, spp, 5) values, plus the interleaved extras."""
+
+    def __init__(self, unit, lens_unit=None, lens_index=None, params=None):
+        self.unit = unit
+        self.lens_unit = lens_unit
+        self.lens_index = lens_index
+        self.params = params or {}
+
+
+def _generator(name: str, **extra_defaults):
+    """Register a generator `impl(spec, rng, **extras) -> _Draw` under `name`, and expose it as
+    the classmethod ``SampleTable.<name>(**params)``."""
+
+    def register(impl):
+        _GENERATORS[name] = (impl, extra_defaults)
+
+        def factory(cls, **params):
+            return cls.create(name, **params)
+
+        factory.__name__ = factory.__qualname__ = name
+        factory.__doc__ = impl.__doc__
+        setattr(SampleTable, name, classmethod(factory))
+        return impl
+
+    return register
+
+
+@_generator("random")
+def _random(spec: _Spec, rng: np.random.Generator) -> _Draw:
+    """Independent uniform values in all five dimensions."""
+    P, S = spec.period, spec.spp
+    return _Draw(_round_down_f32(rng.random((P, P, S, 5))))
+
+
+@_generator("stratified")
+def _stratified(spec: _Spec, rng: np.random.Generator) -> _Draw:
+    """Per pixel: jittered (x, y) on an nx×ny grid (nx·ny = spp, closest to square, nx ≥ ny);
+    (a, b) jittered on its own nx×ny grid and randomly permuted across the samples; t in spp
+    jittered 1D strata, permuted independently (pbrt-style padding)."""
+    P, S = spec.period, spec.spp
+    nx, ny = _grid_shape(S)
+    unit = np.empty((P, P, S, 5))
+    _fill_xy_strata(unit, rng, nx, ny)
+    lens_strata = rng.permuted(np.broadcast_to(np.arange(S), (P, P, S)), axis=-1)
+    unit[..., 2] = _stratum_values(lens_strata % nx, nx, rng.random((P, P, S)))
+    unit[..., 3] = _stratum_values(lens_strata // nx, ny, rng.random((P, P, S)))
+    time_strata = rng.permuted(np.broadcast_to(np.arange(S), (P, P, S)), axis=-1)
+    unit[..., 4] = _stratum_values(time_strata, S, rng.random((P, P, S)))
+    return _Draw(unit, params={"grid_xy": (nx, ny), "grid_lens": (nx, ny)})
+
+
+@_generator("stratified_permuted")
+def _stratified_permuted(spec: _Spec, rng: np.random.Generator) -> _Draw:
+    """001_3248aaf17c219d5e.txt §6, Fig. 13: "permuted (x,y) sample positions for each block of
+    2×2 pixels". (x, y) are jittered strata per pixel (as `stratified`); the lens (a, b) are
+    jittered on an mx×my grid with mx·my = 4·spp over each 2×2 block, and t on 4·spp 1D strata
+    over the block; both are randomly (and independently) assigned to the block's 4·spp
+    (pixel, x/y-stratum) slots. Needs an even period."""
+    P, S = spec.period, spec.spp
+    if P % 2:
+        raise ValueError(f"period: the stratified_permuted generator uses 2x2-pixel blocks; expected an even period, got {P}")
+    nx, ny = _grid_shape(S)
+    mx, my = _grid_shape(4 * S)
+    unit = np.empty((P, P, S, 5))
+    _fill_xy_strata(unit, rng, nx, ny)
+    Q = P // 2
+    block = np.empty((Q, Q, 4 * S, 3))
+    lens_strata = rng.permuted(np.broadcast_to(np.arange(4 * S), (Q, Q, 4 * S)), axis=-1)
+    block[..., 0] = _stratum_values(lens_strata % mx, mx, rng.random((Q, Q, 4 * S)))
+    block[..., 1] = _stratum_values(lens_strata // mx, my, rng.random((Q, Q, 4 * S)))
+    time_strata = rng.permuted(np.broadcast_to(np.arange(4 * S), (Q, Q, 4 * S)), axis=-1)
+    block[..., 2] = _stratum_values(time_strata, 4 * S, rng.random((Q, Q, 4 * S)))
+    unit[..., 2:5] = _blocks_to_pixels(block, 2, S)
+    return _Draw(unit, params={"grid_xy": (nx, ny), "grid_lens_block": (mx, my)})
+
+
+@_generator("sobol")
+def _sobol(spec: _Spec, rng: np.random.Generator) -> _Draw:
+    """Scrambled Sobol (0,2)-nets. The first spp points of the 2D Sobol sequence (dim 1: van der
+    Corput = bit reversal; dim 2: the Pascal-matrix generator) give (x, y), and again (a, b);
+    t is the 1D van der Corput sequence. Every dimension gets its own Owen-style nested uniform
+    scramble per pixel, by hashing (Burley 2020, "Practical Hash-based Owen Scrambling": reverse
+    bits, Laine–Karras permutation with a random 32-bit seed, reverse back), which keeps the
+    (0,m,2)-net property when spp = 2^m. The (a, b) pairs and the t values are then randomly
+    permuted across the pixel's samples, independently, to decorrelate them from (x, y)."""
+    P, S = spec.period, spec.spp
+    d1, d2 = _sobol_02(S)
+    seeds = rng.integers(0, 2**32, size=(P, P, 1, 5), dtype=np.uint32)
+    unit = np.empty((P, P, S, 5))
+    for c, base in enumerate((d1, d2, d1, d2, d1)):
+        scrambled = _owen_scramble(np.broadcast_to(base, (P, P, S)), seeds[..., c])
+        unit[..., c] = _u32_to_unit(scrambled)
+    lens_perm = rng.permuted(np.broadcast_to(np.arange(S), (P, P, S)), axis=-1)
+    unit[..., 2:4] = np.take_along_axis(unit[..., 2:4], lens_perm[..., None], axis=2)
+    time_perm = rng.permuted(np.broadcast_to(np.arange(S), (P, P, S)), axis=-1)
+    unit[..., 4] = np.take_along_axis(unit[..., 4], time_perm, axis=2)
+    return _Draw(unit, params={"scramble": "owen_hash"})
+
+
+@_generator("interleaved", n_lens=256)
+def _interleaved(spec: _Spec, rng: np.random.Generator, n_lens) -> _Draw:
+    """Interleaved sampling with N = n_lens discrete lens positions (any perfect square >= 1),
+    jittered on a √N×√N grid of [0, 1)². Blocks of B×B pixels, B the smallest power of two with
+    B²·spp >= N; each block's B²·spp samples take every position floor(B²·spp / N) times plus
+    (B²·spp mod N) distinct extra positions chosen at random, in a random order per block, so
+    per block every position occurs equally often whenever N divides B²·spp (001: N = 256,
+    spp = 64 gives one sample per position per 2×2 block). spp >= N needs N | spp (then each
+    pixel holds each position spp/N times). Needs period divisible by B. (x, y) are jittered
+    strata per pixel; t is stratified per pixel and permuted."""
+    P, S = spec.period, spec.spp
+    if isinstance(n_lens, bool) or not isinstance(n_lens, (int, np.integer)) or n_lens < 1 or math.isqrt(int(n_lens)) ** 2 != n_lens:
+        raise ValueError(f"n_lens: expected a perfect square >= 1 (1, 4, 9, ..., 256, ...), got {n_lens!r}")
+    N = int(n_lens)
+    if not spec.lens:
+        raise ValueError("lens: the interleaved generator needs the lens dimension (lens=True), got False")
+    if S >= N and S % N:
+        raise ValueError(f"spp: with spp >= n_lens the interleaved generator needs n_lens | spp, got spp={S}, n_lens={N}")
+    B = 1
+    while B * B * S < N:
+        B *= 2
+    if P % B:
+        raise ValueError(
+            f"period: the interleaved generator with n_lens={N}, spp={S} uses {B}x{B}-pixel blocks; "
+            f"expected a multiple of {B}, got {P}"
+        )
+    n = math.isqrt(N)
+    unit = np.empty((P, P, S, 5))
+    _fill_xy_strata(unit, rng, *_grid_shape(S))
+    cells = np.arange(N)
+    lens_unit = np.stack(
+        [_stratum_values(cells % n, n, rng.random(N)), _stratum_values(cells // n, n, rng.random(N))], axis=1
+    )
+    Q = P // B
+    M = B * B * S
+    full, rest = divmod(M, N)
+    per_block = np.empty((Q, Q, M), dtype=np.int64)
+    per_block[..., : full * N] = np.tile(cells, full)
+    if rest:
+        per_block[..., full * N :] = np.argsort(rng.random((Q, Q, N)), axis=-1)[..., :rest]
+    per_block = rng.permuted(per_block, axis=-1)
+    lens_index = _blocks_to_pixels(per_block[..., None], B, S)[..., 0].astype(np.int32)
+    unit[..., 2:4] = lens_unit[lens_index]
+    time_strata = rng.permuted(np.broadcast_to(np.arange(S), (P, P, S)), axis=-1)
+    unit[..., 4] = _stratum_values(time_strata, S, rng.random((P, P, S)))
+    return _Draw(unit, lens_unit=lens_unit, lens_index=lens_index, params={"n_lens": N, "block_px": B})
+
+
+# ==================================================================== helpers
+
+
+def _check_int(field: str, value, lo: int, hi: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not lo <= value <= hi:
+        raise ValueError(f"{field}: expected an integer in {lo}..{hi}, got {value!r}")
+    return int(value)
+
+
+def _check_bool(field: str, value) -> bool:
+    if not isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"{field}: expected true or false, got {value!r}")
+    return bool(value)
+
+
+def _readonly(a: np.ndarray | None) -> np.ndarray | None:
+    if a is not None:
+        a.flags.writeable = False
+    return a
+
+
+def _grid_shape(n: int) -> tuple[int, int]:
+    """(nx, ny) with nx·ny = n, nx >= ny, as close to square as possible (8 -> (4, 2))."""
+    ny = math.isqrt(n)
+    while n % ny:
+        ny -= 1
+    return n // ny, ny
+
+
+def _round_down_f32(x: np.ndarray) -> np.ndarray:
+    """The largest float32 <= x (as float64), for x in [0, 1): keeps values < 1 and keeps
+    floor(x·2^k) for k <= 24."""
+    f = np.asarray(x).astype(np.float32)
+    f = np.where(f.astype(np.float64) > x, np.nextafter(f, np.float32(-np.inf)), f)
+    return f.astype(np.float64)
+
+
+def _stratum_values(index: np.ndarray, n: int, jitter: np.ndarray) -> np.ndarray:
+    """(index + jitter) / n, as float32-representable float64 values with floor(value·n) == index
+    exactly (nudged by one float32 ulp where rounding crossed a stratum edge)."""
+    index = np.asarray(index)
+    value = _round_down_f32((index + jitter) / n)
+    for _ in range(8):
+        k = np.floor(value * n)
+        low, high = k < index, k > index
+        if not (low.any() or high.any()):
+            return value
+        f = value.astype(np.float32)
+        f = np.where(low, np.nextafter(f, np.float32(np.inf)), f)
+        f = np.where(high, np.nextafter(f, np.float32(-np.inf)), f)
+        value = f.astype(np.float64)
+    raise AssertionError("stratum rounding did not converge")  # unreachable for n <= 2^20
+
+
+def _fill_xy_strata(unit: np.ndarray, rng: np.random.Generator, nx: int, ny: int) -> None:
+    """Sample s of every pixel takes (x, y) stratum (s mod nx, s div nx), jittered."""
+    P, _, S, _ = unit.shape
+    s = np.arange(S)
+    unit[..., 0] = _stratum_values(np.broadcast_to(s % nx, (P, P, S)), nx, rng.random((P, P, S)))
+    unit[..., 1] = _stratum_values(np.broadcast_to(s // nx, (P, P, S)), ny, rng.random((P, P, S)))
+
+
+def _blocks_to_pixels(block: np.ndarray, B: int, S: int) -> np.ndarray:
+    """(Q, Q, B·B·S, C) per-block slots -> (Q·B, Q·B, S, C) per-pixel samples. Block slot
+    (dy·B + dx)·S + s is sample s of pixel (bx·B + dx, by·B + dy)."""
+    Q, C = block.shape[0], block.shape[-1]
+    return block.reshape(Q, Q, B, B, S, C).transpose(0, 2, 1, 3, 4, 5).reshape(Q * B, Q * B, S, C)
+
+
+_U32 = np.uint32
+
+
+def _reverse_bits32(x: np.ndarray) -> np.ndarray:
+    x = x.astype(_U32)
+    x = ((x >> _U32(1)) & _U32(0x55555555)) | ((x & _U32(0x55555555)) << _U32(1))
+    x = ((x >> _U32(2)) & _U32(0x33333333)) | ((x & _U32(0x33333333)) << _U32(2))
+    x = ((x >> _U32(4)) & _U32(0x0F0F0F0F)) | ((x & _U32(0x0F0F0F0F)) << _U32(4))
+    x = ((x >> _U32(8)) & _U32(0x00FF00FF)) | ((x & _U32(0x00FF00FF)) << _U32(8))
+    return (x >> _U32(16)) | (x << _U32(16))
+
+
+def _sobol_02(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The first n points of the 2D Sobol (0,2)-sequence as 32-bit fractions (uint32)."""
+    i = np.arange(n, dtype=_U32)
+    dim1 = _reverse_bits32(i)  # generator matrix = identity: van der Corput
+    # dim 2: primitive polynomial x + 1, all m_j = 1, i.e. direction numbers
+    # v_1 = 2^31, v_j = v_{j-1} xor (v_{j-1} >> 1) -- the upper-triangular Pascal matrix mod 2.
+    dim2 = np.zeros(n, dtype=_U32)
+    v = 1 << 31
+    for j in range(max(1, int(n - 1).bit_length())):
+        dim2 ^= np.where((i >> _U32(j)) & _U32(1), _U32(v), _U32(0))
+        v ^= v >> 1
+    return dim1, dim2
+
+
+def _owen_scramble(x: np.ndarray, seed: np.ndarray) -> np.ndarray:
+    """Nested uniform (Owen) scramble of 32-bit fractions by hashing (Burley 2020). In the
+    bit-reversed domain each step (adding the seed, x ^= x·even) changes bit k only as a function
+    of bits < k, i.e. each digit of the fraction is permuted depending on the digits before it."""
+    x = _reverse_bits32(x)
+    x = x + seed.astype(_U32)
+    for c in (0x6C50B47C, 0xB82F1E52, 0xC7AFE638, 0x8D22F6E6):
+        x = x ^ (x * _U32(c))
+    return _reverse_bits32(x)
+
+
+def _u32_to_unit(x: np.ndarray) -> np.ndarray:
+    """Top 24 bits of a 32-bit fraction as float64 (exactly float32, < 1, digit-preserving)."""
+    return (x >> _U32(8)).astype(np.float64) * 2.0**-24
+
+
+__all__ = ["SampleTable", "LENS_SHAPES", "LENS_GRID_SIZES"]

@@ -1,0 +1,249 @@
+// TILE (001_3248aaf17c219d5e.txt §4-§5.1, "OUR"): visit the triangle's screen tiles once each; per
+// tile, the h_i lines give uv-boxes (the active u and v sets), the H_j lines give a conservative
+// bitmask over the lens-grid cells, and only samples in surviving cells whose (u, v) passes the
+// h_i lines are inside-tested. TILE_INTERLEAVED ("OUR (i)") is the same traversal on an
+// interleaved sample table, with the 2D inside test on the triangle pre-sheared to each of the N
+// lens coordinates in setup.
+//
+// Triangle classes: 2D (static, in focus) uses the standard tile vs triangle test (edge functions
+// at the tile corners and the bounding box); 4D (static, defocused) the full h_i + H_j test;
+// moving triangles (3D/5D) a conservative path: h_i lines over the 6 shutter-end vertices, no H_j
+// (counted in trav.motion_fallback), or no tile test at all if a vertex may cross the near plane.
+#include <algorithm>
+#include <vector>
+
+#include "rast5d/footprint.h"
+
+namespace rast5d {
+namespace {
+
+template <class A, bool kInterleaved>
+class Tile final : public Traversal {
+  using D = typename A::f64;
+  using F = typename A::f32;
+
+ public:
+  Tile(const Frame& f, ThreadState& ts)
+      : f_(f), c_(ts.counters), pipe_(f, ts), lens_mask_(lens_cells(f.p.lens_shape, f.p.lens_grid)) {}
+
+  void rasterize(const TriSetup& tri, const BinRect& bin, bool charge_setup) override {
+    std::uint64_t setup_ops = 0;
+    if (tri.cls == DimClass::k2D) {
+      const tiletest::Edges2D e = tiletest::edges_2d<D>(tri.X, tri.Y, tri.W);
+      charge<A>(setup_ops, cost::kEdges2DSetup);
+      if (charge_setup) c_[Counter::ops_setup] += setup_ops;
+      raster_2d(tri, e, bin);
+      return;
+    }
+    const Footprint fp = build_footprint<A>(tri, f_, f_.p.halfspace_H, setup_ops);
+    if (kInterleaved && !tri.moving) shear_lens_positions(tri, setup_ops);
+    if (charge_setup) {
+      c_[Counter::ops_setup] += setup_ops;
+      c_[Counter::setup_H_edges_enabled] += fp.edges_enabled;
+      c_[Counter::setup_H_edges_disabled] += fp.edges_disabled;
+      if (tri.moving) ++c_[Counter::trav_motion_fallback];
+      if (!tri.moving && f_.p.halfspace_H && fp.sigma == 0) ++c_[Counter::tile_H_skipped_orientation];
+    }
+    raster_lens(tri, fp, bin);
+  }
+
+ private:
+  // Pre-shear the static triangle to every discrete lens coordinate (OUR (i) setup cost).
+  void shear_lens_positions(const TriSetup& tri, std::uint64_t& ops) {
+    const int n = f_.table.n_lens();
+    sx_.resize(static_cast<std::size_t>(n) * 3);
+    sy_.resize(static_cast<std::size_t>(n) * 3);
+    F X[3], Y[3], cx[3], cy[3], Xs[3], Ys[3];
+    for (int j = 0; j < 3; ++j) X[j] = F(tri.X[j]), Y[j] = F(tri.Y[j]), cx[j] = F(tri.cx[j]), cy[j] = F(tri.cy[j]);
+    for (int i = 0; i < n; ++i) {
+      shear_static(X, Y, cx, cy, F(f_.table.lens_u(i)), F(f_.table.lens_v(i)), Xs, Ys);
+      charge<A>(ops, cost::kShear);
+      for (int j = 0; j < 3; ++j) sx_[3 * i + j] = raw(Xs[j]), sy_[3 * i + j] = raw(Ys[j]);
+    }
+  }
+
+  template <class Fn>
+  void for_tiles(const TriSetup& tri, const BinRect& bin, Fn&& fn) {
+    const int T = f_.p.tile_size;
+    const int x0 = std::max(tri.bx0, bin.x0), x1 = std::min(tri.bx1, bin.x1);
+    const int y0 = std::max(tri.by0, bin.y0), y1 = std::min(tri.by1, bin.y1);
+    for (int ty = (y0 / T) * T; ty < y1; ty += T)
+      for (int tx = (x0 / T) * T; tx < x1; tx += T) fn(tx, ty, std::min(tx + T, bin.x1), std::min(ty + T, bin.y1));
+  }
+
+  // ---- 2D: standard tile test, every sample of accepted tiles --------------------------------
+  void raster_2d(const TriSetup& tri, const tiletest::Edges2D& e, const BinRect& bin) {
+    const int T = f_.p.tile_size;
+    const int spp = f_.table.spp();
+    const double blx = tri.lo_x - (std::fabs(tri.lo_x) * 0x1p-18 + 0x1p-12);
+    const double bhx = tri.hi_x + (std::fabs(tri.hi_x) * 0x1p-18 + 0x1p-12);
+    const double bly = tri.lo_y - (std::fabs(tri.lo_y) * 0x1p-18 + 0x1p-12);
+    const double bhy = tri.hi_y + (std::fabs(tri.hi_y) * 0x1p-18 + 0x1p-12);
+    for_tiles(tri, bin, [&](int tx, int ty, int tx1, int ty1) {
+      ++c_[Counter::tile_visited];
+      const double x0 = tiletest::expand_lo(tx), x1 = tiletest::expand_hi(tx + T);
+      const double y0 = tiletest::expand_lo(ty), y1 = tiletest::expand_hi(ty + T);
+      const bool out_edges = !e.valid || tiletest::tile_outside_2d<D>(e, x0, x1, y0, y1);
+      const bool b0 = D(x1) < D(blx), b1 = D(x0) > D(bhx), b2 = D(y1) < D(bly), b3 = D(y0) > D(bhy);
+      charge<A>(c_[Counter::ops_tile], cost::kTile2D + cost::kBBoxTile);
+      if (out_edges || b0 || b1 || b2 || b3) {
+        ++c_[Counter::tile_culled_2d];
+        return;
+      }
+      ++c_[Counter::tile_accepted];
+      bool optimal_tile = false;
+      if (f_.p.count_optimal)
+        optimal_tile = tiletest::footprint_overlaps_tile(tri.poly, tri.poly_n, 0, 0, f_.fc.focus_d, 0, 0, tx,
+                                                         tx + T, ty, ty + T);
+      for (int py = ty; py < ty1; ++py)
+        for (int px = tx; px < tx1; ++px) {
+          const PixelSamples ps = f_.table.pixel(px, py);
+          for (int s = 0; s < spp; ++s) pipe_.test(tri, px, py, ps, s);
+          if (optimal_tile) c_[Counter::tile_samples_optimal] += spp;
+        }
+    });
+  }
+
+  // ---- 4D (h_i + H_j), moving (h_i over the shutter ends), or no test --------------------------
+  void raster_lens(const TriSetup& tri, const Footprint& fp, const BinRect& bin) {
+    const RenderParams& p = f_.p;
+    const int T = p.tile_size, G = p.lens_grid;
+    const bool use_h = p.halfspace_h && fp.h_valid;
+    const bool use_H = p.halfspace_H && !tri.moving && fp.sigma != 0;
+    const int cells = G * G;
+    for_tiles(tri, bin, [&](int tx, int ty, int tx1, int ty1) {
+      ++c_[Counter::tile_visited];
+      const double x0 = tiletest::expand_lo(tx), x1 = tiletest::expand_hi(tx + T);
+      const double y0 = tiletest::expand_lo(ty), y1 = tiletest::expand_hi(ty + T);
+      tiletest::AxisSet sx, sy;
+      sx.n_intervals = sy.n_intervals = 1;
+      sx.iv_lo[0] = sy.iv_lo[0] = -1.0, sx.iv_hi[0] = sy.iv_hi[0] = 1.0;
+      if (use_h) {
+        if (!tile_h_sets<A>(fp, x0, x1, y0, y1, sx, sy, c_[Counter::ops_tile])) {
+          ++c_[Counter::tile_culled_h];
+          return;
+        }
+      }
+      // uv-boxes and the lens shape.
+      c_[Counter::tile_uv_boxes] += static_cast<std::uint64_t>(sx.n_intervals) * sy.n_intervals;
+      if (p.lens_shape != LensShape::kSquare) {
+        bool any = false;
+        for (int a = 0; a < sx.n_intervals; ++a)
+          for (int b = 0; b < sy.n_intervals; ++b) {
+            any |= tiletest::box_overlaps_lens<D>(p.lens_shape, sx.iv_lo[a], sx.iv_hi[a], sy.iv_lo[b], sy.iv_hi[b]);
+            charge<A>(c_[Counter::ops_tile], p.lens_shape == LensShape::kDisk ? cost::kBoxDisk : cost::kBoxHexagon);
+          }
+        if (!any) {
+          ++c_[Counter::tile_culled_lens];
+          return;
+        }
+      }
+      // Lens cells inside the uv-boxes (clamped to the grid, 001 §5.1).
+      const std::uint32_t bx = tiletest::axis_cells<D>(sx, G);
+      const std::uint32_t by = tiletest::axis_cells<D>(sy, G);
+      charge<A>(c_[Counter::ops_tile], sx.n_cmp + sy.n_cmp);
+      tiletest::CellMask active;
+      int i0 = G, i1 = -1, j0 = G, j1 = -1;
+      for (int j = 0; j < G; ++j) {
+        if (!(by >> j & 1u)) continue;
+        for (int i = 0; i < G; ++i)
+          if ((bx >> i & 1u) && lens_mask_.test(j * G + i)) {
+            active.set(j * G + i);
+            i0 = std::min(i0, i), i1 = std::max(i1, i), j0 = std::min(j0, j), j1 = std::max(j1, j);
+          }
+      }
+      if (active.none()) {
+        ++c_[Counter::tile_culled_lens];
+        return;
+      }
+      // H_j lines: conservative overlap bitmask over the cells (001 §5.1).
+      if (use_H) {
+        tiletest::CellMask culled;
+        bool any_line = false;
+        for (int k = 0; k < fp.n_edges; ++k) {
+          const tiletest::EdgeH& e = fp.edges[k];
+          if (!e.active) continue;
+          int m, n;
+          const bool has = tiletest::tangent_corners<D>(e, x0, x1, y0, y1, m, n);
+          charge<A>(c_[Counter::ops_tile], e.parallel ? 0 : cost::kTangentCorners);
+          if (!has) continue;  // region 5: the edge points at the tile
+          tiletest::CellMask edge_culled;
+          edge_culled.set();
+          for (const int corner : {m, n}) {
+            const double xc = (corner & 1) ? x1 : x0, yc = (corner & 2) ? y1 : y0;
+            const tiletest::Line l = tiletest::line_at_corner<D>(e, xc, yc, fp.sigma);
+            edge_culled &= tiletest::line_cells<D>(l, G, i0, i1, j0, j1);
+            const int rows = j1 - j0 + 1, cols = i1 - i0 + 1;
+            charge<A>(c_[Counter::ops_tile],
+                      cost::kLineAtCorner + cost::kLineCellsBase + rows + 2 * static_cast<std::uint64_t>(rows * cols));
+            ++c_[Counter::tile_H_lines];
+          }
+          culled |= edge_culled;
+          any_line = true;
+        }
+        if (any_line) {
+          c_[Counter::tile_cells_tested] += active.count();
+          const tiletest::CellMask killed = active & culled;
+          c_[Counter::tile_cells_culled] += killed.count();
+          active &= ~culled;
+          if (active.none()) {
+            ++c_[Counter::tile_culled_H];
+            return;
+          }
+        }
+      }
+      ++c_[Counter::tile_accepted];
+      // Samples of surviving cells, each checked against the h_i lines, then inside-tested.
+      cell_list_.clear();
+      for (int c = 0; c < cells; ++c)
+        if (active.test(c)) cell_list_.push_back(c);
+      const std::uint64_t region_cost = static_cast<std::uint64_t>(sx.n_cmp + sy.n_cmp);
+      const bool count_opt = p.count_optimal;
+      for (int py = ty; py < ty1; ++py)
+        for (int px = tx; px < tx1; ++px) {
+          const PixelSamples ps = f_.table.pixel(px, py);
+          for (const int c : cell_list_) {
+            for (int k = ps.cell_offsets[c]; k < ps.cell_offsets[c + 1]; ++k) {
+              const int s = ps.cell_order[k];
+              if (region_cost) {
+                const bool pu = tiletest::axis_pass(sx, D(ps.u[s]));
+                const bool pv = tiletest::axis_pass(sy, D(ps.v[s]));
+                charge<A>(c_[Counter::ops_sample_region], region_cost);
+                if (!(pu && pv)) continue;
+              }
+              if (count_opt && in_exact_region(tri, fp, f_.fc, ps, s, tx, ty, T)) ++c_[Counter::tile_samples_optimal];
+              if (kInterleaved && !tri.moving) {
+                const int li = ps.lens_index[s];
+                pipe_.test_sheared(tri, &sx_[3 * li], &sy_[3 * li], px, py, ps, s);
+              } else {
+                pipe_.test(tri, px, py, ps, s);
+              }
+            }
+          }
+        }
+    });
+  }
+
+  const Frame& f_;
+  Counters& c_;
+  SamplePipeline<A> pipe_;
+  tiletest::CellMask lens_mask_;
+  std::vector<int> cell_list_;
+  std::vector<float> sx_, sy_;
+};
+
+template <class A>
+using TileArbitrary = Tile<A, false>;
+template <class A>
+using TileInterleaved = Tile<A, true>;
+
+}  // namespace
+
+RAST5D_REGISTER_TRAVERSAL("tile",
+                          "001 §5.1 (OUR): per tile, h_i uv-boxes, H_j lens-cell bitmask, per-sample h_i test",
+                          false, TileArbitrary);
+RAST5D_REGISTER_TRAVERSAL("tile_interleaved",
+                          "001 OUR (i): the tile algorithm on an interleaved table, 2D test per lens coordinate",
+                          true, TileInterleaved);
+
+}  // namespace rast5d

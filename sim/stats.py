@@ -1,0 +1,82 @@
+"""Counter export: raw counters come from the engine's registry (counters.def); derived figures
+are declared here once, with unit and description, and evaluated at export, never stored."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+from . import _core
+
+
+def _ratio(a: float, b: float) -> float:
+    return a / b if b else math.nan
+
+
+@dataclass(frozen=True)
+class Derived:
+    name: str
+    unit: str
+    description: str
+    formula: Callable[[dict], float]
+
+
+DERIVED: tuple[Derived, ...] = (
+    Derived("ops.sample", "ops", "Sample-stage operations: ops.sample_region + ops.sample_inside",
+            lambda s: s["ops.sample_region"] + s["ops.sample_inside"]),
+    Derived("ops.total", "ops", "Rasterization operations as in 001 §6.2: ops.setup + ops.tile + ops.sample",
+            lambda s: s["ops.setup"] + s["ops.tile"] + s["ops.sample_region"] + s["ops.sample_inside"]),
+    Derived("ops.per_pixel", "ops/pixel", "ops.total / frame.pixels",
+            lambda s: _ratio(s["ops.total"], s["frame.pixels"])),
+    Derived("ops.per_sample_test", "ops/test", "ops.sample_inside / raster.samples_tested",
+            lambda s: _ratio(s["ops.sample_inside"], s["raster.samples_tested"])),
+    Derived("raster.ste", "ratio", "Sample-test efficiency: raster.samples_hit / raster.samples_tested",
+            lambda s: _ratio(s["raster.samples_hit"], s["raster.samples_tested"])),
+    Derived("depth.pass_rate", "ratio", "depth.passes / depth.tests",
+            lambda s: _ratio(s["depth.passes"], s["depth.tests"])),
+    Derived("tile.tested_over_optimal", "ratio",
+            "raster.samples_tested / tile.samples_optimal (001 Table 1; tile algorithms only)",
+            lambda s: _ratio(s["raster.samples_tested"], s["tile.samples_optimal"])),
+    Derived("tile.culled", "tiles", "Tiles culled by any tile test",
+            lambda s: s["tile.culled_2d"] + s["tile.culled_h"] + s["tile.culled_lens"] + s["tile.culled_H"]),
+    Derived("tile.cull_rate", "ratio", "tile.culled / tile.visited",
+            lambda s: _ratio(s["tile.culled_2d"] + s["tile.culled_h"] + s["tile.culled_lens"] + s["tile.culled_H"],
+                             s["tile.visited"])),
+    Derived("tile.cells_cull_rate", "ratio", "tile.cells_culled / tile.cells_tested",
+            lambda s: _ratio(s["tile.cells_culled"], s["tile.cells_tested"])),
+)
+
+MEASURED = {
+    "time.wall_s": ("s", "Wall-clock time of the engine call (setup, traversal, resolve)"),
+}
+
+
+def counter_docs() -> dict[str, tuple[str, str]]:
+    """{name: (unit, description)} for every raw counter, derived figure and measured figure."""
+    docs = dict(_core.counter_docs())
+    for d in DERIVED:
+        docs[d.name] = (d.unit, d.description)
+    docs.update(MEASURED)
+    return docs
+
+
+def flat_stats(raw: dict, measured: dict | None = None) -> dict:
+    """Raw counters + derived figures (+ measured figures), flat and sorted by name."""
+    flat = {k: int(v) for k, v in raw.items()}
+    for d in DERIVED:
+        flat[d.name] = d.formula(flat)
+    if measured:
+        flat.update(measured)
+    return dict(sorted(flat.items()))
+
+
+def nest(flat: dict) -> dict:
+    """{"a.b": v} -> {"a": {"b": v}} (names have the form stage.thing)."""
+    out: dict = {}
+    for key, value in flat.items():
+        node = out
+        parts = key.split(".")
+        for p in parts[:-1]:
+            node = node.setdefault(p, {})
+        node[parts[-1]] = value
+    return out
