@@ -22,38 +22,38 @@ def algorithm_docs() -> dict[str, str]:
 @dataclass(frozen=True)
 class PipelineConfig:
     """What the rasterizer does. Every field is validated; bad values raise ConfigError.
+    Field documentation: ``PipelineConfig.field_docs()`` and docs/config.md."""
 
-    algorithm        traversal algorithm, one of sim.algorithm_names() (default "bruteforce")
-    threads          worker threads, 0 = all hardware threads; results are identical for any count
-    tile_size        screen tile edge in pixels for tile-based algorithms: 1, 2, 4 or 8
-    lens_grid        G of the G x G lens-grid cells, 1/2/4/8/16, or "auto" (4; 8 at >= 256 spp)
-    halfspace        {"h": bool, "H": bool}: 001 Table 2 switches for the h_i and H_j lines
-    selective_H      001 Appendix A oracle: disable H_j lines on edges where they do not pay
-    oracle           "simplified" (Eq. 15, the paper's measurements) or "full" (Eq. 11-12)
-    c_sample, c_tile oracle costs in ops (None: the documented 4D sample test / one H_j line)
-    backface_cull    cull back-facing triangles (off by default)
-    op_count         "documented" (fast: charge each kernel's documented cost) or "exact"
-                     (run the kernels on the counting scalar type; slower; same numbers)
-    count_optimal    instrument tile.samples_optimal (001 Table 1 denominator)
-    bin_size         screen bin edge in pixels for threading (multiple of 8)
-    memory_limit_bytes  refuse renders whose memory estimate exceeds this
-    """
 
-    algorithm: str = "bruteforce"
-    threads: int = 0
-    tile_size: int = 2
-    lens_grid: int | str = "auto"
-    halfspace: dict = field(default_factory=lambda: {"h": True, "H": True})
-    selective_H: bool = True
-    oracle: str = "simplified"
-    c_sample: float | None = None
-    c_tile: float | None = None
-    backface_cull: bool = False
-    op_count: str = "documented"
-    count_optimal: bool = True
-    hinterleave_tile: int = 8
-    bin_size: int = 64
-    memory_limit_bytes: int = 4 << 30
+    algorithm: str = field(default="bruteforce", metadata={
+        "doc": "Traversal algorithm: one of sim.algorithm_names()"})
+    threads: int = field(default=0, metadata={
+        "doc": "Worker threads; 0 = all hardware threads (results are identical for any count)"})
+    tile_size: int = field(default=2, metadata={
+        "unit": "px", "doc": "Screen tile edge for tile-based algorithms: 1, 2, 4 or 8"})
+    lens_grid: int | str = field(default="auto", metadata={
+        "doc": "G of the G x G lens-grid cells (1, 2, 4, 8, 16) or 'auto' (4; 8 at >= 256 spp)"})
+    halfspace: dict = field(default_factory=lambda: {"h": True, "H": True}, metadata={
+        "doc": "{h: bool, H: bool}: use the h_i / H_j half-space lines (001 Table 2 modes)"})
+    selective_H: bool = field(default=True, metadata={
+        "doc": "001 Appendix A oracle: disable H_j lines on edges where they are not expected to pay"})
+    oracle: str = field(default="simplified", metadata={
+        "doc": "Oracle estimate: 'simplified' (001 Eq. 15, the paper's) or 'full' (Eq. 11-12)"})
+    c_sample: float | None = field(default=None, metadata={
+        "unit": "ops", "doc": "Oracle C_sample; null = the documented 4D sample-test cost"})
+    c_tile: float | None = field(default=None, metadata={
+        "unit": "ops", "doc": "Oracle C_tile (one edge's H_j lines vs one tile); null = documented"})
+    backface_cull: bool = field(default=False, metadata={"doc": "Cull back-facing triangles"})
+    op_count: str = field(default="documented", metadata={
+        "doc": "'documented' (charge each kernel's documented cost) or 'exact' (counting scalar type)"})
+    count_optimal: bool = field(default=True, metadata={
+        "doc": "Instrument tile.samples_optimal (exact lens region per tile; 001 Table 1)"})
+    hinterleave_tile: int = field(default=8, metadata={
+        "unit": "px", "doc": "HINTERLEAVE tile edge: 4, 8 or 16"})
+    bin_size: int = field(default=64, metadata={
+        "unit": "px", "doc": "Screen bin edge for threading (multiple of 8 and of hinterleave_tile)"})
+    memory_limit_bytes: int = field(default=4 << 30, metadata={
+        "unit": "bytes", "doc": "Refuse renders whose memory estimate exceeds this"})
 
     def __post_init__(self):
         names = algorithm_names()
@@ -87,6 +87,15 @@ class PipelineConfig:
         if self.bin_size % 8 or self.bin_size % self.hinterleave_tile:
             raise ConfigError(f"{_OWNER}.bin_size: expected a multiple of 8 and of hinterleave_tile, got {self.bin_size}")
         check_int(_OWNER, "memory_limit_bytes", self.memory_limit_bytes, 1 << 20, 1 << 50)
+
+    @classmethod
+    def field_docs(cls) -> dict[str, dict]:
+        """{field: {"default", "unit", "doc"}} for every field (the single declaration)."""
+        out = {}
+        for f in dataclasses.fields(cls):
+            default = f.default if f.default is not dataclasses.MISSING else f.default_factory()
+            out[f.name] = {"default": default, "unit": f.metadata.get("unit", ""), "doc": f.metadata["doc"]}
+        return out
 
     def resolved_lens_grid(self, spp: int) -> int:
         if self.lens_grid == "auto":

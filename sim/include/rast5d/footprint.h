@@ -167,9 +167,11 @@ inline bool tile_h_sets(const Footprint& fp, double x0, double x1, double y0, do
 inline bool in_exact_region(const TriSetup& tri, const Footprint& fp, const FrameConst& fc,
                             const PixelSamples& ps, int s, int tx, int ty, int T) {
   const double u = ps.u[s], v = ps.v[s];
-  if (!tri.moving)
-    return tiletest::footprint_overlaps_tile(fp.P, fp.n, fc.kx_d, fc.ky_d, fc.focus_d, u, v, tx, tx + T, ty,
-                                             ty + T);
+  if (!tri.moving) {
+    double x[6], y[6];
+    for (int j = 0; j < fp.n; ++j) x[j] = fp.lv[j].ax + u * fp.lv[j].bx, y[j] = fp.lv[j].ay + v * fp.lv[j].by;
+    return tiletest::polygon_overlaps_tile(x, y, fp.n, tx, tx + T, ty, ty + T);
+  }
   const double t = ps.t[s];
   double P[3][3];
   for (int j = 0; j < 3; ++j) {

@@ -17,6 +17,8 @@
 //    arithmetic, so every specialised kernel hits exactly the samples the 5D kernel hits.
 #pragma once
 
+#include <cstdint>
+
 #include "rast5d/arith.h"
 
 namespace rast5d {
@@ -24,18 +26,110 @@ namespace rast5d {
 enum class DimClass : int { k2D = 0, k3D = 1, k4D = 2, k5D = 3 };
 
 // Homogeneous edge functions and determinant of a (sheared) triangle at the sample (sx, sy).
-// Cost: kCostEdges (costs.h).
+// Cost: kCostEdges (costs.h). The scalar-argument form is the single definition of the arithmetic
+// (the batched fast path calls it in vectorisable loops); the array form forwards to it.
+template <class F>
+inline void edge_functions_s(F X0, F X1, F X2, F Y0, F Y1, F Y2, F W0, F W1, F W2, F sx, F sy, F& e0, F& e1,
+                             F& e2, F& det) {
+  const F rx0 = madd(W0, -sx, X0), ry0 = madd(W0, -sy, Y0);
+  const F rx1 = madd(W1, -sx, X1), ry1 = madd(W1, -sy, Y1);
+  const F rx2 = madd(W2, -sx, X2), ry2 = madd(W2, -sy, Y2);
+  e0 = rx1 * ry2 - ry1 * rx2;
+  e1 = rx2 * ry0 - ry2 * rx0;
+  e2 = rx0 * ry1 - ry0 * rx1;
+  det = madd(W2, e2, madd(W1, e1, W0 * e0));
+}
+
 template <class F>
 inline void edge_functions(const F X[3], const F Y[3], const F W[3], F sx, F sy, F e[3], F& det) {
-  F rx[3], ry[3];
-  for (int j = 0; j < 3; ++j) {
-    rx[j] = madd(W[j], -sx, X[j]);
-    ry[j] = madd(W[j], -sy, Y[j]);
+  edge_functions_s(X[0], X[1], X[2], Y[0], Y[1], Y[2], W[0], W[1], W[2], sx, sy, e[0], e[1], e[2], det);
+}
+
+// ---- batched fast path ---------------------------------------------------------------------------
+// The per-class sample kernels over a batch of samples in structure-of-arrays form, written as
+// straight-line loops over restrict-qualified parameters so the compiler vectorises them. They
+// perform exactly the operations of shear_static / lerp_vertices / shear_moving followed by
+// edge_functions, in the same order, so every result is bit-identical to the scalar kernels.
+struct BatchTri {
+  float X0, X1, X2, Y0, Y1, Y2, W0, W1, W2;
+  float cx0, cx1, cx2, cy0, cy1, cy2;        // static shear coefficients (4D)
+  float dX0, dX1, dX2, dY0, dY1, dY2, dW0, dW1, dW2;  // motion (3D, 5D)
+  float kx, nkx, ky, nky;                    // moving shear constants (5D)
+};
+
+[[gnu::noinline]] inline void batch_edges_2d(int n, const BatchTri& T, const float* __restrict bx,
+                                              const float* __restrict by, float* __restrict e0,
+                                              float* __restrict e1, float* __restrict e2, float* __restrict dt) {
+  const float X0 = T.X0, X1 = T.X1, X2 = T.X2, Y0 = T.Y0, Y1 = T.Y1, Y2 = T.Y2, W0 = T.W0, W1 = T.W1, W2 = T.W2;
+  for (int i = 0; i < n; ++i)
+    edge_functions_s(X0, X1, X2, Y0, Y1, Y2, W0, W1, W2, bx[i], by[i], e0[i], e1[i], e2[i], dt[i]);
+}
+
+[[gnu::noinline]] inline void batch_edges_4d(int n, const BatchTri& T, const float* __restrict bx,
+                                              const float* __restrict by, const float* __restrict bu,
+                                              const float* __restrict bv, float* __restrict e0,
+                                              float* __restrict e1, float* __restrict e2, float* __restrict dt) {
+  const float X0 = T.X0, X1 = T.X1, X2 = T.X2, Y0 = T.Y0, Y1 = T.Y1, Y2 = T.Y2, W0 = T.W0, W1 = T.W1, W2 = T.W2;
+  const float cx0 = T.cx0, cx1 = T.cx1, cx2 = T.cx2, cy0 = T.cy0, cy1 = T.cy1, cy2 = T.cy2;
+  for (int i = 0; i < n; ++i) {
+    const float u = bu[i], v = bv[i];
+    edge_functions_s(madd(u, cx0, X0), madd(u, cx1, X1), madd(u, cx2, X2), madd(v, cy0, Y0), madd(v, cy1, Y1),
+                     madd(v, cy2, Y2), W0, W1, W2, bx[i], by[i], e0[i], e1[i], e2[i], dt[i]);
   }
-  e[0] = rx[1] * ry[2] - ry[1] * rx[2];
-  e[1] = rx[2] * ry[0] - ry[2] * rx[0];
-  e[2] = rx[0] * ry[1] - ry[0] * rx[1];
-  det = madd(W[2], e[2], madd(W[1], e[1], W[0] * e[0]));
+}
+
+[[gnu::noinline]] inline void batch_edges_3d(int n, const BatchTri& T, const float* __restrict bx,
+                                              const float* __restrict by, const float* __restrict bt,
+                                              float* __restrict e0, float* __restrict e1, float* __restrict e2,
+                                              float* __restrict dt) {
+  const float X0 = T.X0, X1 = T.X1, X2 = T.X2, Y0 = T.Y0, Y1 = T.Y1, Y2 = T.Y2, W0 = T.W0, W1 = T.W1, W2 = T.W2;
+  const float dX0 = T.dX0, dX1 = T.dX1, dX2 = T.dX2, dY0 = T.dY0, dY1 = T.dY1, dY2 = T.dY2;
+  const float dW0 = T.dW0, dW1 = T.dW1, dW2 = T.dW2;
+  for (int i = 0; i < n; ++i) {
+    const float t = bt[i];
+    edge_functions_s(madd(t, dX0, X0), madd(t, dX1, X1), madd(t, dX2, X2), madd(t, dY0, Y0), madd(t, dY1, Y1),
+                     madd(t, dY2, Y2), madd(t, dW0, W0), madd(t, dW1, W1), madd(t, dW2, W2), bx[i], by[i], e0[i],
+                     e1[i], e2[i], dt[i]);
+  }
+}
+
+[[gnu::noinline]] inline void batch_edges_5d(int n, const BatchTri& T, const float* __restrict bx,
+                                              const float* __restrict by, const float* __restrict bu,
+                                              const float* __restrict bv, const float* __restrict bt,
+                                              float* __restrict e0, float* __restrict e1, float* __restrict e2,
+                                              float* __restrict dt) {
+  const float X0 = T.X0, X1 = T.X1, X2 = T.X2, Y0 = T.Y0, Y1 = T.Y1, Y2 = T.Y2, W0 = T.W0, W1 = T.W1, W2 = T.W2;
+  const float dX0 = T.dX0, dX1 = T.dX1, dX2 = T.dX2, dY0 = T.dY0, dY1 = T.dY1, dY2 = T.dY2;
+  const float dW0 = T.dW0, dW1 = T.dW1, dW2 = T.dW2;
+  const float kx = T.kx, nkx = T.nkx, ky = T.ky, nky = T.nky;
+  for (int i = 0; i < n; ++i) {
+    const float t = bt[i], u = bu[i], v = bv[i];
+    const float xt0 = madd(t, dX0, X0), yt0 = madd(t, dY0, Y0), wt0 = madd(t, dW0, W0);
+    const float xt1 = madd(t, dX1, X1), yt1 = madd(t, dY1, Y1), wt1 = madd(t, dW1, W1);
+    const float xt2 = madd(t, dX2, X2), yt2 = madd(t, dY2, Y2), wt2 = madd(t, dW2, W2);
+    edge_functions_s(madd(u, madd(wt0, kx, nkx), xt0), madd(u, madd(wt1, kx, nkx), xt1),
+                     madd(u, madd(wt2, kx, nkx), xt2), madd(v, madd(wt0, ky, nky), yt0),
+                     madd(v, madd(wt1, ky, nky), yt1), madd(v, madd(wt2, ky, nky), yt2), wt0, wt1, wt2, bx[i], by[i],
+                     e0[i], e1[i], e2[i], dt[i]);
+  }
+}
+
+// Batch decision flags: 1 = covered (det != 0 and every e_i strictly has det's sign; back-facing
+// det > 0 rejected when culling), 2 = undecided (an e_i is exactly 0: the scalar top-left path
+// decides). Same decisions as edge_signs() for every sample it marks 1 or 0.
+[[gnu::noinline]] inline void batch_flags(int n, const float* __restrict e0, const float* __restrict e1,
+                                           const float* __restrict e2, const float* __restrict det,
+                                           bool back_face_cull, std::uint8_t* __restrict flags) {
+  const int bfc = back_face_cull ? 1 : 0;
+  for (int i = 0; i < n; ++i) {
+    const float a = e0[i], b = e1[i], c = e2[i], d = det[i];
+    const int dpos = d > 0.0f, dneg = d < 0.0f;
+    const int allpos = (a > 0.0f) & (b > 0.0f) & (c > 0.0f);
+    const int allneg = (a < 0.0f) & (b < 0.0f) & (c < 0.0f);
+    const int anyzero = (a == 0.0f) | (b == 0.0f) | (c == 0.0f);
+    const int cov = (dpos & allpos & (1 - bfc)) | (dneg & allneg);
+    flags[i] = static_cast<std::uint8_t>(cov | ((anyzero & (dpos | dneg)) << 1));
+  }
 }
 
 // Sign tests of the edge functions against det. Cost: kCostSigns (4 CMP).

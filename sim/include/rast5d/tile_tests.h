@@ -184,17 +184,26 @@ inline AxisSet axis_set(const Gaps& g) {
   return s;
 }
 
-// Is the lens coordinate x outside every cut? Cost: s.n_cmp CMP (all evaluated).
+// Is the lens coordinate x outside every cut? Cost: s.n_cmp CMP. The fast path evaluates all
+// four bounds branch-free (an infinite bound compares trivially); the counting path performs
+// exactly the n_cmp comparisons the hardware needs.
 template <class D>
 inline bool axis_pass(const AxisSet& s, D x) {
-  bool pass = true;
-  for (int k = 0; k < s.n_cuts; ++k) {
-    bool above = true, below = true;
-    if (s.cut_lo[k] != -kInf) above = x > D(s.cut_lo[k]);
-    if (s.cut_hi[k] != kInf) below = x < D(s.cut_hi[k]);
-    if (above && below) pass = false;
+  if constexpr (is_counted_v<D>) {
+    bool pass = true;
+    for (int k = 0; k < s.n_cuts; ++k) {
+      bool above = true, below = true;
+      if (s.cut_lo[k] != -kInf) above = x > D(s.cut_lo[k]);
+      if (s.cut_hi[k] != kInf) below = x < D(s.cut_hi[k]);
+      if (above && below) pass = false;
+    }
+    return pass;
+  } else {
+    const double v = x;
+    const bool in0 = (s.n_cuts > 0) & (v > s.cut_lo[0]) & (v < s.cut_hi[0]);
+    const bool in1 = (s.n_cuts > 1) & (v > s.cut_lo[1]) & (v < s.cut_hi[1]);
+    return !(in0 | in1);
   }
-  return pass;
 }
 
 // Lens-grid cells of one axis that intersect the active set, as a bit mask (bit i = cell i).
@@ -452,18 +461,14 @@ inline bool tile_outside_2d(const Edges2D& e, double x0, double x1, double y0, d
 
 // ---- exact reference region (instrumentation, uncounted) -------------------------------------
 
-// Does the convex footprint polygon (pixel-homogeneous vertices, all W > 0), seen from lens point
-// (u, v), overlap the tile [x0, x1] x [y0, y1]? Exact separating-axis test in double: the
-// optimal tile test of 001 §4 evaluated point-wise, used for tile.samples_optimal.
-inline bool footprint_overlaps_tile(const double (*P)[3], int n, double kx, double ky, double focus,
-                                    double u, double v, double x0, double x1, double y0, double y1) {
-  double x[6], y[6];
+// Does the convex polygon with screen vertices (x[j], y[j]) overlap the tile [x0, x1] x [y0, y1]?
+// Exact separating-axis test in double: the optimal tile test of 001 §4 evaluated point-wise,
+// used for tile.samples_optimal (uncounted instrumentation).
+inline bool polygon_overlaps_tile(const double* x, const double* y, int n, double x0, double x1, double y0,
+                                  double y1) {
   double lx = kInf, hx = -kInf, ly = kInf, hy = -kInf;
-  for (int j = 0; j < n; ++j) {
-    x[j] = (P[j][0] + u * kx * (P[j][2] - focus)) / P[j][2];
-    y[j] = (P[j][1] + v * ky * (P[j][2] - focus)) / P[j][2];
+  for (int j = 0; j < n; ++j)
     lx = std::min(lx, x[j]), hx = std::max(hx, x[j]), ly = std::min(ly, y[j]), hy = std::max(hy, y[j]);
-  }
   if (hx < x0 || lx > x1 || hy < y0 || ly > y1) return false;
   double area = 0;
   for (int j = 0; j < n; ++j) area += x[j] * y[(j + 1) % n] - x[(j + 1) % n] * y[j];
@@ -480,6 +485,17 @@ inline bool footprint_overlaps_tile(const double (*P)[3], int n, double kx, doub
     if (all_out) return false;
   }
   return true;
+}
+
+// The footprint polygon (pixel-homogeneous vertices, all W > 0) seen from lens point (u, v).
+inline bool footprint_overlaps_tile(const double (*P)[3], int n, double kx, double ky, double focus,
+                                    double u, double v, double x0, double x1, double y0, double y1) {
+  double x[6], y[6];
+  for (int j = 0; j < n; ++j) {
+    x[j] = (P[j][0] + u * kx * (P[j][2] - focus)) / P[j][2];
+    y[j] = (P[j][1] + v * ky * (P[j][2] - focus)) / P[j][2];
+  }
+  return polygon_overlaps_tile(x, y, n, x0, x1, y0, y1);
 }
 
 }  // namespace rast5d::tiletest

@@ -1,6 +1,7 @@
 // BRUTEFORCE (001_3248aaf17c219d5e.txt §6): test every sample of every pixel inside the triangle's
 // conservative screen bounds over the whole lens and shutter. No tile test.
 #include <algorithm>
+#include <vector>
 
 #include "rast5d/traversal.h"
 
@@ -10,7 +11,9 @@ namespace {
 template <class A>
 class BruteForce final : public Traversal {
  public:
-  BruteForce(const Frame& f, ThreadState& ts) : f_(f), pipe_(f, ts) {}
+  BruteForce(const Frame& f, ThreadState& ts) : f_(f), pipe_(f, ts), iota_(f.table.spp()) {
+    for (int s = 0; s < f.table.spp(); ++s) iota_[s] = s;
+  }
 
   void rasterize(const TriSetup& tri, const BinRect& bin, bool /*charge_setup*/) override {
     const int x0 = std::max(tri.bx0, bin.x0), x1 = std::min(tri.bx1, bin.x1);
@@ -19,13 +22,14 @@ class BruteForce final : public Traversal {
     for (int py = y0; py < y1; ++py)
       for (int px = x0; px < x1; ++px) {
         const PixelSamples ps = f_.table.pixel(px, py);
-        for (int s = 0; s < spp; ++s) pipe_.test(tri, px, py, ps, s);
+        pipe_.test_many(tri, px, py, ps, nullptr, spp);
       }
   }
 
  private:
   const Frame& f_;
   SamplePipeline<A> pipe_;
+  std::vector<int> iota_;
 };
 
 }  // namespace

@@ -84,13 +84,12 @@ class Interleave final : public Traversal {
     for (int py = y0; py < y1; ++py)
       for (int px = x0; px < x1; ++px) {
         const PixelSamples ps = f_.table.pixel(px, py);
-        for (int k = ps.lens_offsets[i]; k < ps.lens_offsets[i + 1]; ++k) {
-          const int s = ps.lens_order[k];
-          if (tri.moving)
-            pipe_.test(tri, px, py, ps, s);
-          else
-            pipe_.test_sheared(tri, xs, ys, px, py, ps, s);
-        }
+        const int* idx = ps.lens_order + ps.lens_offsets[i];
+        const int n = ps.lens_offsets[i + 1] - ps.lens_offsets[i];
+        if (tri.moving)
+          pipe_.test_many(tri, px, py, ps, idx, n);
+        else
+          pipe_.test_many_sheared(tri, xs, ys, 0, px, py, ps, idx, n);
       }
   }
 

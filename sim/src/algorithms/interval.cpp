@@ -43,8 +43,8 @@ class Interval final : public Traversal {
           for (int py = std::max(ty, y0); py < std::min(ty + T, y1); ++py)
             for (int px = std::max(tx, x0); px < std::min(tx + T, x1); ++px) {
               const PixelSamples ps = f_.table.pixel(px, py);
-              for (int k = ps.cell_offsets[c]; k < ps.cell_offsets[c + 1]; ++k)
-                pipe_.test(tri, px, py, ps, ps.cell_order[k]);
+              pipe_.test_many(tri, px, py, ps, ps.cell_order + ps.cell_offsets[c],
+                              ps.cell_offsets[c + 1] - ps.cell_offsets[c]);
             }
     }
     if (charge_setup) {

@@ -3,6 +3,7 @@
 // tile's pixels is tested against them and, if inside, inside-tested. No lens grid and no early out
 // at tile level (an empty region still costs each sample its comparisons).
 #include <algorithm>
+#include <vector>
 
 #include "rast5d/footprint.h"
 
@@ -41,25 +42,26 @@ class Laine final : public Traversal {
         for (int py = ty; py < std::min(ty + T, bin.y1); ++py)
           for (int px = tx; px < std::min(tx + T, bin.x1); ++px) {
             const PixelSamples ps = f_.table.pixel(px, py);
+            int n = 0;
             for (int s = 0; s < spp; ++s) {
+              bool pass;
               if (empty) {
                 // Laine's per-sample test u_min <= u <= u_max, v_min <= v <= v_max against an
                 // empty region (u_min > u_max): four comparisons that always fail.
                 const D u(ps.u[s]), v(ps.v[s]);
-                const bool in = (u >= D(1.0)) & (u <= D(-1.0)) & (v >= D(1.0)) & (v <= D(-1.0));
-                charge<A>(c_[Counter::ops_sample_region], region_cost);
-                if (!in) continue;
+                pass = (u >= D(1.0)) & (u <= D(-1.0)) & (v >= D(1.0)) & (v <= D(-1.0));
+              } else {
+                pass = region_cost == 0 ||
+                       (tiletest::axis_pass(sx, D(ps.u[s])) & tiletest::axis_pass(sy, D(ps.v[s])));
               }
-              if (region_cost) {
-                const bool pu = tiletest::axis_pass(sx, D(ps.u[s]));
-                const bool pv = tiletest::axis_pass(sy, D(ps.v[s]));
-                charge<A>(c_[Counter::ops_sample_region], region_cost);
-                if (!(pu && pv)) continue;
-              }
-              if (p.count_optimal && fp.n > 0 && in_exact_region(tri, fp, f_.fc, ps, s, tx, ty, T))
-                ++c_[Counter::tile_samples_optimal];
-              pipe_.test(tri, px, py, ps, s);
+              cand_[n] = s;
+              n += pass;
             }
+            charge<A>(c_[Counter::ops_sample_region], region_cost * static_cast<std::uint64_t>(spp));
+            if (p.count_optimal && fp.n > 0)
+              for (int i = 0; i < n; ++i)
+                c_[Counter::tile_samples_optimal] += in_exact_region(tri, fp, f_.fc, ps, cand_[i], tx, ty, T);
+            pipe_.test_many(tri, px, py, ps, cand_.data(), n);
           }
       }
   }
@@ -68,6 +70,7 @@ class Laine final : public Traversal {
   const Frame& f_;
   Counters& c_;
   SamplePipeline<A> pipe_;
+  std::vector<int> cand_ = std::vector<int>(4096);
 };
 
 }  // namespace

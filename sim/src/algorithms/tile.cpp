@@ -24,7 +24,10 @@ class Tile final : public Traversal {
 
  public:
   Tile(const Frame& f, ThreadState& ts)
-      : f_(f), c_(ts.counters), pipe_(f, ts), lens_mask_(lens_cells(f.p.lens_shape, f.p.lens_grid)) {}
+      : f_(f), c_(ts.counters), pipe_(f, ts), lens_mask_(lens_cells(f.p.lens_shape, f.p.lens_grid)),
+        iota_(f.table.spp()) {
+    for (int s = 0; s < f.table.spp(); ++s) iota_[s] = s;
+  }
 
   void rasterize(const TriSetup& tri, const BinRect& bin, bool charge_setup) override {
     std::uint64_t setup_ops = 0;
@@ -98,7 +101,7 @@ class Tile final : public Traversal {
       for (int py = ty; py < ty1; ++py)
         for (int px = tx; px < tx1; ++px) {
           const PixelSamples ps = f_.table.pixel(px, py);
-          for (int s = 0; s < spp; ++s) pipe_.test(tri, px, py, ps, s);
+          pipe_.test_many(tri, px, py, ps, nullptr, spp);
           if (optimal_tile) c_[Counter::tile_samples_optimal] += spp;
         }
     });
@@ -202,24 +205,26 @@ class Tile final : public Traversal {
       for (int py = ty; py < ty1; ++py)
         for (int px = tx; px < tx1; ++px) {
           const PixelSamples ps = f_.table.pixel(px, py);
+          // Gather the candidates of the surviving cells that pass the h_i lines (branch-free
+          // compaction), then inside-test them.
+          int n = 0, checked = 0;
           for (const int c : cell_list_) {
-            for (int k = ps.cell_offsets[c]; k < ps.cell_offsets[c + 1]; ++k) {
+            const int k0 = ps.cell_offsets[c], k1 = ps.cell_offsets[c + 1];
+            checked += k1 - k0;
+            for (int k = k0; k < k1; ++k) {
               const int s = ps.cell_order[k];
-              if (region_cost) {
-                const bool pu = tiletest::axis_pass(sx, D(ps.u[s]));
-                const bool pv = tiletest::axis_pass(sy, D(ps.v[s]));
-                charge<A>(c_[Counter::ops_sample_region], region_cost);
-                if (!(pu && pv)) continue;
-              }
-              if (count_opt && in_exact_region(tri, fp, f_.fc, ps, s, tx, ty, T)) ++c_[Counter::tile_samples_optimal];
-              if (kInterleaved && !tri.moving) {
-                const int li = ps.lens_index[s];
-                pipe_.test_sheared(tri, &sx_[3 * li], &sy_[3 * li], px, py, ps, s);
-              } else {
-                pipe_.test(tri, px, py, ps, s);
-              }
+              cand_[n] = s;
+              n += region_cost == 0 || (tiletest::axis_pass(sx, D(ps.u[s])) & tiletest::axis_pass(sy, D(ps.v[s])));
             }
           }
+          if (region_cost) charge<A>(c_[Counter::ops_sample_region], region_cost * checked);
+          if (count_opt)
+            for (int i = 0; i < n; ++i)
+              c_[Counter::tile_samples_optimal] += in_exact_region(tri, fp, f_.fc, ps, cand_[i], tx, ty, T);
+          if (kInterleaved && !tri.moving)
+            pipe_.test_many_sheared(tri, sx_.data(), sy_.data(), 3, px, py, ps, cand_.data(), n);
+          else
+            pipe_.test_many(tri, px, py, ps, cand_.data(), n);
         }
     });
   }
@@ -229,6 +234,8 @@ class Tile final : public Traversal {
   SamplePipeline<A> pipe_;
   tiletest::CellMask lens_mask_;
   std::vector<int> cell_list_;
+  std::vector<int> cand_ = std::vector<int>(4096);
+  std::vector<int> iota_;
   std::vector<float> sx_, sy_;
 };
 

@@ -1,0 +1,76 @@
+"""Type stub for the rast5d engine (sim/bindings/module.cpp). Use the Python face (sim.render,
+sim.Camera, sim.SampleTable, sim.PipelineConfig) rather than calling these directly."""
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+class LensShape:
+    square: LensShape
+    disk: LensShape
+    hexagon: LensShape
+
+class RenderParams:
+    """Engine parameters; see sim/include/rast5d/params.h. Vertices are pixel-homogeneous:
+    X_h = (x_clip + w) * width / 2, Y_h = (w - y_clip) * height / 2, W = w."""
+    width: int
+    height: int
+    coc_x_px: float  # shear coefficient for u in pixels (the CoC radius at infinity)
+    coc_y_px: float  # shear coefficient for v (negative: rows grow downwards)
+    focus_w: float
+    near_w: float
+    lens_shape: LensShape
+    algorithm: str
+    tile_size: int
+    lens_grid: int
+    hinterleave_tile: int
+    threads: int
+    bin_size: int
+    halfspace_h: bool
+    halfspace_H: bool
+    selective_H: bool
+    oracle_full: bool
+    c_sample: float  # < 0: the documented 4D sample-test cost
+    c_tile: float  # < 0: the documented cost of one edge's H_j lines against one tile
+    backface_cull: bool
+    exact_ops: bool
+    count_optimal: bool
+    table_has_lens: bool
+    table_has_time: bool
+    def __init__(self) -> None: ...
+
+def render(
+    params: RenderParams,
+    v0: npt.NDArray[np.float32],  # (N, 3, 3) pixel-homogeneous vertices at t = 0
+    v1: npt.NDArray[np.float32],  # (N, 3, 3) at t = 1
+    colors: npt.NDArray[np.float32],  # (N, 3, 3) linear RGB
+    samples: npt.NDArray[np.float32],  # (P, P, spp, 5): x, y, u, v, t
+    lens_index: npt.NDArray[np.int32],  # (P, P, spp) or empty
+    lens_uv: npt.NDArray[np.float32],  # (N_lens, 2) or empty
+    export_samples: bool = False,
+) -> dict[str, Any]:
+    """Returns {'image': (H, W, 3) float32, 'counters': {name: int}} and, with export_samples,
+    'sample_depth' (H, W, spp) float32 and 'sample_triangle' (H, W, spp) int32. Releases the GIL;
+    Ctrl-C raises KeyboardInterrupt. Raises ValueError for invalid parameters."""
+
+def validate(params: RenderParams, samples: npt.NDArray[np.float32], lens_index: npt.NDArray[np.int32],
+             lens_uv: npt.NDArray[np.float32]) -> None: ...
+def lens_grid_buckets(
+    samples: npt.NDArray[np.float32], grid: int
+) -> tuple[npt.NDArray[np.int32], npt.NDArray[np.int32], npt.NDArray[np.int32]]:
+    """(order (P,P,spp), counts (P,P,G*G), offsets (P,P,G*G)) of 001 Fig. 10."""
+
+def probe(
+    params: RenderParams,
+    v0: npt.NDArray[np.float32],  # (3, 3) one triangle at t = 0
+    v1: npt.NDArray[np.float32],  # (3, 3) at t = 1
+    points: npt.NDArray[np.float32],  # (M, 5): absolute pixel x, y, then u, v, t
+    force_general: bool = False,
+) -> dict[str, Any]:
+    """Exact sample test at arbitrary points: {'dim_class': int (0..3 = 2D, 3D, 4D, 5D; -1 culled
+    near), 'covered', 'hit': bool (M,), 'depth': float32 (M,) z = 1 - near / w, 'w_hit': float32}."""
+
+def counter_docs() -> dict[str, tuple[str, str]]: ...
+def algorithms() -> list[tuple[str, str, bool]]: ...
+def measure_kernel_costs(trials: int = 100, seed: int = 1) -> dict[str, tuple[int, int, int]]:
+    """{kernel: (documented cost, min counted, max counted)} over random inputs."""
