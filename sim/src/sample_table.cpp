@@ -22,13 +22,17 @@ SampleTable::SampleTable(int period, int spp, const float* samples, int grid,
   }
   const int cells = grid * grid;
   cell_order_.resize(n);
+  cell_idx_.assign(n, 0);
   cell_offsets_.assign(npix * (cells + 1), 0);
   std::vector<int> cell(spp);
   for (std::size_t p = 0; p < npix; ++p) {
     const std::size_t base = p * spp;
     std::int32_t* order = &cell_order_[base];
     std::int32_t* off = &cell_offsets_[p * (cells + 1)];
-    for (int s = 0; s < spp; ++s) cell[s] = cell_of(u_[base + s], v_[base + s], grid);
+    for (int s = 0; s < spp; ++s) {
+      cell[s] = cell_of(u_[base + s], v_[base + s], grid);
+      cell_idx_[base + s] = static_cast<std::uint8_t>(cell[s] < 256 ? cell[s] : 255);
+    }
     std::iota(order, order + spp, 0);
     std::stable_sort(order, order + spp, [&](int a, int b) { return cell[a] < cell[b]; });
     for (int s = 0; s < spp; ++s) ++off[cell[s] + 1];

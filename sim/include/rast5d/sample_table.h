@@ -25,6 +25,7 @@ struct PixelSamples {
   const float* u;
   const float* v;
   const float* t;
+  const std::uint8_t* cell;          // spp entries: lens-grid cell of each sample (G <= 16)
   const std::int32_t* cell_order;    // spp entries
   const std::int32_t* cell_offsets;  // G*G + 1 entries
   const std::int32_t* lens_index;    // spp entries (interleaved tables only)
@@ -57,6 +58,7 @@ class SampleTable {
     ps.u = &u_[base];
     ps.v = &v_[base];
     ps.t = &t_[base];
+    ps.cell = &cell_idx_[base];
     ps.cell_order = &cell_order_[base];
     ps.cell_offsets = &cell_offsets_[pi * (grid_ * grid_ + 1)];
     if (n_lens_ > 0) {
@@ -84,6 +86,7 @@ class SampleTable {
   int period_, spp_, grid_, n_lens_;
   std::vector<float> x_, y_, u_, v_, t_;
   std::vector<std::int32_t> cell_order_, cell_offsets_;
+  std::vector<std::uint8_t> cell_idx_;
   std::vector<float> lens_u_, lens_v_;
   std::vector<std::int32_t> lens_index_, lens_order_, lens_offsets_;
 };

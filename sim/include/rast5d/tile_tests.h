@@ -41,6 +41,7 @@
 #include <bitset>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 
 #include "rast5d/arith.h"
@@ -51,6 +52,18 @@ namespace rast5d::tiletest {
 inline constexpr double kMarginAbs = 0x1p-10;  // pixels
 inline constexpr double kMarginRel = 0x1p-18;  // of the tile coordinate's magnitude
 inline constexpr double kInf = std::numeric_limits<double>::infinity();
+inline constexpr float kInfF = std::numeric_limits<float>::infinity();
+
+inline float round_up_to_float(double x) {
+  float f = static_cast<float>(x);
+  if (static_cast<double>(f) < x) f = std::nextafter(f, kInfF);
+  return f;
+}
+inline float round_down_to_float(double x) {
+  float f = static_cast<float>(x);
+  if (static_cast<double>(f) > x) f = std::nextafter(f, -kInfF);
+  return f;
+}
 
 // One bit per lens-grid cell (G <= 16), bit j * G + i.
 using CellMask = std::bitset<256>;
@@ -134,6 +147,9 @@ struct AxisSet {
   bool empty = false;
   int n_cuts = 0;
   double cut_lo[2] = {0, 0}, cut_hi[2] = {0, 0};
+  // The cuts as float open intervals, rounded inwards (so a float sample compared against them is
+  // culled only if it is inside the double cut: conservative). Unused cuts are (+inf, -inf).
+  float fl_lo[2] = {kInfF, kInfF}, fl_hi[2] = {-kInfF, -kInfF};
   int n_cmp = 0;        // per-sample comparisons (ops.sample_region)
   int n_intervals = 0;  // disjoint active intervals (uv-box factor)
   double iv_lo[3] = {0, 0, 0}, iv_hi[3] = {0, 0, 0};
@@ -160,6 +176,8 @@ inline AxisSet axis_set(const Gaps& g) {
     }
     s.cut_lo[s.n_cuts] = open_lo ? -kInf : g.L[k];
     s.cut_hi[s.n_cuts] = open_hi ? kInf : g.R[k];
+    s.fl_lo[s.n_cuts] = open_lo ? -kInfF : round_up_to_float(g.L[k]);
+    s.fl_hi[s.n_cuts] = open_hi ? kInfF : round_down_to_float(g.R[k]);
     s.n_cmp += (open_lo || open_hi) ? 1 : 2;
     ++s.n_cuts;
   }
@@ -184,26 +202,61 @@ inline AxisSet axis_set(const Gaps& g) {
   return s;
 }
 
-// Is the lens coordinate x outside every cut? Cost: s.n_cmp CMP. The fast path evaluates all
-// four bounds branch-free (an infinite bound compares trivially); the counting path performs
-// exactly the n_cmp comparisons the hardware needs.
-template <class D>
-inline bool axis_pass(const AxisSet& s, D x) {
-  if constexpr (is_counted_v<D>) {
+// Is the (float) lens coordinate x outside every cut? Cost: s.n_cmp CMP. The counting path performs
+// exactly the n_cmp comparisons the hardware needs; the fast path evaluates them branch-free
+// (unused and infinite bounds compare trivially). Both compare against the same float bounds.
+template <class F>
+inline bool axis_pass(const AxisSet& s, F x) {
+  if constexpr (is_counted_v<F>) {
     bool pass = true;
     for (int k = 0; k < s.n_cuts; ++k) {
       bool above = true, below = true;
-      if (s.cut_lo[k] != -kInf) above = x > D(s.cut_lo[k]);
-      if (s.cut_hi[k] != kInf) below = x < D(s.cut_hi[k]);
+      if (s.cut_lo[k] != -kInf) above = x > F(s.fl_lo[k]);
+      if (s.cut_hi[k] != kInf) below = x < F(s.fl_hi[k]);
       if (above && below) pass = false;
     }
     return pass;
   } else {
-    const double v = x;
-    const bool in0 = (s.n_cuts > 0) & (v > s.cut_lo[0]) & (v < s.cut_hi[0]);
-    const bool in1 = (s.n_cuts > 1) & (v > s.cut_lo[1]) & (v < s.cut_hi[1]);
+    const float v = x;
+    const bool in0 = (v > s.fl_lo[0]) & (v < s.fl_hi[0]);
+    const bool in1 = (v > s.fl_lo[1]) & (v < s.fl_hi[1]);
     return !(in0 | in1);
   }
+}
+
+// Fast-path candidate selection for one pixel: flag[s] = sample s is in an active lens cell
+// (bit cell[s] of active, G * G <= 64; kCells = false: every cell) and passes both axis sets.
+template <bool kCells>
+[[gnu::noinline]] inline void select_candidates(int spp, const float* __restrict u, const float* __restrict v,
+                                                 const std::uint8_t* __restrict cell, std::uint64_t active,
+                                                 const AxisSet& su, const AxisSet& sv,
+                                                 std::uint8_t* __restrict flags) {
+  const float a0 = su.fl_lo[0], b0 = su.fl_hi[0], a1 = su.fl_lo[1], b1 = su.fl_hi[1];
+  const float c0 = sv.fl_lo[0], d0 = sv.fl_hi[0], c1 = sv.fl_lo[1], d1 = sv.fl_hi[1];
+  for (int s = 0; s < spp; ++s) {
+    const float x = u[s], y = v[s];
+    const int in_u = ((x > a0) & (x < b0)) | ((x > a1) & (x < b1));
+    const int in_v = ((y > c0) & (y < d0)) | ((y > c1) & (y < d1));
+    int act = 1;
+    if constexpr (kCells) act = static_cast<int>((active >> cell[s]) & 1u);
+    flags[s] = static_cast<std::uint8_t>(act & (1 - in_u) & (1 - in_v));
+  }
+}
+
+// Indices of the set flags, in order (skipping 8 zero flags at a time).
+inline int compact_flags(const std::uint8_t* flags, int n, int* out) {
+  int m = 0;
+  for (int w = 0; w < n; w += 8) {
+    std::uint64_t word = 0;
+    std::memcpy(&word, flags + w, 8);
+    if (!word) continue;
+    const int end = std::min(n, w + 8);
+    for (int i = w; i < end; ++i) {
+      out[m] = i;
+      m += flags[i];
+    }
+  }
+  return m;
 }
 
 // Lens-grid cells of one axis that intersect the active set, as a bit mask (bit i = cell i).

@@ -52,23 +52,30 @@ struct ThreadState {
 };
 
 // The sample test and backend, shared by every algorithm.
+//
+// Two ways in: test() / test_sheared() for one sample, or the batch protocol
+//   begin(tri) | begin_sheared(tri, Xs, Ys, stride);  push(px, py, ps, s)... | push_pixel(...);  flush()
+// A batch holds candidate samples of one triangle (any pixels; each sample at most once). On the
+// fast path the batch is evaluated by vectorised straight-line kernels performing exactly the
+// float operations of the scalar kernels (bit-identical results, same counts); on the counting
+// path push() tests immediately with the counting scalar type. begin() flushes a pending batch.
 template <class A>
 class SamplePipeline {
  public:
   using F = typename A::f32;
 
-  SamplePipeline(const Frame& f, ThreadState& ts) : f_(f), c_(ts.counters), buf_(ts.buffers) {}
+  SamplePipeline(const Frame& f, ThreadState& ts)
+      : f_(f), c_(ts.counters), buf_(ts.buffers), cap_(std::max(kBatch, f.table.spp())) {
+    for (auto* v : {&gx_, &gy_, &gu_, &gv_, &gt_, &bdet_}) v->resize(cap_);
+    for (auto* v : {&bpx_, &bpy_, &bs_, &bl_}) v->resize(cap_);
+    be_.resize(3 * static_cast<std::size_t>(cap_));
+    flags_.assign(cap_ + 8, 0);
+  }
 
   // Test canonical sample s of pixel (px, py) against tri with the kernel of tri's class.
   inline void test(const TriSetup& tri, int px, int py, const PixelSamples& ps, int s) {
-    const F sx = F(static_cast<float>(px) + ps.x[s]);
-    const F sy = F(static_cast<float>(py) + ps.y[s]);
-    F X[3], Y[3], W[3], e[3], det;
-    int n_ties;
-    const bool covered = inside_test(tri, tri.cls, f_.fc, sx, sy, F(ps.u[s]), F(ps.v[s]), F(ps.t[s]),
-                                     f_.p.backface_cull, X, Y, W, e, det, n_ties);
-    ++c_[kTestedByClass[static_cast<int>(tri.cls)]];
-    finish(tri, covered, e, det, n_ties, px, py, s, kInsideCost[static_cast<int>(tri.cls)]);
+    test_values(tri, F(static_cast<float>(px) + ps.x[s]), F(static_cast<float>(py) + ps.y[s]), F(ps.u[s]),
+                F(ps.v[s]), F(ps.t[s]), px, py, s);
   }
 
   // Test with static vertices already sheared to the sample's (discrete) lens coordinate: the 2D
@@ -76,104 +83,74 @@ class SamplePipeline {
   // result is bit-identical to test().
   inline void test_sheared(const TriSetup& tri, const float Xs[3], const float Ys[3], int px, int py,
                            const PixelSamples& ps, int s) {
-    const F sx = F(static_cast<float>(px) + ps.x[s]);
-    const F sy = F(static_cast<float>(py) + ps.y[s]);
-    F X[3], Y[3], W[3], e[3], det;
-    for (int j = 0; j < 3; ++j) X[j] = F(Xs[j]), Y[j] = F(Ys[j]), W[j] = F(tri.W[j]);
-    int n_ties;
-    const bool covered = inside_from_vertices(X, Y, W, sx, sy, f_.p.backface_cull, e, det, n_ties);
-    ++c_[Counter::raster_samples_tested_2d];
-    finish(tri, covered, e, det, n_ties, px, py, s, cost::kInside2D);
+    test_sheared_values(tri, Xs, Ys, F(static_cast<float>(px) + ps.x[s]), F(static_cast<float>(py) + ps.y[s]),
+                        px, py, s);
   }
 
-  // Test candidate samples idx[0..n) of pixel (px, py). Same results and counts as calling
-  // test() for each; the fast path evaluates the kernels for the whole batch in branch-free
-  // loops (the decisions of near-edge samples are data-dependent and mispredict otherwise),
-  // with the identical float operations, so the results are bit-identical.
-  inline void test_many(const TriSetup& tri, int px, int py, const PixelSamples& ps, const int* idx, int n) {
+  // ---- batch protocol ----
+  inline void begin(const TriSetup& tri) {
+    flush();
+    tri_ = &tri;
+    sheared_ = false;
+    stride_ = 0;
+  }
+  // Static triangle pre-sheared to discrete lens coordinates: lens_stride 0 = every sample uses
+  // Xs/Ys; 3 = sample s uses Xs + 3 * lens_index[s] (interleaved tables).
+  inline void begin_sheared(const TriSetup& tri, const float* Xs, const float* Ys, int lens_stride) {
+    flush();
+    tri_ = &tri;
+    sheared_ = true;
+    xs_ = Xs, ys_ = Ys, stride_ = lens_stride;
+  }
+  inline void push(int px, int py, const PixelSamples& ps, int s) {
     if constexpr (A::counting) {
-      for (int i = 0; i < n; ++i) test(tri, px, py, ps, idx ? idx[i] : i);
-    } else {
-      if (n <= 0) return;
-      const float fx = static_cast<float>(px), fy = static_cast<float>(py);
-      const int cls = static_cast<int>(tri.cls);
-      const FrameConst& fc = f_.fc;
-      const BatchTri T{tri.X[0],  tri.X[1],  tri.X[2],  tri.Y[0],  tri.Y[1],  tri.Y[2],  tri.W[0],
-                       tri.W[1],  tri.W[2],  tri.cx[0], tri.cx[1], tri.cx[2], tri.cy[0], tri.cy[1],
-                       tri.cy[2], tri.dX[0], tri.dX[1], tri.dX[2], tri.dY[0], tri.dY[1], tri.dY[2],
-                       tri.dW[0], tri.dW[1], tri.dW[2], fc.kx,     fc.neg_kx_f, fc.ky, fc.neg_ky_f};
-      // Gather the batch into contiguous arrays (only the components the class needs; a null idx
-      // means samples 0..n-1, already contiguous), then run the class's vectorised kernel.
-      const float *bu = ps.u, *bv = ps.v, *bt = ps.t;
-      if (idx == nullptr) {
-        gather_xy(ps.x, ps.y, fx, fy, n);
+      if (!sheared_) {
+        test(*tri_, px, py, ps, s);
       } else {
-        for (int i = 0; i < n; ++i) {
-          const int s = idx[i];
-          gx_[i] = fx + ps.x[s], gy_[i] = fy + ps.y[s];
-        }
-        if (cls >= 2) {
-          for (int i = 0; i < n; ++i) gu_[i] = ps.u[idx[i]], gv_[i] = ps.v[idx[i]];
-          bu = gu_.data(), bv = gv_.data();
-        }
-        if (cls & 1) {
-          for (int i = 0; i < n; ++i) gt_[i] = ps.t[idx[i]];
-          bt = gt_.data();
-        }
+        const int off = stride_ ? stride_ * ps.lens_index[s] : 0;
+        test_sheared(*tri_, xs_ + off, ys_ + off, px, py, ps, s);
       }
-      float* e = be_.data();
-      switch (cls) {
-        case 0: batch_edges_2d(n, T, gx_.data(), gy_.data(), e, e + n, e + 2 * n, bdet_.data()); break;
-        case 2: batch_edges_4d(n, T, gx_.data(), gy_.data(), bu, bv, e, e + n, e + 2 * n, bdet_.data()); break;
-        case 1: batch_edges_3d(n, T, gx_.data(), gy_.data(), bt, e, e + n, e + 2 * n, bdet_.data()); break;
-        default:
-          batch_edges_5d(n, T, gx_.data(), gy_.data(), bu, bv, bt, e, e + n, e + 2 * n, bdet_.data());
-          break;
-      }
-      c_[kTestedByClass[cls]] += static_cast<std::uint64_t>(n);
-      classify_batch(tri, px, py, ps, idx, n, kInsideCost[cls], false, nullptr, nullptr, 0);
+    } else {
+      if (n_ == cap_) flush();
+      const int i = n_++;
+      gx_[i] = static_cast<float>(px) + ps.x[s];
+      gy_[i] = static_cast<float>(py) + ps.y[s];
+      gu_[i] = ps.u[s], gv_[i] = ps.v[s], gt_[i] = ps.t[s];
+      bpx_[i] = px, bpy_[i] = py, bs_[i] = s;
+      if (stride_) bl_[i] = ps.lens_index[s];
     }
   }
-
-  // Batched test_sheared(). With lens_stride == 0 every sample uses Xs/Ys; with lens_stride == 3
-  // sample s uses Xs[3 * lens_index[s]] (the triangle pre-sheared to each lens coordinate).
-  inline void test_many_sheared(const TriSetup& tri, const float* Xs, const float* Ys, int lens_stride, int px,
-                                int py, const PixelSamples& ps, const int* idx, int n) {
+  // Every sample of pixel (px, py).
+  inline void push_pixel(int px, int py, const PixelSamples& ps) {
+    const int spp = f_.table.spp();
     if constexpr (A::counting) {
-      for (int i = 0; i < n; ++i) {
-        const int s = idx ? idx[i] : i;
-        const int off = lens_stride ? lens_stride * ps.lens_index[s] : 0;
-        test_sheared(tri, Xs + off, Ys + off, px, py, ps, s);
-      }
+      for (int s = 0; s < spp; ++s) push(px, py, ps, s);
+    } else if (spp >= 32) {
+      // Large enough to be its own batch: no per-sample pixel/index bookkeeping.
+      flush();
+      gather_xy(static_cast<float>(px), static_cast<float>(py), ps, spp);
+      uniform_ps_ = &ps;
+      if (stride_)
+        for (int s = 0; s < spp; ++s) bl_[s] = ps.lens_index[s];
+      n_ = spp;
+      uniform_px_ = px, uniform_py_ = py;
+      run_batch(true);
+      n_ = 0;
     } else {
-      if (n <= 0) return;
+      if (n_ + spp > cap_) flush();
+      const int i0 = n_;
       const float fx = static_cast<float>(px), fy = static_cast<float>(py);
-      const float W[3] = {tri.W[0], tri.W[1], tri.W[2]};
-      if (lens_stride == 0) {
-        if (idx == nullptr) {
-          gather_xy(ps.x, ps.y, fx, fy, n);
-        } else {
-          for (int i = 0; i < n; ++i) {
-            const int s = idx[i];
-            gx_[i] = fx + ps.x[s], gy_[i] = fy + ps.y[s];
-          }
-        }
-        BatchTri T{};
-        T.X0 = Xs[0], T.X1 = Xs[1], T.X2 = Xs[2], T.Y0 = Ys[0], T.Y1 = Ys[1], T.Y2 = Ys[2];
-        T.W0 = W[0], T.W1 = W[1], T.W2 = W[2];
-        float* e = be_.data();
-        batch_edges_2d(n, T, gx_.data(), gy_.data(), e, e + n, e + 2 * n, bdet_.data());
-      } else {
-        for (int i = 0; i < n; ++i) {
-          const int s = idx ? idx[i] : i;
-          const int off = lens_stride * ps.lens_index[s];
-          float ev[3];
-          edge_functions(Xs + off, Ys + off, W, fx + ps.x[s], fy + ps.y[s], ev, bdet_[i]);
-          be_[i] = ev[0], be_[n + i] = ev[1], be_[2 * n + i] = ev[2];
-        }
-      }
-      c_[Counter::raster_samples_tested_2d] += static_cast<std::uint64_t>(n);
-      classify_batch(tri, px, py, ps, idx, n, cost::kInside2D, true, Xs, Ys, lens_stride);
+      gather_pixel(fx, fy, ps, spp, i0);
+      for (int s = 0; s < spp; ++s) bpx_[i0 + s] = px, bpy_[i0 + s] = py, bs_[i0 + s] = s;
+      if (stride_)
+        for (int s = 0; s < spp; ++s) bl_[i0 + s] = ps.lens_index[s];
+      n_ += spp;
+    }
+  }
+  inline void flush() {
+    if constexpr (!A::counting) {
+      if (n_ > 0) run_batch(false);
+      n_ = 0;
     }
   }
 
@@ -183,58 +160,132 @@ class SamplePipeline {
   static constexpr Counter kTestedByClass[4] = {
       Counter::raster_samples_tested_2d, Counter::raster_samples_tested_3d,
       Counter::raster_samples_tested_4d, Counter::raster_samples_tested_5d};
-  static constexpr int kBatch = 4096;
+  static constexpr int kBatch = 1024;  // small enough for the batch to stay in L1/L2
 
-  void gather_xy(const float* __restrict x, const float* __restrict y, float fx, float fy, int n) {
-    float* __restrict gx = gx_.data();
-    float* __restrict gy = gy_.data();
-    for (int i = 0; i < n; ++i) gx[i] = fx + x[i], gy[i] = fy + y[i];
+  inline void test_values(const TriSetup& tri, F sx, F sy, F u, F v, F t, int px, int py, int s) {
+    F X[3], Y[3], W[3], e[3], det;
+    int n_ties;
+    const bool covered = inside_test(tri, tri.cls, f_.fc, sx, sy, u, v, t, f_.p.backface_cull, X, Y, W, e, det, n_ties);
+    ++c_[kTestedByClass[static_cast<int>(tri.cls)]];
+    finish(tri, covered, e, det, n_ties, px, py, s, kInsideCost[static_cast<int>(tri.cls)]);
   }
 
-  // Decide the batch from be_/bdet_: covered where det != 0 and every e_i has det's sign; samples
-  // with an e_i == 0 go through the scalar path (top-left rule). Then interpolate and shade.
-  inline void classify_batch(const TriSetup& tri, int px, int py, const PixelSamples& ps, const int* idx, int n,
-                             std::uint64_t inside_cost, bool sheared, const float* Xs, const float* Ys,
-                             int lens_stride = 0) {
+  inline void test_sheared_values(const TriSetup& tri, const float Xs[3], const float Ys[3], F sx, F sy, int px,
+                                  int py, int s) {
+    F X[3], Y[3], W[3], e[3], det;
+    for (int j = 0; j < 3; ++j) X[j] = F(Xs[j]), Y[j] = F(Ys[j]), W[j] = F(tri.W[j]);
+    int n_ties;
+    const bool covered = inside_from_vertices(X, Y, W, sx, sy, f_.p.backface_cull, e, det, n_ties);
+    ++c_[Counter::raster_samples_tested_2d];
+    finish(tri, covered, e, det, n_ties, px, py, s, cost::kInside2D);
+  }
+
+  void gather_xy(float fx, float fy, const PixelSamples& ps, int spp) {
+    float* __restrict gx = gx_.data();
+    float* __restrict gy = gy_.data();
+    const float* __restrict x = ps.x;
+    const float* __restrict y = ps.y;
+    for (int s = 0; s < spp; ++s) gx[s] = fx + x[s], gy[s] = fy + y[s];
+  }
+
+  void gather_pixel(float fx, float fy, const PixelSamples& ps, int spp, int i0) {
+    float* __restrict gx = gx_.data() + i0;
+    float* __restrict gy = gy_.data() + i0;
+    float* __restrict gu = gu_.data() + i0;
+    float* __restrict gv = gv_.data() + i0;
+    float* __restrict gt = gt_.data() + i0;
+    for (int s = 0; s < spp; ++s) {
+      gx[s] = fx + ps.x[s], gy[s] = fy + ps.y[s];
+      gu[s] = ps.u[s], gv[s] = ps.v[s], gt[s] = ps.t[s];
+    }
+  }
+
+  // Evaluate the pending batch (fast path). uniform: the batch is samples 0..n-1 of pixel
+  // (uniform_px_, uniform_py_).
+  void run_batch(bool uniform) {
+    uniform_ = uniform;
+    const TriSetup& tri = *tri_;
+    const int n = n_;
+    float* e = be_.data();
+    float* d = bdet_.data();
+    std::uint64_t inside_cost;
+    const float* bu = uniform ? uniform_ps_->u : gu_.data();
+    const float* bv = uniform ? uniform_ps_->v : gv_.data();
+    const float* bt = uniform ? uniform_ps_->t : gt_.data();
+    if (!sheared_) {
+      const int cls = static_cast<int>(tri.cls);
+      const FrameConst& fc = f_.fc;
+      const BatchTri T{tri.X[0],  tri.X[1],  tri.X[2],  tri.Y[0],  tri.Y[1],  tri.Y[2],  tri.W[0],
+                       tri.W[1],  tri.W[2],  tri.cx[0], tri.cx[1], tri.cx[2], tri.cy[0], tri.cy[1],
+                       tri.cy[2], tri.dX[0], tri.dX[1], tri.dX[2], tri.dY[0], tri.dY[1], tri.dY[2],
+                       tri.dW[0], tri.dW[1], tri.dW[2], fc.kx,     fc.neg_kx_f, fc.ky, fc.neg_ky_f};
+      switch (cls) {
+        case 0: batch_edges_2d(n, T, gx_.data(), gy_.data(), e, e + n, e + 2 * n, d); break;
+        case 2: batch_edges_4d(n, T, gx_.data(), gy_.data(), bu, bv, e, e + n, e + 2 * n, d); break;
+        case 1: batch_edges_3d(n, T, gx_.data(), gy_.data(), bt, e, e + n, e + 2 * n, d); break;
+        default: batch_edges_5d(n, T, gx_.data(), gy_.data(), bu, bv, bt, e, e + n, e + 2 * n, d); break;
+      }
+      c_[kTestedByClass[cls]] += static_cast<std::uint64_t>(n);
+      inside_cost = kInsideCost[cls];
+    } else {
+      const float W[3] = {tri.W[0], tri.W[1], tri.W[2]};
+      if (stride_ == 0) {
+        BatchTri T{};
+        T.X0 = xs_[0], T.X1 = xs_[1], T.X2 = xs_[2], T.Y0 = ys_[0], T.Y1 = ys_[1], T.Y2 = ys_[2];
+        T.W0 = W[0], T.W1 = W[1], T.W2 = W[2];
+        batch_edges_2d(n, T, gx_.data(), gy_.data(), e, e + n, e + 2 * n, d);
+      } else {
+        for (int i = 0; i < n; ++i) {
+          const int off = stride_ * bl_[i];
+          edge_functions_s(xs_[off], xs_[off + 1], xs_[off + 2], ys_[off], ys_[off + 1], ys_[off + 2], W[0], W[1],
+                           W[2], gx_[i], gy_[i], e[i], e[n + i], e[2 * n + i], d[i]);
+        }
+      }
+      c_[Counter::raster_samples_tested_2d] += static_cast<std::uint64_t>(n);
+      inside_cost = cost::kInside2D;
+    }
+    // Flags: 1 = covered, 2 = an e_i is exactly zero (scalar top-left path). Then skip 8 flags at a
+    // time (most batches are mostly misses).
     const bool bfc = f_.p.backface_cull;
-    // Flags: 1 = covered (every e_i has det's non-zero sign), 2 = an e_i is exactly zero (scalar
-    // top-left path). Vectorised; then skip 8 flags at a time (most batches are mostly misses).
-    batch_flags(n, be_.data(), be_.data() + n, be_.data() + 2 * n, bdet_.data(), bfc, flags_.data());
+    batch_flags(n, e, e + n, e + 2 * n, d, bfc, flags_.data());
     c_[Counter::raster_samples_tested] += static_cast<std::uint64_t>(n);
     c_[Counter::ops_sample_inside] += inside_cost * static_cast<std::uint64_t>(n);
-    int n_tie = 0;
     for (int w = 0; w < n; w += 8) {
       std::uint64_t word;
       std::memcpy(&word, &flags_[w], 8);
       if (!word) continue;
       for (int i = w; i < std::min(n, w + 8); ++i) {
         const std::uint8_t fl = flags_[i];
+        const int px = uniform ? uniform_px_ : bpx_[i], py = uniform ? uniform_py_ : bpy_[i];
+        const int smp = uniform ? i : bs_[i];
         if (fl & 1) {
-          const F ev[3] = {be_[i], be_[n + i], be_[2 * n + i]};
-          shade(tri, ev, bdet_[i], px, py, idx ? idx[i] : i);
+          const F ev[3] = {e[i], e[n + i], e[2 * n + i]};
+          shade(tri, ev, d[i], px, py, smp);
         } else if (fl & 2) {
-          tie_[n_tie++] = i;
+          tie_break_sample(tri, i, px, py, smp);
         }
       }
     }
-    for (int k = 0; k < n_tie; ++k) {  // rare: an edge function is exactly zero
-      const int i = tie_[k];
-      const int s = idx ? idx[i] : i;
-      float X[3], Y[3], W[3], e[3], det;
-      int n_ties;
-      const float sx = static_cast<float>(px) + ps.x[s], sy = static_cast<float>(py) + ps.y[s];
-      bool covered;
-      if (sheared) {
-        const int off = lens_stride ? lens_stride * ps.lens_index[s] : 0;
-        for (int j = 0; j < 3; ++j) X[j] = Xs[off + j], Y[j] = Ys[off + j], W[j] = tri.W[j];
-        covered = inside_from_vertices(X, Y, W, sx, sy, bfc, e, det, n_ties);
-      } else {
-        covered = inside_test(tri, tri.cls, f_.fc, sx, sy, ps.u[s], ps.v[s], ps.t[s], bfc, X, Y, W, e, det, n_ties);
-      }
-      c_[Counter::ops_sample_inside] += static_cast<std::uint64_t>(n_ties) * cost::kTieBreak;
-      if (n_ties) ++c_[Counter::raster_tie_breaks];
-      if (covered) shade(tri, e, det, px, py, s);
+  }
+
+  // An edge function was exactly zero: settle the sample with the scalar test (top-left rule).
+  void tie_break_sample(const TriSetup& tri, int i, int px, int py, int smp) {
+    float X[3], Y[3], W[3], e[3], det;
+    int n_ties;
+    bool covered;
+    if (sheared_) {
+      const int off = stride_ ? stride_ * bl_[i] : 0;
+      for (int j = 0; j < 3; ++j) X[j] = xs_[off + j], Y[j] = ys_[off + j], W[j] = tri.W[j];
+      covered = inside_from_vertices(X, Y, W, gx_[i], gy_[i], f_.p.backface_cull, e, det, n_ties);
+    } else {
+      const bool u = uniform_;
+      covered = inside_test(tri, tri.cls, f_.fc, gx_[i], gy_[i], u ? uniform_ps_->u[i] : gu_[i],
+                            u ? uniform_ps_->v[i] : gv_[i], u ? uniform_ps_->t[i] : gt_[i], f_.p.backface_cull, X,
+                            Y, W, e, det, n_ties);
     }
+    c_[Counter::ops_sample_inside] += static_cast<std::uint64_t>(n_ties) * cost::kTieBreak;
+    if (n_ties) ++c_[Counter::raster_tie_breaks];
+    if (covered) shade(tri, e, det, px, py, smp);
   }
 
   inline void finish(const TriSetup& tri, bool covered, const F e[3], F det, int n_ties, int px, int py,
@@ -246,11 +297,12 @@ class SamplePipeline {
   }
 
   // A covered sample: depth, near plane, depth test, colour. Cost: ops.interp.
-  inline void shade(const TriSetup& tri, const F e[3], F det, int px, int py, int s) {
+  template <class G>
+  inline void shade(const TriSetup& tri, const G e[3], G det, int px, int py, int s) {
     ++c_[Counter::raster_samples_covered];
     std::uint64_t& iops = c_[Counter::ops_interp];
-    F sum, z;
-    const bool in_front = hit_depth(e, det, F(f_.fc.neg_near), sum, z);
+    G sum, z;
+    const bool in_front = hit_depth(e, det, G(f_.fc.neg_near), sum, z);
     charge<A>(iops, cost::kDepth);
     if (!in_front) {
       ++c_[Counter::raster_samples_near_rejected];
@@ -260,13 +312,13 @@ class SamplePipeline {
     ++c_[Counter::depth_tests];
     const std::size_t slot = buf_.slot(px, py, s);
     float& zbuf = buf_.depth(slot);
-    const bool pass = z < F(zbuf);
+    const bool pass = z < G(zbuf);
     charge<A>(iops, cost::kDepthTest);
     if (!pass) return;
     ++c_[Counter::depth_passes];
-    F c0[3], c1[3], c2[3], out[3];
+    G c0[3], c1[3], c2[3], out[3];
     for (int ch = 0; ch < 3; ++ch)
-      c0[ch] = F(tri.color[0][ch]), c1[ch] = F(tri.color[1][ch]), c2[ch] = F(tri.color[2][ch]);
+      c0[ch] = G(tri.color[0][ch]), c1[ch] = G(tri.color[1][ch]), c2[ch] = G(tri.color[2][ch]);
     hit_color(e, sum, c0, c1, c2, out);
     charge<A>(iops, cost::kColor);
     zbuf = raw(z);
@@ -278,13 +330,19 @@ class SamplePipeline {
   const Frame& f_;
   Counters& c_;
   BinBuffers& buf_;
-  // Batch scratch (fast path): edge functions, determinants, covered and tie lists.
-  std::vector<float> be_ = std::vector<float>(3 * kBatch), bdet_ = std::vector<float>(kBatch);
-  std::vector<int> cov_ = std::vector<int>(kBatch), tie_ = std::vector<int>(kBatch);
-  std::vector<std::uint8_t> flags_ = std::vector<std::uint8_t>(kBatch + 8, 0);
-  std::vector<float> gx_ = std::vector<float>(kBatch), gy_ = std::vector<float>(kBatch),
-                     gu_ = std::vector<float>(kBatch), gv_ = std::vector<float>(kBatch),
-                     gt_ = std::vector<float>(kBatch);
+  // Pending batch (fast path).
+  const TriSetup* tri_ = nullptr;
+  bool sheared_ = false;
+  const float *xs_ = nullptr, *ys_ = nullptr;
+  int stride_ = 0;
+  int n_ = 0;
+  int cap_;
+  int uniform_px_ = 0, uniform_py_ = 0;
+  bool uniform_ = false;
+  const PixelSamples* uniform_ps_ = nullptr;
+  std::vector<float> gx_, gy_, gu_, gv_, gt_, be_, bdet_;
+  std::vector<int> bpx_, bpy_, bs_, bl_;
+  std::vector<std::uint8_t> flags_;
 };
 
 class Traversal {

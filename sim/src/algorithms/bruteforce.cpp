@@ -11,25 +11,20 @@ namespace {
 template <class A>
 class BruteForce final : public Traversal {
  public:
-  BruteForce(const Frame& f, ThreadState& ts) : f_(f), pipe_(f, ts), iota_(f.table.spp()) {
-    for (int s = 0; s < f.table.spp(); ++s) iota_[s] = s;
-  }
+  BruteForce(const Frame& f, ThreadState& ts) : f_(f), pipe_(f, ts) {}
 
   void rasterize(const TriSetup& tri, const BinRect& bin, bool /*charge_setup*/) override {
     const int x0 = std::max(tri.bx0, bin.x0), x1 = std::min(tri.bx1, bin.x1);
     const int y0 = std::max(tri.by0, bin.y0), y1 = std::min(tri.by1, bin.y1);
-    const int spp = f_.table.spp();
+    pipe_.begin(tri);
     for (int py = y0; py < y1; ++py)
-      for (int px = x0; px < x1; ++px) {
-        const PixelSamples ps = f_.table.pixel(px, py);
-        pipe_.test_many(tri, px, py, ps, nullptr, spp);
-      }
+      for (int px = x0; px < x1; ++px) pipe_.push_pixel(px, py, f_.table.pixel(px, py));
+    pipe_.flush();
   }
 
  private:
   const Frame& f_;
   SamplePipeline<A> pipe_;
-  std::vector<int> iota_;
 };
 
 }  // namespace

@@ -51,6 +51,11 @@ class Interleave final : public Traversal {
         tiletest::pixel_range(ly, hy, by0, by1, y0, y1);
       }
       if (x0 >= x1 || y0 >= y1) continue;
+      // One batch per lens coordinate: the pre-sheared vertices change with i.
+      if (tri.moving)
+        pipe_.begin(tri);
+      else
+        pipe_.begin_sheared(tri, xs, ys, 0);
       if (kHier && !tri.moving) {
         const tiletest::Edges2D e = tiletest::edges_2d<D>(xs, ys, W);
         charge<A>(setup_ops, cost::kEdges2DSetup);
@@ -70,7 +75,9 @@ class Interleave final : public Traversal {
       } else {
         pass(tri, i, xs, ys, x0, x1, y0, y1);
       }
+      pipe_.flush();  // xs / ys are this iteration's
     }
+    pipe_.flush();
     if (charge_setup) {
       c_[Counter::ops_setup] += setup_ops;
       c_[Counter::trav_passes] += static_cast<std::uint64_t>(N);
@@ -80,16 +87,12 @@ class Interleave final : public Traversal {
 
  private:
   // Inside-test the samples of lens coordinate i in the pixel rectangle, in 2x2-block order.
-  void pass(const TriSetup& tri, int i, const float xs[3], const float ys[3], int x0, int x1, int y0, int y1) {
+  void pass(const TriSetup& /*tri*/, int i, const float* /*xs*/, const float* /*ys*/, int x0, int x1, int y0,
+            int y1) {
     for (int py = y0; py < y1; ++py)
       for (int px = x0; px < x1; ++px) {
         const PixelSamples ps = f_.table.pixel(px, py);
-        const int* idx = ps.lens_order + ps.lens_offsets[i];
-        const int n = ps.lens_offsets[i + 1] - ps.lens_offsets[i];
-        if (tri.moving)
-          pipe_.test_many(tri, px, py, ps, idx, n);
-        else
-          pipe_.test_many_sheared(tri, xs, ys, 0, px, py, ps, idx, n);
+        for (int k = ps.lens_offsets[i]; k < ps.lens_offsets[i + 1]; ++k) pipe_.push(px, py, ps, ps.lens_order[k]);
       }
   }
 

@@ -24,6 +24,7 @@ class Interval final : public Traversal {
     const int bx0 = std::max(tri.bx0, bin.x0), bx1 = std::min(tri.bx1, bin.x1);
     const int by0 = std::max(tri.by0, bin.y0), by1 = std::min(tri.by1, bin.y1);
     std::uint64_t passes = 0;
+    pipe_.begin(tri);
     for (int c = 0; c < G * G; ++c) {
       if (!lens_mask_.test(c)) continue;
       const int ci = c % G, cj = c / G;
@@ -43,10 +44,11 @@ class Interval final : public Traversal {
           for (int py = std::max(ty, y0); py < std::min(ty + T, y1); ++py)
             for (int px = std::max(tx, x0); px < std::min(tx + T, x1); ++px) {
               const PixelSamples ps = f_.table.pixel(px, py);
-              pipe_.test_many(tri, px, py, ps, ps.cell_order + ps.cell_offsets[c],
-                              ps.cell_offsets[c + 1] - ps.cell_offsets[c]);
+              for (int k = ps.cell_offsets[c]; k < ps.cell_offsets[c + 1]; ++k)
+                pipe_.push(px, py, ps, ps.cell_order[k]);
             }
     }
+    pipe_.flush();
     if (charge_setup) {
       c_[Counter::ops_setup] += setup_ops;
       c_[Counter::trav_passes] += passes;

@@ -13,6 +13,7 @@ namespace {
 template <class A>
 class Laine final : public Traversal {
   using D = typename A::f64;
+  using F = typename A::f32;
 
  public:
   Laine(const Frame& f, ThreadState& ts) : f_(f), c_(ts.counters), pipe_(f, ts) {}
@@ -27,6 +28,7 @@ class Laine final : public Traversal {
     const RenderParams& p = f_.p;
     const int T = p.tile_size, spp = f_.table.spp();
     const bool use_h = p.halfspace_h && fp.h_valid;
+    pipe_.begin(tri);
     const int x0 = std::max(tri.bx0, bin.x0), x1 = std::min(tri.bx1, bin.x1);
     const int y0 = std::max(tri.by0, bin.y0), y1 = std::min(tri.by1, bin.y1);
     for (int ty = (y0 / T) * T; ty < y1; ty += T)
@@ -43,27 +45,33 @@ class Laine final : public Traversal {
           for (int px = tx; px < std::min(tx + T, bin.x1); ++px) {
             const PixelSamples ps = f_.table.pixel(px, py);
             int n = 0;
-            for (int s = 0; s < spp; ++s) {
-              bool pass;
-              if (empty) {
-                // Laine's per-sample test u_min <= u <= u_max, v_min <= v <= v_max against an
-                // empty region (u_min > u_max): four comparisons that always fail.
-                const D u(ps.u[s]), v(ps.v[s]);
-                pass = (u >= D(1.0)) & (u <= D(-1.0)) & (v >= D(1.0)) & (v <= D(-1.0));
-              } else {
-                pass = region_cost == 0 ||
-                       (tiletest::axis_pass(sx, D(ps.u[s])) & tiletest::axis_pass(sy, D(ps.v[s])));
+            if (!A::counting && !empty) {
+              tiletest::select_candidates<false>(spp, ps.u, ps.v, ps.cell, ~std::uint64_t(0), sx, sy, sel_.data());
+              n = tiletest::compact_flags(sel_.data(), spp, cand_.data());
+            } else {
+              for (int s = 0; s < spp; ++s) {
+                bool pass;
+                if (empty) {
+                  // Laine's per-sample test u_min <= u <= u_max, v_min <= v <= v_max against an
+                  // empty region (u_min > u_max): four comparisons that always fail.
+                  const F u(ps.u[s]), v(ps.v[s]);
+                  pass = (u >= F(1.0f)) & (u <= F(-1.0f)) & (v >= F(1.0f)) & (v <= F(-1.0f));
+                } else {
+                  pass = region_cost == 0 ||
+                         (tiletest::axis_pass(sx, F(ps.u[s])) & tiletest::axis_pass(sy, F(ps.v[s])));
+                }
+                cand_[n] = s;
+                n += pass;
               }
-              cand_[n] = s;
-              n += pass;
             }
             charge<A>(c_[Counter::ops_sample_region], region_cost * static_cast<std::uint64_t>(spp));
             if (p.count_optimal && fp.n > 0)
               for (int i = 0; i < n; ++i)
                 c_[Counter::tile_samples_optimal] += in_exact_region(tri, fp, f_.fc, ps, cand_[i], tx, ty, T);
-            pipe_.test_many(tri, px, py, ps, cand_.data(), n);
+            for (int i = 0; i < n; ++i) pipe_.push(px, py, ps, cand_[i]);
           }
       }
+    pipe_.flush();
   }
 
  private:
@@ -71,6 +79,7 @@ class Laine final : public Traversal {
   Counters& c_;
   SamplePipeline<A> pipe_;
   std::vector<int> cand_ = std::vector<int>(4096);
+  std::vector<std::uint8_t> sel_ = std::vector<std::uint8_t>(4096 + 8, 0);
 };
 
 }  // namespace

@@ -78,6 +78,7 @@ class Tile final : public Traversal {
   void raster_2d(const TriSetup& tri, const tiletest::Edges2D& e, const BinRect& bin) {
     const int T = f_.p.tile_size;
     const int spp = f_.table.spp();
+    pipe_.begin(tri);
     const double blx = tri.lo_x - (std::fabs(tri.lo_x) * 0x1p-18 + 0x1p-12);
     const double bhx = tri.hi_x + (std::fabs(tri.hi_x) * 0x1p-18 + 0x1p-12);
     const double bly = tri.lo_y - (std::fabs(tri.lo_y) * 0x1p-18 + 0x1p-12);
@@ -101,10 +102,11 @@ class Tile final : public Traversal {
       for (int py = ty; py < ty1; ++py)
         for (int px = tx; px < tx1; ++px) {
           const PixelSamples ps = f_.table.pixel(px, py);
-          pipe_.test_many(tri, px, py, ps, nullptr, spp);
+          pipe_.push_pixel(px, py, ps);
           if (optimal_tile) c_[Counter::tile_samples_optimal] += spp;
         }
     });
+    pipe_.flush();
   }
 
   // ---- 4D (h_i + H_j), moving (h_i over the shutter ends), or no test --------------------------
@@ -114,6 +116,10 @@ class Tile final : public Traversal {
     const bool use_h = p.halfspace_h && fp.h_valid;
     const bool use_H = p.halfspace_H && !tri.moving && fp.sigma != 0;
     const int cells = G * G;
+    if (kInterleaved && !tri.moving)
+      pipe_.begin_sheared(tri, sx_.data(), sy_.data(), 3);
+    else
+      pipe_.begin(tri);
     for_tiles(tri, bin, [&](int tx, int ty, int tx1, int ty1) {
       ++c_[Counter::tile_visited];
       const double x0 = tiletest::expand_lo(tx), x1 = tiletest::expand_hi(tx + T);
@@ -202,31 +208,36 @@ class Tile final : public Traversal {
         if (active.test(c)) cell_list_.push_back(c);
       const std::uint64_t region_cost = static_cast<std::uint64_t>(sx.n_cmp + sy.n_cmp);
       const bool count_opt = p.count_optimal;
+      const int spp = f_.table.spp();
+      std::uint64_t active_bits = 0;
+      for (const int c : cell_list_)
+        if (c < 64) active_bits |= std::uint64_t(1) << c;
+      const bool fast_select = !A::counting && cells <= 64;
       for (int py = ty; py < ty1; ++py)
         for (int px = tx; px < tx1; ++px) {
           const PixelSamples ps = f_.table.pixel(px, py);
-          // Gather the candidates of the surviving cells that pass the h_i lines (branch-free
-          // compaction), then inside-test them.
+          // Candidates: samples of the surviving cells whose (u, v) passes the h_i lines.
           int n = 0, checked = 0;
-          for (const int c : cell_list_) {
-            const int k0 = ps.cell_offsets[c], k1 = ps.cell_offsets[c + 1];
-            checked += k1 - k0;
-            for (int k = k0; k < k1; ++k) {
-              const int s = ps.cell_order[k];
-              cand_[n] = s;
-              n += region_cost == 0 || (tiletest::axis_pass(sx, D(ps.u[s])) & tiletest::axis_pass(sy, D(ps.v[s])));
-            }
+          for (const int c : cell_list_) checked += ps.cell_offsets[c + 1] - ps.cell_offsets[c];
+          if (fast_select) {  // vectorised scan of the pixel's samples
+            tiletest::select_candidates<true>(spp, ps.u, ps.v, ps.cell, active_bits, sx, sy, sel_.data());
+            n = tiletest::compact_flags(sel_.data(), spp, cand_.data());
+          } else {  // counting path: walk the active cells' buckets, as the hardware would
+            for (const int c : cell_list_)
+              for (int k = ps.cell_offsets[c]; k < ps.cell_offsets[c + 1]; ++k) {
+                const int s = ps.cell_order[k];
+                cand_[n] = s;
+                n += region_cost == 0 || (tiletest::axis_pass(sx, F(ps.u[s])) & tiletest::axis_pass(sy, F(ps.v[s])));
+              }
           }
           if (region_cost) charge<A>(c_[Counter::ops_sample_region], region_cost * checked);
           if (count_opt)
             for (int i = 0; i < n; ++i)
               c_[Counter::tile_samples_optimal] += in_exact_region(tri, fp, f_.fc, ps, cand_[i], tx, ty, T);
-          if (kInterleaved && !tri.moving)
-            pipe_.test_many_sheared(tri, sx_.data(), sy_.data(), 3, px, py, ps, cand_.data(), n);
-          else
-            pipe_.test_many(tri, px, py, ps, cand_.data(), n);
+          for (int i = 0; i < n; ++i) pipe_.push(px, py, ps, cand_[i]);
         }
     });
+    pipe_.flush();
   }
 
   const Frame& f_;
@@ -236,6 +247,7 @@ class Tile final : public Traversal {
   std::vector<int> cell_list_;
   std::vector<int> cand_ = std::vector<int>(4096);
   std::vector<int> iota_;
+  std::vector<std::uint8_t> sel_ = std::vector<std::uint8_t>(4096 + 8, 0);
   std::vector<float> sx_, sy_;
 };
 
