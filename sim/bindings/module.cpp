@@ -239,4 +239,26 @@ PYBIND11_MODULE(_core, m) {
       },
       py::arg("trials") = 100, py::arg("seed") = 1,
       "Run every registered kernel on the counting scalar type: {name: (documented, min, max)}.");
+
+  m.def(
+      "measure_tile_kernel_costs",
+      [](int trials, std::uint64_t seed) {
+        py::dict d;
+        std::mt19937_64 g(seed);
+        for (auto& [name, run] : TileKernelCostRegistry::entries()) {
+          int mismatches = 0;
+          std::uint64_t lo = ~0ull, hi = 0;
+          for (int i = 0; i < trials; ++i) {
+            const auto [counted, documented] = run(g);
+            mismatches += counted != documented;
+            lo = std::min(lo, documented);
+            hi = std::max(hi, documented);
+          }
+          d[py::str(name)] = py::make_tuple(trials, mismatches, lo, hi);
+        }
+        return d;
+      },
+      py::arg("trials") = 200, py::arg("seed") = 1,
+      "Tile-test kernels with configuration-dependent costs: {name: (runs, mismatches, min documented, "
+      "max documented)}; counted == documented on every run means mismatches == 0.");
 }

@@ -34,8 +34,8 @@ inline constexpr std::uint64_t kBoundsPoint = 7;       // RCP, 2 MUL, 2 MIN, 2 M
 inline constexpr std::uint64_t kBoundsPointLens = 14;  // RCP, 2 MUL, MADD, 2 MUL, 4 ADD, 2 MIN, 2 MAX
 
 // ---- tile tests (tile_tests.h) ----
-inline constexpr std::uint64_t kLensVertex = 10;        // RCP, 2 MUL, MADD, 2 MUL, 2 RCP, 2 MUL
-inline constexpr std::uint64_t kLensVertexInFocus = 6;  // W == F: no reciprocal of b
+inline constexpr std::uint64_t kLensVertexBase = 6;     // RCP, 2 MUL, MADD, 2 MUL
+inline constexpr std::uint64_t kLensVertexAxis = 2;     // per axis with a line: RCP, MUL
 inline constexpr std::uint64_t kGapVertex = 4;          // per vertex per axis: 2 MADD, MIN, MAX
 inline constexpr std::uint64_t kGapVertexInFocus = 2;   // 2 CMP
 inline constexpr std::uint64_t kAxisSetGap = 5;         // 5 CMP per gap that is not blocked

@@ -72,7 +72,7 @@ inline Footprint build_footprint(const TriSetup& tri, const Frame& f, bool with_
   auto add_vertex = [&](double X, double Y, double W) {
     fp.P[fp.n][0] = X, fp.P[fp.n][1] = Y, fp.P[fp.n][2] = W;
     fp.lv[fp.n] = tiletest::lens_vertex(D(X), D(Y), D(W), neg_f, kx, ky);
-    charge<A>(ops, fp.lv[fp.n].kx == 0 && fp.lv[fp.n].ky == 0 ? cost::kLensVertexInFocus : cost::kLensVertex);
+    charge<A>(ops, tiletest::lens_vertex_cost(fp.lv[fp.n]));
     ++fp.n;
   };
   if (!tri.moving) {

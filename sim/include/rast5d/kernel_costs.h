@@ -8,6 +8,7 @@
 #include <map>
 #include <random>
 #include <string>
+#include <utility>
 
 namespace rast5d {
 
@@ -25,6 +26,17 @@ class KernelCostRegistry {
   static bool add(const std::string& name, KernelCostEntry e) {
     entries().emplace(name, std::move(e));
     return true;
+  }
+};
+
+// Kernels whose documented cost depends on the configuration (number of vertices, blur, tile):
+// each run returns (counted, documented) for one random configuration.
+class TileKernelCostRegistry {
+ public:
+  using Run = std::function<std::pair<std::uint64_t, std::uint64_t>(std::mt19937_64&)>;
+  static std::map<std::string, Run>& entries() {
+    static std::map<std::string, Run> m;
+    return m;
   }
 };
 

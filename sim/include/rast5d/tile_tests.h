@@ -81,7 +81,9 @@ struct LensVertex {
   int kx, ky;      // sign of b per axis: +1, -1, or 0 (W == F: no line)
 };
 
-// Cost: kCostLensVertex (10), or kCostLensVertexInFocus (6) when W == F exactly (no reciprocal).
+// Cost: cost::kLensVertexBase (6: RCP, 2 MUL, MADD, 2 MUL) + cost::kLensVertexAxis (2: RCP, MUL)
+// per axis whose slope b is non-zero (b == 0: the vertex is on the focus plane or the camera has
+// no blur, and gives no h_i line on that axis).
 template <class D>
 inline LensVertex lens_vertex(D X, D Y, D W, D neg_focus, D coc_x, D coc_y) {
   LensVertex v{};
@@ -92,15 +94,22 @@ inline LensVertex lens_vertex(D X, D Y, D W, D neg_focus, D coc_x, D coc_y) {
   v.ax = raw(ax), v.ay = raw(ay), v.bx = raw(bx), v.by = raw(by);
   v.kx = (v.bx > 0) - (v.bx < 0);
   v.ky = (v.by > 0) - (v.by < 0);
-  if (raw(g) != 0.0) {
-    const D ibx = rcp(bx), iby = rcp(by);
-    v.ibx = raw(ibx), v.iby = raw(iby);
+  v.ibx = v.iby = v.ox = v.oy = 0.0;
+  if (v.kx != 0) {
+    const D ibx = rcp(bx);
+    v.ibx = raw(ibx);
     v.ox = raw(-(ax * ibx));
+  }
+  if (v.ky != 0) {
+    const D iby = rcp(by);
+    v.iby = raw(iby);
     v.oy = raw(-(ay * iby));
-  } else {
-    v.ibx = v.iby = v.ox = v.oy = 0.0;
   }
   return v;
+}
+
+inline std::uint64_t lens_vertex_cost(const LensVertex& v) {
+  return 6 + (v.kx != 0 ? 2 : 0) + (v.ky != 0 ? 2 : 0);  // = cost::kLensVertexBase + kLensVertexAxis per axis
 }
 
 // ---- h_i lines: the active lens interval set of one axis -------------------------------------
@@ -168,11 +177,9 @@ inline AxisSet axis_set(const Gaps& g) {
     const bool open_lo = L < D(-1.0);
     const bool open_hi = R > D(1.0);
     if (!(nonempty && reaches_lo && reaches_hi)) continue;
-    if (open_lo && open_hi) {
+    if (open_lo && open_hi) {  // the gap covers the whole lens: nothing is active
       s.empty = true;
-      s.n_cuts = 0;
-      s.n_intervals = 0;
-      return s;
+      continue;  // (the other gap is still evaluated: fixed cost per gap)
     }
     s.cut_lo[s.n_cuts] = open_lo ? -kInf : g.L[k];
     s.cut_hi[s.n_cuts] = open_hi ? kInf : g.R[k];
@@ -180,6 +187,10 @@ inline AxisSet axis_set(const Gaps& g) {
     s.fl_hi[s.n_cuts] = open_hi ? kInfF : round_down_to_float(g.R[k]);
     s.n_cmp += (open_lo || open_hi) ? 1 : 2;
     ++s.n_cuts;
+  }
+  if (s.empty) {
+    s.n_cuts = 0, s.n_cmp = 0, s.n_intervals = 0;
+    return s;
   }
   // Active intervals, for counting uv-boxes and the lens-shape overlap test (control logic only).
   double lo[2] = {s.cut_lo[0], s.cut_lo[1]}, hi[2] = {s.cut_hi[0], s.cut_hi[1]};

@@ -50,6 +50,11 @@ class Interleave final : public Traversal {
         tiletest::pixel_range(lx, hx, bx0, bx1, x0, x1);
         tiletest::pixel_range(ly, hy, by0, by1, y0, y1);
       }
+      tiletest::Edges2D e;
+      if (kHier && !tri.moving) {  // per-pass setup, charged whether or not this bin sees the pass
+        e = tiletest::edges_2d<D>(xs, ys, W);
+        charge<A>(setup_ops, cost::kEdges2DSetup);
+      }
       if (x0 >= x1 || y0 >= y1) continue;
       // One batch per lens coordinate: the pre-sheared vertices change with i.
       if (tri.moving)
@@ -57,13 +62,12 @@ class Interleave final : public Traversal {
       else
         pipe_.begin_sheared(tri, xs, ys, 0);
       if (kHier && !tri.moving) {
-        const tiletest::Edges2D e = tiletest::edges_2d<D>(xs, ys, W);
-        charge<A>(setup_ops, cost::kEdges2DSetup);
         for (int ty = (y0 / HT) * HT; ty < y1; ty += HT)
           for (int tx = (x0 / HT) * HT; tx < x1; tx += HT) {
             ++c_[Counter::tile_visited];
-            const bool out = !e.valid || tiletest::tile_outside_2d<D>(e, tiletest::expand_lo(tx), tiletest::expand_hi(tx + HT),
-                                                                       tiletest::expand_lo(ty), tiletest::expand_hi(ty + HT));
+            const bool out = tiletest::tile_outside_2d<D>(e, tiletest::expand_lo(tx), tiletest::expand_hi(tx + HT),
+                                                          tiletest::expand_lo(ty), tiletest::expand_hi(ty + HT)) ||
+                             !e.valid;
             charge<A>(c_[Counter::ops_tile], cost::kTile2D);
             if (out) {
               ++c_[Counter::tile_culled_2d];

@@ -87,7 +87,7 @@ class Tile final : public Traversal {
       ++c_[Counter::tile_visited];
       const double x0 = tiletest::expand_lo(tx), x1 = tiletest::expand_hi(tx + T);
       const double y0 = tiletest::expand_lo(ty), y1 = tiletest::expand_hi(ty + T);
-      const bool out_edges = !e.valid || tiletest::tile_outside_2d<D>(e, x0, x1, y0, y1);
+      const bool out_edges = tiletest::tile_outside_2d<D>(e, x0, x1, y0, y1) || !e.valid;
       const bool b0 = D(x1) < D(blx), b1 = D(x0) > D(bhx), b2 = D(y1) < D(bly), b3 = D(y0) > D(bhy);
       charge<A>(c_[Counter::ops_tile], cost::kTile2D + cost::kBBoxTile);
       if (out_edges || b0 || b1 || b2 || b3) {
