@@ -207,6 +207,33 @@ bool setup_triangle(const float* v0, const float* v1, const float* col, std::uin
     return false;
   }
 
+  // Degenerate static triangles: if the footprint projects to (nearly) a single point from every
+  // lens corner, its area is below what the float sample test resolves, whose rounding would then
+  // decide coverage (spurious hits around the point). Such a triangle covers no sample in exact
+  // arithmetic (up to a negligible probability), so it is culled. A triangle seen edge-on through
+  // the pinhole still projects to a segment and is kept. Not counted (robustness, like the near
+  // plane).
+  if (!moving && o.poly_n >= 3) {
+    double extent = 0.0, mag = 0.0;
+    const int corners = defocused ? 4 : 1;
+    for (int k = 0; k < corners; ++k) {
+      const double u = defocused ? ((k & 1) ? 1.0 : -1.0) : 0.0, v = defocused ? ((k & 2) ? 1.0 : -1.0) : 0.0;
+      double lx = std::numeric_limits<double>::infinity(), hx = -lx, ly = lx, hy = -lx;
+      for (int j = 0; j < o.poly_n; ++j) {
+        const double w = o.poly[j][2];
+        const double b = 1.0 - fc.focus_d / w;
+        const double x = o.poly[j][0] / w + u * fc.kx_d * b, y = o.poly[j][1] / w + v * fc.ky_d * b;
+        lx = std::min(lx, x), hx = std::max(hx, x), ly = std::min(ly, y), hy = std::max(hy, y);
+        mag = std::max(mag, std::max(std::fabs(x), std::fabs(y)));
+      }
+      extent = std::max(extent, (hx - lx) + (hy - ly));
+    }
+    if (!(extent > 0x1p-20 * (mag + 1.0))) {
+      ++c[Counter::setup_culled_degenerate];
+      return false;
+    }
+  }
+
   // Optional back-face culling of static triangles back-facing from every lens point (det > 0;
   // det is affine in (u, v), so the lens-square corners decide). Not counted (001 §6.2).
   if (p.backface_cull && !moving) {

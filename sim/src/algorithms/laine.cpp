@@ -41,8 +41,9 @@ class Laine final : public Traversal {
                                   tiletest::expand_hi(ty + T), sx, sy, c_[Counter::ops_tile]);
         ++c_[Counter::tile_accepted];
         const std::uint64_t region_cost = empty ? 4 : static_cast<std::uint64_t>(sx.n_cmp + sy.n_cmp);
-        for (int py = ty; py < std::min(ty + T, bin.y1); ++py)
-          for (int px = tx; px < std::min(tx + T, bin.x1); ++px) {
+        // Pixels of the tile inside the triangle's bounds (the bounding-box mask).
+        for (int py = std::max(ty, y0); py < std::min(ty + T, y1); ++py)
+          for (int px = std::max(tx, x0); px < std::min(tx + T, x1); ++px) {
             const PixelSamples ps = f_.table.pixel(px, py);
             int n = 0;
             if (!A::counting && !empty) {

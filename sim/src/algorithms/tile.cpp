@@ -65,13 +65,17 @@ class Tile final : public Traversal {
     }
   }
 
+  // Visit the tiles overlapping the triangle's bounds in the bin; fn(tx, ty, px0, py0, px1, py1)
+  // gets the tile origin and its pixels inside the bounds (pixels outside the triangle's setup
+  // bounds cannot be hit: the hardware masks them with the bounding-box test).
   template <class Fn>
   void for_tiles(const TriSetup& tri, const BinRect& bin, Fn&& fn) {
     const int T = f_.p.tile_size;
     const int x0 = std::max(tri.bx0, bin.x0), x1 = std::min(tri.bx1, bin.x1);
     const int y0 = std::max(tri.by0, bin.y0), y1 = std::min(tri.by1, bin.y1);
     for (int ty = (y0 / T) * T; ty < y1; ty += T)
-      for (int tx = (x0 / T) * T; tx < x1; tx += T) fn(tx, ty, std::min(tx + T, bin.x1), std::min(ty + T, bin.y1));
+      for (int tx = (x0 / T) * T; tx < x1; tx += T)
+        fn(tx, ty, std::max(tx, x0), std::max(ty, y0), std::min(tx + T, x1), std::min(ty + T, y1));
   }
 
   // ---- 2D: standard tile test, every sample of accepted tiles --------------------------------
@@ -83,7 +87,7 @@ class Tile final : public Traversal {
     const double bhx = tri.hi_x + (std::fabs(tri.hi_x) * 0x1p-18 + 0x1p-12);
     const double bly = tri.lo_y - (std::fabs(tri.lo_y) * 0x1p-18 + 0x1p-12);
     const double bhy = tri.hi_y + (std::fabs(tri.hi_y) * 0x1p-18 + 0x1p-12);
-    for_tiles(tri, bin, [&](int tx, int ty, int tx1, int ty1) {
+    for_tiles(tri, bin, [&](int tx, int ty, int px0, int py0, int tx1, int ty1) {
       ++c_[Counter::tile_visited];
       const double x0 = tiletest::expand_lo(tx), x1 = tiletest::expand_hi(tx + T);
       const double y0 = tiletest::expand_lo(ty), y1 = tiletest::expand_hi(ty + T);
@@ -99,8 +103,8 @@ class Tile final : public Traversal {
       if (f_.p.count_optimal)
         optimal_tile = tiletest::footprint_overlaps_tile(tri.poly, tri.poly_n, 0, 0, f_.fc.focus_d, 0, 0, tx,
                                                          tx + T, ty, ty + T);
-      for (int py = ty; py < ty1; ++py)
-        for (int px = tx; px < tx1; ++px) {
+      for (int py = py0; py < ty1; ++py)
+        for (int px = px0; px < tx1; ++px) {
           const PixelSamples ps = f_.table.pixel(px, py);
           pipe_.push_pixel(px, py, ps);
           if (optimal_tile) c_[Counter::tile_samples_optimal] += spp;
@@ -120,7 +124,7 @@ class Tile final : public Traversal {
       pipe_.begin_sheared(tri, sx_.data(), sy_.data(), 3);
     else
       pipe_.begin(tri);
-    for_tiles(tri, bin, [&](int tx, int ty, int tx1, int ty1) {
+    for_tiles(tri, bin, [&](int tx, int ty, int px0, int py0, int tx1, int ty1) {
       ++c_[Counter::tile_visited];
       const double x0 = tiletest::expand_lo(tx), x1 = tiletest::expand_hi(tx + T);
       const double y0 = tiletest::expand_lo(ty), y1 = tiletest::expand_hi(ty + T);
@@ -213,8 +217,8 @@ class Tile final : public Traversal {
       for (const int c : cell_list_)
         if (c < 64) active_bits |= std::uint64_t(1) << c;
       const bool fast_select = !A::counting && cells <= 64;
-      for (int py = ty; py < ty1; ++py)
-        for (int px = tx; px < tx1; ++px) {
+      for (int py = py0; py < ty1; ++py)
+        for (int px = px0; px < tx1; ++px) {
           const PixelSamples ps = f_.table.pixel(px, py);
           // Candidates: samples of the surviving cells whose (u, v) passes the h_i lines.
           int n = 0, checked = 0;

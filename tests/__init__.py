@@ -1,0 +1,1 @@
+"""rast5d test suite (a package so that tests can import tests.reference)."""
