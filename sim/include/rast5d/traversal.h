@@ -147,6 +147,34 @@ class SamplePipeline {
       n_ += spp;
     }
   }
+  // The samples s of pixel (px, py) with sel[s] != 0 (n_sel of them). With enough samples per
+  // pixel the fast path evaluates the kernel for the whole pixel in one vectorised pass and keeps
+  // the selected lanes (predication, as SIMD hardware would); only the selected samples are tested,
+  // counted and shaded, so the results and counts equal pushing them one by one.
+  // idx[0..n_sel) lists the selected samples.
+  inline void push_pixel_masked(int px, int py, const PixelSamples& ps, const std::uint8_t* sel, const int* idx,
+                                int n_sel) {
+    const int spp = f_.table.spp();
+    if (n_sel == 0) return;
+    if constexpr (A::counting) {
+      for (int i = 0; i < n_sel; ++i) push(px, py, ps, idx[i]);
+    } else {
+      if (spp < 32 || 3 * n_sel < spp) {
+        for (int i = 0; i < n_sel; ++i) push(px, py, ps, idx[i]);
+        return;
+      }
+      flush();
+      gather_xy(static_cast<float>(px), static_cast<float>(py), ps, spp);
+      uniform_ps_ = &ps;
+      if (stride_)
+        for (int s = 0; s < spp; ++s) bl_[s] = ps.lens_index[s];
+      n_ = spp;
+      uniform_px_ = px, uniform_py_ = py;
+      run_batch(true, sel, n_sel);
+      n_ = 0;
+    }
+  }
+
   inline void flush() {
     if constexpr (!A::counting) {
       if (n_ > 0) run_batch(false);
@@ -180,6 +208,10 @@ class SamplePipeline {
     finish(tri, covered, e, det, n_ties, px, py, s, cost::kInside2D);
   }
 
+  static void mask_flags(int n, const std::uint8_t* __restrict sel, std::uint8_t* __restrict flags) {
+    for (int i = 0; i < n; ++i) flags[i] = static_cast<std::uint8_t>(flags[i] * (sel[i] != 0));
+  }
+
   void gather_xy(float fx, float fy, const PixelSamples& ps, int spp) {
     float* __restrict gx = gx_.data();
     float* __restrict gy = gy_.data();
@@ -202,7 +234,7 @@ class SamplePipeline {
 
   // Evaluate the pending batch (fast path). uniform: the batch is samples 0..n-1 of pixel
   // (uniform_px_, uniform_py_).
-  void run_batch(bool uniform) {
+  void run_batch(bool uniform, const std::uint8_t* sel = nullptr, int n_sel = 0) {
     uniform_ = uniform;
     const TriSetup& tri = *tri_;
     const int n = n_;
@@ -225,7 +257,7 @@ class SamplePipeline {
         case 1: batch_edges_3d(n, T, gx_.data(), gy_.data(), bt, e, e + n, e + 2 * n, d); break;
         default: batch_edges_5d(n, T, gx_.data(), gy_.data(), bu, bv, bt, e, e + n, e + 2 * n, d); break;
       }
-      c_[kTestedByClass[cls]] += static_cast<std::uint64_t>(n);
+      c_[kTestedByClass[cls]] += static_cast<std::uint64_t>(sel ? n_sel : n);
       inside_cost = kInsideCost[cls];
     } else {
       const float W[3] = {tri.W[0], tri.W[1], tri.W[2]};
@@ -241,15 +273,17 @@ class SamplePipeline {
                            W[2], gx_[i], gy_[i], e[i], e[n + i], e[2 * n + i], d[i]);
         }
       }
-      c_[Counter::raster_samples_tested_2d] += static_cast<std::uint64_t>(n);
+      c_[Counter::raster_samples_tested_2d] += static_cast<std::uint64_t>(sel ? n_sel : n);
       inside_cost = cost::kInside2D;
     }
     // Flags: 1 = covered, 2 = an e_i is exactly zero (scalar top-left path). Then skip 8 flags at a
     // time (most batches are mostly misses).
     const bool bfc = f_.p.backface_cull;
     batch_flags(n, e, e + n, e + 2 * n, d, bfc, flags_.data());
-    c_[Counter::raster_samples_tested] += static_cast<std::uint64_t>(n);
-    c_[Counter::ops_sample_inside] += inside_cost * static_cast<std::uint64_t>(n);
+    if (sel) mask_flags(n, sel, flags_.data());
+    const int tested = sel ? n_sel : n;
+    c_[Counter::raster_samples_tested] += static_cast<std::uint64_t>(tested);
+    c_[Counter::ops_sample_inside] += inside_cost * static_cast<std::uint64_t>(tested);
     for (int w = 0; w < n; w += 8) {
       std::uint64_t word;
       std::memcpy(&word, &flags_[w], 8);

@@ -226,6 +226,12 @@ class Tile final : public Traversal {
           if (fast_select) {  // vectorised scan of the pixel's samples
             tiletest::select_candidates<true>(spp, ps.u, ps.v, ps.cell, active_bits, sx, sy, sel_.data());
             n = tiletest::compact_flags(sel_.data(), spp, cand_.data());
+            if (region_cost) charge<A>(c_[Counter::ops_sample_region], region_cost * checked);
+            if (count_opt)
+              for (int i = 0; i < n; ++i)
+                c_[Counter::tile_samples_optimal] += in_exact_region(tri, fp, f_.fc, ps, cand_[i], tx, ty, T);
+            pipe_.push_pixel_masked(px, py, ps, sel_.data(), cand_.data(), n);
+            continue;
           } else {  // counting path: walk the active cells' buckets, as the hardware would
             for (const int c : cell_list_)
               for (int k = ps.cell_offsets[c]; k < ps.cell_offsets[c + 1]; ++k) {

@@ -1,0 +1,150 @@
+"""Golden operation counts: tests/golden/ops.csv.
+
+Rows are (scene, algorithm, table, coc, spp, tile, grid, counter) -> value, one counter per line so
+that a change in the model shows up in review as exactly the counters it moved. `make golden`
+(`python -m experiments.golden`) regenerates the file and prints a summary of the differences;
+change the file only on purpose and say why in the commit. tests/test_golden.py compares the key
+sets first, then the values.
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parent.parent
+GOLDEN = REPO / "tests" / "golden" / "ops.csv"
+KEY = ("scene", "algorithm", "table", "coc", "spp", "tile", "grid")
+
+# Small renders of the paper's workloads (and two hard cases) so the whole file recomputes in seconds.
+SCENES = {
+    "bunny": dict(name="bunny", params={}, size=(96, 96)),
+    "spot": dict(name="spot", params={}, size=(96, 96)),
+    "modern_hall": dict(name="modern_hall", params={}, size=(128, 72)),
+    "mixed_sizes": dict(name="mixed_sizes", params={"n": 2000, "resolution": 96, "max_area_px": 1000.0},
+                        size=(96, 96)),
+    "focus_crossing": dict(name="focus_crossing", params={}, size=(64, 64)),
+    "moving_quads": dict(name="moving_quads", params={}, size=(64, 64)),
+}
+ARBITRARY = ("bruteforce", "interval", "tile", "laine")
+INTERLEAVED = ("interleave", "hinterleave", "tile_interleaved")
+
+
+@dataclass(frozen=True)
+class Case:
+    scene: str
+    algorithm: str
+    coc: float
+    spp: int = 16
+    tile: int = 2
+    grid: int = 4
+
+    @property
+    def table(self) -> str:
+        return "interleaved64" if self.algorithm in INTERLEAVED else "stratified"
+
+    def key(self) -> tuple:
+        return (self.scene, self.algorithm, self.table, f"{self.coc:g}", str(self.spp), str(self.tile), str(self.grid))
+
+
+def cases() -> list[Case]:
+    out = []
+    for scene in SCENES:
+        for algorithm in ARBITRARY + INTERLEAVED:
+            for coc in (0.0, 10.0, 50.0):
+                out.append(Case(scene, algorithm, coc))
+    for tile in (1, 4, 8):  # tile sizes, and the 8x8 grid at 64 spp
+        out.append(Case("bunny", "tile", 10.0, tile=tile))
+    out.append(Case("bunny", "tile", 20.0, spp=64, grid=8))
+    out.append(Case("bunny", "interval", 20.0, spp=64, grid=8))
+    return out
+
+
+_scene_cache: dict = {}
+
+
+def compute(case: Case) -> dict[str, int]:
+    """The raw counters of one case (documented op costs; equal to exact counting by invariant 4)."""
+    import models
+    import sim
+
+    spec = SCENES[case.scene]
+    if case.scene not in _scene_cache:
+        _scene_cache[case.scene] = models.named(spec["name"], **spec["params"])
+    scene = _scene_cache[case.scene]
+    hint = scene.camera_hint
+    w, h = spec["size"]
+    camera = sim.Camera(width=w, height=h, fov_y_deg=hint.get("fov_y_deg", 45.0),
+                        focus_distance=hint["focus_distance"], coc_px=case.coc)
+    if case.table == "stratified":
+        table = sim.SampleTable.stratified(spp=case.spp, seed=7)
+    else:
+        table = sim.SampleTable.interleaved(spp=case.spp, n_lens=64, seed=7)
+    config = sim.PipelineConfig(algorithm=case.algorithm, tile_size=case.tile, lens_grid=case.grid, threads=2)
+    result = sim.render(scene, camera, table, config)
+    raw = set(sim._core.counter_docs())
+    return {k: int(v) for k, v in result.flat_stats.items() if k in raw}
+
+
+def compute_all(progress: bool = True) -> dict[tuple, int]:
+    rows = {}
+    todo = cases()
+    it = todo
+    if progress:
+        from tqdm import tqdm
+
+        it = tqdm(todo, desc="golden", unit="case")
+    for case in it:
+        for counter, value in compute(case).items():
+            rows[case.key() + (counter,)] = value
+    return rows
+
+
+def read(path: Path = GOLDEN) -> dict[tuple, int]:
+    with path.open() as f:
+        return {tuple(r[k] for k in KEY + ("counter",)): int(r["value"]) for r in csv.DictReader(f)}
+
+
+def write(rows: dict[tuple, int], path: Path = GOLDEN) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("w", newline="") as f:
+        w = csv.writer(f, lineterminator="\n")
+        w.writerow(KEY + ("counter", "value"))
+        for key in sorted(rows):
+            w.writerow(key + (rows[key],))
+
+
+def diff(old: dict[tuple, int], new: dict[tuple, int]) -> tuple[set, set, list]:
+    """(keys only in old, keys only in new, [(key, old, new)] for changed values)."""
+    removed = set(old) - set(new)
+    added = set(new) - set(old)
+    changed = [(k, old[k], new[k]) for k in sorted(set(old) & set(new)) if old[k] != new[k]]
+    return removed, added, changed
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--check", action="store_true", help="only compare, do not rewrite")
+    args = parser.parse_args(argv)
+    new = compute_all()
+    old = read() if GOLDEN.exists() else {}
+    removed, added, changed = diff(old, new)
+    print(f"{GOLDEN.relative_to(REPO)}: {len(new)} values; {len(added)} added, {len(removed)} removed, "
+          f"{len(changed)} changed")
+    by_counter: dict[str, list] = {}
+    for key, a, b in changed:
+        by_counter.setdefault(key[-1], []).append((key, a, b))
+    for counter, items in sorted(by_counter.items()):
+        worst = max(items, key=lambda x: abs(x[2] - x[1]) / max(abs(x[1]), 1))
+        rel = (worst[2] - worst[1]) / max(abs(worst[1]), 1)
+        print(f"  {counter}: {len(items)} cases changed, largest {rel:+.2%} at {worst[0][:-1]} ({worst[1]} -> {worst[2]})")
+    if not args.check:
+        write(new)
+        print("rewritten; review `git diff tests/golden/ops.csv` and explain the change in the commit")
+    return 1 if (args.check and (removed or added or changed)) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
