@@ -17,6 +17,24 @@ from pathlib import Path
 from .config import REPO, RenderConfig, build, config_hash, expand_sweep
 
 CACHE_DIR = REPO / "results" / "cache"
+_ENGINE_ID = None
+
+
+def engine_id() -> str:
+    """Fingerprint of the compiled engine and the Python that drives it: cached results are only
+    reused by the same engine (an engine change invalidates the cache)."""
+    global _ENGINE_ID
+    if _ENGINE_ID is None:
+        import hashlib
+
+        import sim
+
+        h = hashlib.sha256(Path(sim._core.__file__).read_bytes())
+        for folder in ("sim", "models"):
+            for f in sorted((REPO / folder).glob("*.py")):
+                h.update(f.read_bytes())
+        _ENGINE_ID = h.hexdigest()[:12]
+    return _ENGINE_ID
 
 
 def meta_columns(config: RenderConfig, camera=None, table=None) -> dict:
@@ -52,6 +70,7 @@ def render_point(config: RenderConfig, image_path: str | Path | None = None) -> 
     row.update(result.flat_stats)
     row["status"] = "ok"
     row["error"] = ""
+    row["engine_id"] = engine_id()
     if image_path is not None:
         result.save_png(image_path)
     return row, result
@@ -86,7 +105,7 @@ def run_sweep(config: RenderConfig, out_dir: str | Path, *, source: str = "confi
     todo = []
     for point, cfg in points:
         h = config_hash(cfg)
-        cached = CACHE_DIR / f"{h}.json"
+        cached = CACHE_DIR / f"{h}-{engine_id()}.json"
         if use_cache and cached.exists():
             row = json.loads(cached.read_text())
             row.update({f"point.{k}": v for k, v in point.items()})
@@ -111,7 +130,7 @@ def run_sweep(config: RenderConfig, out_dir: str | Path, *, source: str = "confi
         if row["status"] == "ok":
             CACHE_DIR.mkdir(parents=True, exist_ok=True)
             keep = {k: v for k, v in row.items() if not k.startswith("point.")}
-            (CACHE_DIR / f"{row['config_hash']}.json").write_text(json.dumps(keep, default=str))
+            (CACHE_DIR / f"{row['config_hash']}-{engine_id()}.json").write_text(json.dumps(keep, default=str))
         if bar:
             bar.update(1)
             if row["status"] != "ok":

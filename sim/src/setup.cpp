@@ -213,6 +213,28 @@ bool setup_triangle(const float* v0, const float* v1, const float* col, std::uin
   // arithmetic (up to a negligible probability), so it is culled. A triangle seen edge-on through
   // the pinhole still projects to a segment and is kept. Not counted (robustness, like the near
   // plane).
+  if (!moving) {
+    // Zero area in 3D (collinear vertices, up to the float rounding of the vertices): thinner than
+    // a few ulps of its coordinates, so exact coverage is empty and the float sample test would only
+    // see rounding noise along the projected segment.
+    double e1[3], e2[3], pmax = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      const double a = k == 0 ? o.X[0] : (k == 1 ? o.Y[0] : o.W[0]);
+      const double b1 = k == 0 ? o.X[1] : (k == 1 ? o.Y[1] : o.W[1]);
+      const double b2 = k == 0 ? o.X[2] : (k == 1 ? o.Y[2] : o.W[2]);
+      e1[k] = b1 - a, e2[k] = b2 - a;
+      pmax = std::max({pmax, std::fabs(a), std::fabs(b1), std::fabs(b2)});
+    }
+    const double cx = e1[1] * e2[2] - e1[2] * e2[1], cy = e1[2] * e2[0] - e1[0] * e2[2],
+                 cz = e1[0] * e2[1] - e1[1] * e2[0];
+    const double cross = std::sqrt(cx * cx + cy * cy + cz * cz);
+    const double l1 = std::sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]);
+    const double l2 = std::sqrt(e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]);
+    if (!(cross > 0x1p-20 * pmax * (l1 + l2))) {
+      ++c[Counter::setup_culled_degenerate];
+      return false;
+    }
+  }
   if (!moving && o.poly_n >= 3) {
     double extent = 0.0, mag = 0.0;
     const int corners = defocused ? 4 : 1;

@@ -21,7 +21,10 @@ struct Footprint {
   double P[6][3];
   bool h_valid = false;  // false: moving and may cross the near plane (no tile test possible)
   // H_j lines (static triangles only).
-  int sigma = 0;         // orientation over the lens, 0 if it changes sign (no H_j culling)
+  int sigma = 0;         // orientation over the lens, 0 if it changes sign over the lens square
+  // When sigma == 0: the lens cells where the orientation det(u, v) is surely positive / negative.
+  tiletest::CellMask orient_pos, orient_neg;
+  bool orient_split = false;
   int n_edges = 0;
   tiletest::EdgeH edges[4];
   int edges_enabled = 0, edges_disabled = 0;
@@ -37,22 +40,26 @@ inline D det3_columns(const D a[3], const D b[3], const D c[3]) {
   return madd(a[0], x0, madd(a[1], x1, a[2] * x2));
 }
 
-// Orientation of the (static) triangle seen from the lens-square corners: det(u, v) = D0 + u Du +
-// v Dv (the u v term vanishes). Returns +1/-1 if the sign is the same (clearly) at all four
-// corners, else 0. Cost: cost::kOrientation.
+// Orientation of the (static) triangle seen from lens point (u, v): det(u, v) = D0 + u Du + v Dv
+// (the u v term vanishes), the sign of the sample test's determinant. Returns +1/-1 if the sign is
+// clearly the same at all four lens-square corners, else 0; `line` receives det as a lens line and
+// `thr` the threshold below which its sign is not trusted. Cost: cost::kOrientation.
 template <class D>
-inline int lens_orientation(const TriSetup& tri, const FrameConst& fc) {
+inline int lens_orientation(const TriSetup& tri, const FrameConst& fc, tiletest::Line* line = nullptr,
+                            double* thr_out = nullptr) {
   D X[3], Y[3], W[3], one[3];
   for (int j = 0; j < 3; ++j) X[j] = D(tri.X[j]), Y[j] = D(tri.Y[j]), W[j] = D(tri.W[j]), one[j] = D(1.0);
   const D d0 = det3_columns(X, Y, W);
   const D du = det3_columns(one, Y, W) * D(-(fc.kx_d * fc.focus_d));
   const D dv = det3_columns(X, one, W) * D(-(fc.ky_d * fc.focus_d));
   const double scale = std::fabs(raw(d0)) + std::fabs(raw(du)) + std::fabs(raw(dv));
+  const double thr = 1e-9 * scale;
+  if (line) *line = tiletest::Line{raw(du), raw(dv), raw(d0)};
+  if (thr_out) *thr_out = thr;
   int pos = 0, neg = 0;
   for (int k = 0; k < 4; ++k) {
     const D su = (k & 1) ? du : -du, sv = (k & 2) ? dv : -dv;
     const D val = d0 + su + sv;
-    const double thr = 1e-9 * scale;
     const bool p = val > D(thr);
     const bool q = val < D(-thr);
     pos += p, neg += q;
@@ -88,9 +95,20 @@ inline Footprint build_footprint(const TriSetup& tri, const Frame& f, bool with_
   }
   if (!with_H || tri.moving) return fp;
 
-  fp.sigma = lens_orientation<D>(tri, fc);
+  tiletest::Line orient;
+  double thr;
+  fp.sigma = lens_orientation<D>(tri, fc, &orient, &thr);
   charge<A>(ops, cost::kOrientation);
-  if (fp.sigma == 0) return fp;
+  if (fp.sigma == 0) {
+    // The lens sees the triangle edge-on somewhere: cull with H_j only in lens cells where the
+    // orientation has one sign (cells where it is ~0 see a sliver and are left to the sample test).
+    const int Gc = p.lens_grid;
+    const std::uint64_t cells = static_cast<std::uint64_t>(Gc) * Gc;
+    fp.orient_pos = tiletest::line_cells<D>(tiletest::Line{-orient.A, -orient.B, thr - orient.C}, Gc, 0, Gc - 1, 0, Gc - 1);
+    fp.orient_neg = tiletest::line_cells<D>(tiletest::Line{orient.A, orient.B, orient.C + thr}, Gc, 0, Gc - 1, 0, Gc - 1);
+    charge<A>(ops, 2 * (cost::kLineCellsBase + Gc + 2 * cells));
+    fp.orient_split = true;
+  }
   // Selective H_j oracle (001 Appendix A): N_samples * C_sample < N_tiles * C_tile disables.
   const int T = p.tile_size, G = p.lens_grid;
   const double n_tiles = static_cast<double>((tri.bx1 - 1) / T - tri.bx0 / T + 1) *

@@ -45,7 +45,7 @@ class Tile final : public Traversal {
       c_[Counter::setup_H_edges_enabled] += fp.edges_enabled;
       c_[Counter::setup_H_edges_disabled] += fp.edges_disabled;
       if (tri.moving) ++c_[Counter::trav_motion_fallback];
-      if (!tri.moving && f_.p.halfspace_H && fp.sigma == 0) ++c_[Counter::tile_H_skipped_orientation];
+      if (!tri.moving && f_.p.halfspace_H && fp.orient_split) ++c_[Counter::tile_H_split_orientation];
     }
     raster_lens(tri, fp, bin);
   }
@@ -118,7 +118,7 @@ class Tile final : public Traversal {
     const RenderParams& p = f_.p;
     const int T = p.tile_size, G = p.lens_grid;
     const bool use_h = p.halfspace_h && fp.h_valid;
-    const bool use_H = p.halfspace_H && !tri.moving && fp.sigma != 0;
+    const bool use_H = p.halfspace_H && !tri.moving && (fp.sigma != 0 || fp.orient_split);
     const int cells = G * G;
     if (kInterleaved && !tri.moving)
       pipe_.begin_sheared(tri, sx_.data(), sy_.data(), 3);
@@ -180,16 +180,30 @@ class Tile final : public Traversal {
           const bool has = tiletest::tangent_corners<D>(e, x0, x1, y0, y1, m, n);
           charge<A>(c_[Counter::ops_tile], e.parallel ? 0 : cost::kTangentCorners);
           if (!has) continue;  // region 5: the edge points at the tile
+          const int rows = j1 - j0 + 1, cols = i1 - i0 + 1;
+          const std::uint64_t cells_cost = cost::kLineCellsBase + rows + 2 * static_cast<std::uint64_t>(rows * cols);
           tiletest::CellMask edge_culled;
-          edge_culled.set();
-          for (const int corner : {m, n}) {
-            const double xc = (corner & 1) ? x1 : x0, yc = (corner & 2) ? y1 : y0;
-            const tiletest::Line l = tiletest::line_at_corner<D>(e, xc, yc, fp.sigma);
-            edge_culled &= tiletest::line_cells<D>(l, G, i0, i1, j0, j1);
-            const int rows = j1 - j0 + 1, cols = i1 - i0 + 1;
-            charge<A>(c_[Counter::ops_tile],
-                      cost::kLineAtCorner + cost::kLineCellsBase + rows + 2 * static_cast<std::uint64_t>(rows * cols));
-            ++c_[Counter::tile_H_lines];
+          if (fp.sigma != 0) {  // one orientation over the lens: cull where sigma * H < 0 for both
+            edge_culled.set();
+            for (const int corner : {m, n}) {
+              const double xc = (corner & 1) ? x1 : x0, yc = (corner & 2) ? y1 : y0;
+              const tiletest::Line l = tiletest::line_at_corner<D>(e, xc, yc, fp.sigma);
+              edge_culled &= tiletest::line_cells<D>(l, G, i0, i1, j0, j1);
+              charge<A>(c_[Counter::ops_tile], cost::kLineAtCorner + cells_cost);
+              ++c_[Counter::tile_H_lines];
+            }
+          } else {  // orientation changes over the lens: per cell of one sign (H < 0 or H > 0)
+            tiletest::CellMask neg_both, pos_both;
+            neg_both.set(), pos_both.set();
+            for (const int corner : {m, n}) {
+              const double xc = (corner & 1) ? x1 : x0, yc = (corner & 2) ? y1 : y0;
+              const tiletest::Line l = tiletest::line_at_corner<D>(e, xc, yc, 1);
+              neg_both &= tiletest::line_cells<D>(l, G, i0, i1, j0, j1);
+              pos_both &= tiletest::line_cells<D>(tiletest::Line{-l.A, -l.B, -l.C}, G, i0, i1, j0, j1);
+              charge<A>(c_[Counter::ops_tile], cost::kLineAtCorner + 2 * cells_cost);
+              ++c_[Counter::tile_H_lines];
+            }
+            edge_culled = (fp.orient_pos & neg_both) | (fp.orient_neg & pos_both);
           }
           culled |= edge_culled;
           any_line = true;
