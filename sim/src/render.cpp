@@ -123,12 +123,11 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
         const int bx = b % bins_x, by = b / bins_x;
         BinRect r{bx * B, by * B, std::min(p.width, (bx + 1) * B), std::min(p.height, (by + 1) * B)};
         ts.buffers.begin(r, table.spp());
-        int k = 0;
         for (std::uint32_t i : bin_lists[b]) {
+          if (cancel.load(std::memory_order_relaxed)) break;  // Ctrl-C: stop within one triangle
           const TriSetup& tri = setups[i];
           const bool home = (tri.by0 / B) * bins_x + (tri.bx0 / B) == b;
           algo->rasterize(tri, r, home);
-          if ((++k & 63) == 0 && cancel.load(std::memory_order_relaxed)) break;
         }
         ts.buffers.resolve(result.image.data(), p.width);
         if (export_samples)

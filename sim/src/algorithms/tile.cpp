@@ -24,9 +24,11 @@ class Tile final : public Traversal {
 
  public:
   Tile(const Frame& f, ThreadState& ts)
-      : f_(f), c_(ts.counters), pipe_(f, ts), lens_mask_(lens_cells(f.p.lens_shape, f.p.lens_grid)),
-        iota_(f.table.spp()) {
-    for (int s = 0; s < f.table.spp(); ++s) iota_[s] = s;
+      : f_(f), c_(ts.counters), pipe_(f, ts), lens_mask_(lens_cells(f.p.lens_shape, f.p.lens_grid)) {
+    for (int c = 0; c < 64; ++c) {
+      low64_.set(c);
+      if (lens_mask_.test(c)) lens_mask64_ |= std::uint64_t(1) << c;
+    }
   }
 
   void rasterize(const TriSetup& tri, const BinRect& bin, bool charge_setup) override {
@@ -155,17 +157,32 @@ class Tile final : public Traversal {
       const std::uint32_t bx = tiletest::axis_cells<D>(sx, G);
       const std::uint32_t by = tiletest::axis_cells<D>(sy, G);
       charge<A>(c_[Counter::ops_tile], sx.n_cmp + sy.n_cmp);
+      // Active cells: a 64-bit mask for grids up to 8 x 8, a bitset above.
+      const bool small = cells <= 64;
       tiletest::CellMask active;
+      std::uint64_t act64 = 0;
       int i0 = G, i1 = -1, j0 = G, j1 = -1;
-      for (int j = 0; j < G; ++j) {
-        if (!(by >> j & 1u)) continue;
-        for (int i = 0; i < G; ++i)
-          if ((bx >> i & 1u) && lens_mask_.test(j * G + i)) {
-            active.set(j * G + i);
-            i0 = std::min(i0, i), i1 = std::max(i1, i), j0 = std::min(j0, j), j1 = std::max(j1, j);
-          }
+      if (small) {
+        for (int j = 0; j < G; ++j)
+          if (by >> j & 1u) act64 |= static_cast<std::uint64_t>(bx) << (j * G);
+        act64 &= lens_mask64_;
+        std::uint64_t cols = 0;
+        for (int j = 0; j < G; ++j) {
+          const std::uint64_t row = (act64 >> (j * G)) & ((std::uint64_t(1) << G) - 1);
+          if (row) j0 = std::min(j0, j), j1 = j, cols |= row;
+        }
+        if (cols) i0 = __builtin_ctzll(cols), i1 = 63 - __builtin_clzll(cols);
+      } else {
+        for (int j = 0; j < G; ++j) {
+          if (!(by >> j & 1u)) continue;
+          for (int i = 0; i < G; ++i)
+            if ((bx >> i & 1u) && lens_mask_.test(j * G + i)) {
+              active.set(j * G + i);
+              i0 = std::min(i0, i), i1 = std::max(i1, i), j0 = std::min(j0, j), j1 = std::max(j1, j);
+            }
+        }
       }
-      if (active.none()) {
+      if (small ? act64 == 0 : active.none()) {
         ++c_[Counter::tile_culled_lens];
         return;
       }
@@ -209,11 +226,17 @@ class Tile final : public Traversal {
           any_line = true;
         }
         if (any_line) {
-          c_[Counter::tile_cells_tested] += active.count();
-          const tiletest::CellMask killed = active & culled;
-          c_[Counter::tile_cells_culled] += killed.count();
-          active &= ~culled;
-          if (active.none()) {
+          if (small) {
+            const std::uint64_t culled64 = (culled & low64_).to_ullong();
+            c_[Counter::tile_cells_tested] += static_cast<std::uint64_t>(__builtin_popcountll(act64));
+            c_[Counter::tile_cells_culled] += static_cast<std::uint64_t>(__builtin_popcountll(act64 & culled64));
+            act64 &= ~culled64;
+          } else {
+            c_[Counter::tile_cells_tested] += active.count();
+            c_[Counter::tile_cells_culled] += (active & culled).count();
+            active &= ~culled;
+          }
+          if (small ? act64 == 0 : active.none()) {
             ++c_[Counter::tile_culled_H];
             return;
           }
@@ -222,22 +245,24 @@ class Tile final : public Traversal {
       ++c_[Counter::tile_accepted];
       // Samples of surviving cells, each checked against the h_i lines, then inside-tested.
       cell_list_.clear();
-      for (int c = 0; c < cells; ++c)
-        if (active.test(c)) cell_list_.push_back(c);
+      if (small) {
+        for (std::uint64_t m = act64; m; m &= m - 1) cell_list_.push_back(__builtin_ctzll(m));
+      } else {
+        for (int c = 0; c < cells; ++c)
+          if (active.test(c)) cell_list_.push_back(c);
+      }
       const std::uint64_t region_cost = static_cast<std::uint64_t>(sx.n_cmp + sy.n_cmp);
       const bool count_opt = p.count_optimal;
       const int spp = f_.table.spp();
-      std::uint64_t active_bits = 0;
-      for (const int c : cell_list_)
-        if (c < 64) active_bits |= std::uint64_t(1) << c;
-      const bool fast_select = !A::counting && cells <= 64;
+      const std::uint64_t active_bits = act64;
+      const bool fast_select = !A::counting && small;
       for (int py = py0; py < ty1; ++py)
         for (int px = px0; px < tx1; ++px) {
           const PixelSamples ps = f_.table.pixel(px, py);
           // Candidates: samples of the surviving cells whose (u, v) passes the h_i lines.
           int n = 0, checked = 0;
           for (const int c : cell_list_) checked += ps.cell_offsets[c + 1] - ps.cell_offsets[c];
-          if (fast_select) {  // vectorised scan of the pixel's samples
+          if (fast_select && 4 * checked >= spp) {  // many: vectorised scan of the pixel's samples
             tiletest::select_candidates<true>(spp, ps.u, ps.v, ps.cell, active_bits, sx, sy, sel_.data());
             n = tiletest::compact_flags(sel_.data(), spp, cand_.data());
             if (region_cost) charge<A>(c_[Counter::ops_sample_region], region_cost * checked);
@@ -246,7 +271,7 @@ class Tile final : public Traversal {
                 c_[Counter::tile_samples_optimal] += in_exact_region(tri, fp, f_.fc, ps, cand_[i], tx, ty, T);
             pipe_.push_pixel_masked(px, py, ps, sel_.data(), cand_.data(), n);
             continue;
-          } else {  // counting path: walk the active cells' buckets, as the hardware would
+          } else {  // few candidates (or the counting path): walk the active cells' buckets
             for (const int c : cell_list_)
               for (int k = ps.cell_offsets[c]; k < ps.cell_offsets[c + 1]; ++k) {
                 const int s = ps.cell_order[k];
@@ -270,7 +295,8 @@ class Tile final : public Traversal {
   tiletest::CellMask lens_mask_;
   std::vector<int> cell_list_;
   std::vector<int> cand_ = std::vector<int>(4096);
-  std::vector<int> iota_;
+  tiletest::CellMask low64_;
+  std::uint64_t lens_mask64_ = 0;
   std::vector<std::uint8_t> sel_ = std::vector<std::uint8_t>(4096 + 8, 0);
   std::vector<float> sx_, sy_;
 };
