@@ -140,18 +140,24 @@ def _concat(*frames):
 
 # ---- Fig. 15 ---------------------------------------------------------------------------------------
 
-@report("fig15", ["fig15_arbitrary", "fig15_interleaved"])
+@report("fig15", ["fig15_arbitrary", "fig15_interleaved", "fig15_tile1"])
 def fig15(dfs):
     plt = _plt()
+    import pandas as pd
+
     da, bad = _ok(dfs["fig15_arbitrary"])
     di, bad2 = _ok(dfs["fig15_interleaved"])
+    d1, bad3 = _ok(dfs["fig15_tile1"])
+    d1["algorithm"] = "tile 1x1"
+    da = pd.concat([da, d1])
     scenes = [s for s in SCENE_ORDER if s in set(da["scene"]) | set(di["scene"])]
     fig, axes = plt.subplots(2, len(scenes), figsize=(4 * len(scenes), 7), squeeze=False)
     lines = ["Total rasterization operations (setup + tile test + sample test, 001 §6.2) against the CoC radius "
-             "at 64 spp. Top: arbitrary sample patterns; bottom: an interleaved pattern with 256 lens positions "
-             "(`tile_interleaved` is the paper's OUR (i)).", "", "![fig15](fig15.png)", ""]
+             "at 64 spp. Top: arbitrary sample patterns (`tile` with the paper's 2x2 tiles, and with 1x1 tiles); "
+             "bottom: an interleaved pattern with 256 lens positions (`tile_interleaved` is the paper's OUR (i)).",
+             "", "![fig15](fig15.png)", ""]
     table_rows = []
-    for row, (df, algos) in enumerate(((da, ["bruteforce", "interval", "tile"]),
+    for row, (df, algos) in enumerate(((da, ["bruteforce", "interval", "tile", "tile 1x1"]),
                                        (di, ["interleave", "hinterleave", "tile_interleaved"]))):
         for col, s in enumerate(scenes):
             ax = axes[row][col]
@@ -175,17 +181,30 @@ def fig15(dfs):
     checks = []
     for s in scenes:
         sub = da[da["scene"] == s]
-        cheapest = all(
-            sub[(sub["coc_px"] == c) & (sub["algorithm"] == "tile")]["ops.total"].iloc[0]
-            <= sub[(sub["coc_px"] == c)]["ops.total"].min() + 0.5
-            for c in sorted(sub["coc_px"].unique()) if len(sub[(sub["coc_px"] == c) & (sub["algorithm"] == "tile")]))
+        others = sub[sub["algorithm"].isin(["bruteforce", "interval"])]
+
+        def cheapest(algo):
+            fails = []
+            for c in sorted(sub["coc_px"].unique()):
+                mine = sub[(sub["coc_px"] == c) & (sub["algorithm"] == algo)]["ops.total"]
+                best_other = others[others["coc_px"] == c]["ops.total"].min()
+                if len(mine) and not mine.iloc[0] <= best_other:
+                    fails.append(f"CoC {c:g}: {mine.iloc[0] / best_other:.2f}x the best other")
+            return "yes" if not fails else "no (" + "; ".join(fails) + ")"
+
         bf = sub[sub["algorithm"] == "bruteforce"].sort_values("coc_px")
         growth = bf["ops.total"].iloc[-1] / bf["ops.total"].iloc[0] if len(bf) > 1 else math.nan
-        checks.append(f"- {s}: `tile` cheapest arbitrary-pattern algorithm at every CoC: **{cheapest}**; "
-                      f"bruteforce ops grow {growth:.1f}x from CoC 0 to 50.")
-    lines += ["Trend checks:", ""] + checks + ["", "<details><summary>data</summary>", ""]
+        checks.append(f"- {s}: `tile` (2x2) cheaper than bruteforce and interval at every CoC: **{cheapest('tile')}**; "
+                      f"`tile` 1x1: **{cheapest('tile 1x1')}**; bruteforce ops grow {growth:.1f}x from CoC 0 to 50.")
+    lines += ["Trend checks:", ""] + checks + [
+        "", "Where `tile` with 2x2 tiles loses to `interval` (the bunny: 69k triangles of about 1.5 px^2, close to the "
+        "focus plane), the 2x2 tile is coarser than the triangles: the exact active region of a 2x2 tile holds more "
+        "samples than INTERVAL's per-pixel bounds for a lens cell (tile's tested/optimal is only 1.08 at CoC 10, so "
+        "the loss is the tile granularity, not the test). With 1x1 tiles `tile` is the cheapest on the bunny at every "
+        "CoC. The paper chose 2x2 on scenes with larger triangles; the best tile size depends on the triangle-size "
+        "distribution.", "", "<details><summary>data</summary>", ""]
     lines += _md_table(["scene", "algorithm", "CoC", "Gops", "STE"], table_rows) + ["", "</details>", ""]
-    return lines, _concat(bad, bad2)
+    return lines, _concat(bad, bad2, bad3)
 
 
 # ---- Fig. 16 ---------------------------------------------------------------------------------------
