@@ -126,16 +126,7 @@ class SamplePipeline {
     if constexpr (A::counting) {
       for (int s = 0; s < spp; ++s) push(px, py, ps, s);
     } else if (spp >= 32) {
-      // Large enough to be its own batch: no per-sample pixel/index bookkeeping.
-      flush();
-      gather_xy(static_cast<float>(px), static_cast<float>(py), ps, spp);
-      uniform_ps_ = &ps;
-      if (stride_)
-        for (int s = 0; s < spp; ++s) bl_[s] = ps.lens_index[s];
-      n_ = spp;
-      uniform_px_ = px, uniform_py_ = py;
-      run_batch(true);
-      n_ = 0;
+      run_pixel(px, py, ps, nullptr, spp);  // large enough to be its own batch
     } else {
       if (n_ + spp > cap_) flush();
       const int i0 = n_;
@@ -163,15 +154,7 @@ class SamplePipeline {
         for (int i = 0; i < n_sel; ++i) push(px, py, ps, idx[i]);
         return;
       }
-      flush();
-      gather_xy(static_cast<float>(px), static_cast<float>(py), ps, spp);
-      uniform_ps_ = &ps;
-      if (stride_)
-        for (int s = 0; s < spp; ++s) bl_[s] = ps.lens_index[s];
-      n_ = spp;
-      uniform_px_ = px, uniform_py_ = py;
-      run_batch(true, sel, n_sel);
-      n_ = 0;
+      run_pixel(px, py, ps, sel, n_sel);
     }
   }
 
@@ -206,6 +189,21 @@ class SamplePipeline {
     const bool covered = inside_from_vertices(X, Y, W, sx, sy, f_.p.backface_cull, e, det, n_ties);
     ++c_[Counter::raster_samples_tested_2d];
     finish(tri, covered, e, det, n_ties, px, py, s, cost::kInside2D);
+  }
+
+  // One pixel's samples as a batch of their own (no per-sample pixel/index bookkeeping); with sel,
+  // only the selected samples count (fast path only).
+  void run_pixel(int px, int py, const PixelSamples& ps, const std::uint8_t* sel, int n_sel) {
+    const int spp = f_.table.spp();
+    flush();
+    gather_xy(static_cast<float>(px), static_cast<float>(py), ps, spp);
+    uniform_ps_ = &ps;
+    if (stride_)
+      for (int s = 0; s < spp; ++s) bl_[s] = ps.lens_index[s];
+    n_ = spp;
+    uniform_px_ = px, uniform_py_ = py;
+    run_batch(true, sel, n_sel);
+    n_ = 0;
   }
 
   static void mask_flags(int n, const std::uint8_t* __restrict sel, std::uint8_t* __restrict flags) {
