@@ -74,3 +74,6 @@ def counter_docs() -> dict[str, tuple[str, str]]: ...
 def algorithms() -> list[tuple[str, str, bool]]: ...
 def measure_kernel_costs(trials: int = 100, seed: int = 1) -> dict[str, tuple[int, int, int]]:
     """{kernel: (documented cost, min counted, max counted)} over random inputs."""
+def measure_tile_kernel_costs(trials: int = 200, seed: int = 1) -> dict[str, tuple[int, int, int, int]]:
+    """Tile-test kernels whose cost depends on the configuration: {name: (runs, mismatches between
+    counted and documented, min documented, max documented)}."""
