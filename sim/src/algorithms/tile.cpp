@@ -244,13 +244,14 @@ class Tile final : public Traversal {
       }
       ++c_[Counter::tile_accepted];
       // Samples of surviving cells, each checked against the h_i lines, then inside-tested.
-      cell_list_.clear();
+      int n_cells = 0;
       if (small) {
-        for (std::uint64_t m = act64; m; m &= m - 1) cell_list_.push_back(__builtin_ctzll(m));
+        for (std::uint64_t m = act64; m; m &= m - 1) cell_list_[n_cells++] = __builtin_ctzll(m);
       } else {
         for (int c = 0; c < cells; ++c)
-          if (active.test(c)) cell_list_.push_back(c);
+          if (active.test(c)) cell_list_[n_cells++] = c;
       }
+      const int* const cl = cell_list_.data();
       const std::uint64_t region_cost = static_cast<std::uint64_t>(sx.n_cmp + sy.n_cmp);
       const bool count_opt = p.count_optimal;
       const int spp = f_.table.spp();
@@ -261,7 +262,7 @@ class Tile final : public Traversal {
           const PixelSamples ps = f_.table.pixel(px, py);
           // Candidates: samples of the surviving cells whose (u, v) passes the h_i lines.
           int n = 0, checked = 0;
-          for (const int c : cell_list_) checked += ps.cell_offsets[c + 1] - ps.cell_offsets[c];
+          for (int q = 0; q < n_cells; ++q) checked += ps.cell_offsets[cl[q] + 1] - ps.cell_offsets[cl[q]];
           if (fast_select && 4 * checked >= spp) {  // many: vectorised scan of the pixel's samples
             tiletest::select_candidates<true>(spp, ps.u, ps.v, ps.cell, active_bits, sx, sy, sel_.data());
             n = tiletest::compact_flags(sel_.data(), spp, cand_.data());
@@ -272,8 +273,8 @@ class Tile final : public Traversal {
             pipe_.push_pixel_masked(px, py, ps, sel_.data(), cand_.data(), n);
             continue;
           } else {  // few candidates (or the counting path): walk the active cells' buckets
-            for (const int c : cell_list_)
-              for (int k = ps.cell_offsets[c]; k < ps.cell_offsets[c + 1]; ++k) {
+            for (int q = 0; q < n_cells; ++q)
+              for (int k = ps.cell_offsets[cl[q]]; k < ps.cell_offsets[cl[q] + 1]; ++k) {
                 const int s = ps.cell_order[k];
                 cand_[n] = s;
                 n += region_cost == 0 || (tiletest::axis_pass(sx, F(ps.u[s])) & tiletest::axis_pass(sy, F(ps.v[s])));
@@ -293,7 +294,7 @@ class Tile final : public Traversal {
   Counters& c_;
   SamplePipeline<A> pipe_;
   tiletest::CellMask lens_mask_;
-  std::vector<int> cell_list_;
+  std::vector<int> cell_list_ = std::vector<int>(256);
   std::vector<int> cand_ = std::vector<int>(4096);
   tiletest::CellMask low64_;
   std::uint64_t lens_mask64_ = 0;
