@@ -1,6 +1,7 @@
 """sim.render: hand a scene, a camera and a sample table to the engine, get a Result."""
 from __future__ import annotations
 
+import os
 import time
 from dataclasses import dataclass, field
 
@@ -106,8 +107,6 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     samples = table.samples(camera.lens)
     spp = int(samples.shape[2])
     grid = config.resolved_lens_grid(spp)
-    import os
-
     threads = config.threads or (os.cpu_count() or 1)
     need = memory_estimate(camera, spp, p0.shape[0], config, threads, export_samples)
     if need > config.memory_limit_bytes:

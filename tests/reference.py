@@ -623,3 +623,19 @@ def hard_cases():
         [tri(px(4, 4, 2.0), px(20, 6, 8.0), px(10, 20, 5.0))],
         [tri(px(12, 10, 9.0), px(28, 12, 2.5), px(18, 28, 5.0))])
     return cases
+
+
+def check_resolved(request, label, cam, positions, positions_t1, table, result) -> dict:
+    """Compare a render's resolved samples (export_samples=True) with the ray caster, record the
+    figures on the test report, and fail on any mismatch away from an edge or the near plane or any
+    depth outside tolerance. Returns compare_resolved's dict for further checks."""
+    pts = table_points(table, cam)
+    r = compare_resolved(cam, positions, positions_t1, pts, result.sample_triangle, result.sample_depth)
+    for k in ("samples", "covered", "mismatches", "unexplained", "depth_ties", "depth_bad", "max_z_err"):
+        request.node.user_properties.append((k, r[k]))
+    bad = [tuple(int(v) for v in i) for i in r["unexplained_idx"][:5]]
+    assert r["unexplained"] == 0, (
+        f"{label}: {r['unexplained']} samples (py, px, s) differ from the ray caster away from edges: {bad}, "
+        f"engine {[int(result.sample_triangle[i]) for i in bad]}, reference {[int(r['ref_triangle'][i]) for i in bad]}")
+    assert r["depth_bad"] == 0, f"{label}: depth differs on {r['depth_bad']} samples (max |dz| {r['max_z_err']:.3g})"
+    return r
