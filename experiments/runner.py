@@ -37,7 +37,7 @@ def engine_id() -> str:
     return _ENGINE_ID
 
 
-def meta_columns(config: RenderConfig, camera=None, table=None) -> dict:
+def meta_columns(config: RenderConfig, camera=None) -> dict:
     """Identifying columns of a result row."""
     spec = config.scene
     row = {
@@ -64,7 +64,7 @@ def render_point(config: RenderConfig, image_path: str | Path | None = None) -> 
 
     scene, camera, table, pipeline = build(config)
     result = sim.render(scene, camera, table, pipeline)
-    row = meta_columns(config, camera, table)
+    row = meta_columns(config, camera)
     row["lens_grid"] = result.config["lens_grid"]
     row["triangles"] = scene.n_triangles
     row.update(result.flat_stats)

@@ -53,8 +53,6 @@ def render(
     'sample_depth' (H, W, spp) float32 and 'sample_triangle' (H, W, spp) int32. Releases the GIL;
     Ctrl-C raises KeyboardInterrupt. Raises ValueError for invalid parameters."""
 
-def validate(params: RenderParams, samples: npt.NDArray[np.float32], lens_index: npt.NDArray[np.int32],
-             lens_uv: npt.NDArray[np.float32]) -> None: ...
 def lens_grid_buckets(
     samples: npt.NDArray[np.float32], grid: int
 ) -> tuple[npt.NDArray[np.int32], npt.NDArray[np.int32], npt.NDArray[np.int32]]:

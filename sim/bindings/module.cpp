@@ -147,15 +147,6 @@ PYBIND11_MODULE(_core, m) {
       "'sample_triangle']}. The GIL is released; Ctrl-C interrupts.");
 
   m.def(
-      "validate",
-      [](const RenderParams& p, const FArr& samples, const IArr& lens_index, const FArr& lens_uv) {
-        SampleTable table = make_table(samples, p.lens_grid, lens_index, lens_uv);
-        validate_params(p, table);
-      },
-      py::arg("params"), py::arg("samples"), py::arg("lens_index"), py::arg("lens_uv"),
-      "Raise ValueError if the parameters are invalid for this sample table.");
-
-  m.def(
       "lens_grid_buckets",
       [](const FArr& samples, int grid) {
         if (grid < 1 || grid > 64) throw std::invalid_argument("grid: expected 1..64");

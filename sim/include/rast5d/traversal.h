@@ -145,17 +145,14 @@ class SamplePipeline {
   // idx[0..n_sel) lists the selected samples.
   inline void push_pixel_masked(int px, int py, const PixelSamples& ps, const std::uint8_t* sel, const int* idx,
                                 int n_sel) {
-    const int spp = f_.table.spp();
-    if (n_sel == 0) return;
-    if constexpr (A::counting) {
-      for (int i = 0; i < n_sel; ++i) push(px, py, ps, idx[i]);
-    } else {
-      if (spp < 32 || 3 * n_sel < spp) {
-        for (int i = 0; i < n_sel; ++i) push(px, py, ps, idx[i]);
+    if constexpr (!A::counting) {
+      const int spp = f_.table.spp();
+      if (spp >= 32 && 3 * n_sel >= spp) {
+        run_pixel(px, py, ps, sel, n_sel);
         return;
       }
-      run_pixel(px, py, ps, sel, n_sel);
     }
+    for (int i = 0; i < n_sel; ++i) push(px, py, ps, idx[i]);
   }
 
   inline void flush() {
@@ -164,8 +161,6 @@ class SamplePipeline {
       n_ = 0;
     }
   }
-
-  Counters& counters() { return c_; }
 
  private:
   static constexpr Counter kTestedByClass[4] = {
