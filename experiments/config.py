@@ -11,6 +11,7 @@ import copy
 import hashlib
 import itertools
 import json
+import typing
 from pathlib import Path
 from typing import Any, Literal, Optional
 
@@ -85,9 +86,12 @@ def _pipeline_model() -> type[BaseModel]:
              "c_sample": Optional[float], "c_tile": Optional[float], "backface_cull": bool,
              "op_count": Literal["documented", "exact"], "count_optimal": bool, "hinterleave_tile": int,
              "bin_size": int, "memory_limit_bytes": int}
+    hints = typing.get_type_hints(sim.PipelineConfig)
     for name, info in sim.PipelineConfig.field_docs().items():
         unit = f" [{info['unit']}]" if info["unit"] else ""
-        fields[name] = (types[name], Field(info["default"], description=info["doc"] + unit))
+        # Fields added to sim.PipelineConfig appear here by themselves (with their declared type);
+        # the table above only narrows types for better error messages.
+        fields[name] = (types.get(name, hints[name]), Field(info["default"], description=info["doc"] + unit))
     return create_model("PipelineSpec", __config__=ConfigDict(extra="forbid"),
                         __doc__="The rasterizer pipeline (sim.PipelineConfig).", **fields)
 

@@ -10,6 +10,7 @@ Public contract (ARCHITECTURE.md §Public contract)::
 from . import _core
 
 from .errors import ConfigError, SceneInputError
+from .hardware import HardwareConfig, TextureCacheConfig, UnitConfig
 from .pipeline import PipelineConfig, algorithm_docs, algorithm_names
 from .png import linear_to_srgb8, write_png
 
@@ -21,10 +22,13 @@ from .stats import counter_docs
 __all__ = [
     "Camera",
     "ConfigError",
+    "HardwareConfig",
     "PipelineConfig",
     "Result",
     "SampleTable",
     "SceneInputError",
+    "TextureCacheConfig",
+    "UnitConfig",
     "algorithm_docs",
     "algorithm_names",
     "counter_docs",

@@ -1,0 +1,158 @@
+"""HardwareConfig: the modelled hardware (units of the timing model, caches, memory), validated on
+construction. Every parameter is declared once here, with a unit and a description; the YAML
+``hardware:`` section (experiments/config.py) and docs/config.md are generated from it.
+
+Throughputs are work items per clock in each unit's own currency (triangles, tile tests, sample
+tests, depth tests, quads, texel fetches); latencies are in clocks; FIFO depths in entries.
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+from .errors import ConfigError, check_float, check_int
+
+
+@dataclass(frozen=True)
+class UnitConfig:
+    """One pipeline unit of the timing model (docs/timing.md)."""
+
+    throughput: float = field(default=1.0, metadata={
+        "unit": "items/clock", "doc": "Work items the unit accepts per clock (its own currency)"})
+    latency_cycles: int = field(default=4, metadata={
+        "unit": "clocks", "doc": "Clocks from accepting an item to handing it to the next unit"})
+    fifo_entries: int = field(default=32, metadata={
+        "unit": "entries", "doc": "Depth of the unit's input FIFO"})
+
+    def validate(self, owner: str) -> None:
+        check_float(owner, "throughput", self.throughput, lo=0.0, lo_open=True, hi=1e6)
+        check_int(owner, "latency_cycles", self.latency_cycles, 0, 1_000_000)
+        check_int(owner, "fifo_entries", self.fifo_entries, 1, 1_000_000)
+
+
+@dataclass(frozen=True)
+class TextureCacheConfig:
+    """A set-associative texture cache (one per texture unit)."""
+
+    size_bytes: int = field(default=16 * 1024, metadata={"unit": "bytes", "doc": "Capacity of one cache"})
+    line_bytes: int = field(default=64, metadata={"unit": "bytes", "doc": "Cache line size (power of two)"})
+    ways: int = field(default=4, metadata={
+        "unit": "ways", "doc": "Associativity; 0 = fully associative"})
+    policy: str = field(default="lru", metadata={"doc": "Replacement policy: 'lru'"})
+    count: int = field(default=1, metadata={
+        "unit": "caches", "doc": "Number of texture caches (screen tiles are interleaved over them)"})
+    hit_latency_cycles: int = field(default=4, metadata={"unit": "clocks", "doc": "Latency of a hit"})
+    miss_latency_cycles: int = field(default=200, metadata={"unit": "clocks", "doc": "Latency of a miss"})
+
+    def validate(self, owner: str) -> None:
+        check_int(owner, "size_bytes", self.size_bytes, 64, 1 << 30)
+        check_int(owner, "line_bytes", self.line_bytes, 4, 4096)
+        if self.line_bytes & (self.line_bytes - 1):
+            raise ConfigError(f"{owner}.line_bytes: expected a power of two, got {self.line_bytes}")
+        check_int(owner, "ways", self.ways, 0, 1 << 20)
+        lines = self.size_bytes // self.line_bytes
+        if self.size_bytes % self.line_bytes or (self.ways and lines % self.ways):
+            raise ConfigError(f"{owner}.size_bytes: {self.size_bytes} is not a whole number of sets of "
+                              f"{self.ways} x {self.line_bytes}-byte lines")
+        if self.policy != "lru":
+            raise ConfigError(f"{owner}.policy: expected 'lru', got {self.policy!r}")
+        check_int(owner, "count", self.count, 1, 1024)
+        check_int(owner, "hit_latency_cycles", self.hit_latency_cycles, 0, 1_000_000)
+        check_int(owner, "miss_latency_cycles", self.miss_latency_cycles, 0, 1_000_000)
+
+
+_UNIT_DEFAULTS = {
+    # unit: (throughput, latency, fifo, currency)
+    "setup": (1.0, 16, 16, "triangles"),
+    "tile_test": (4.0, 4, 32, "tile tests"),
+    "sample_test": (64.0, 4, 64, "sample tests (lanes)"),
+    "depth": (32.0, 8, 64, "depth tests"),
+    "shader": (1.0, 64, 32, "quads"),
+    "texture": (4.0, 8, 64, "texel fetches"),
+}
+
+
+def _unit(name: str):
+    tp, lat, fifo, currency = _UNIT_DEFAULTS[name]
+    return field(default_factory=lambda: UnitConfig(tp, lat, fifo),
+                 metadata={"doc": f"{name} unit; throughput in {currency} per clock", "section": True})
+
+
+@dataclass(frozen=True)
+class HardwareConfig:
+    """The modelled hardware. Nested sections accept dicts (``HardwareConfig.from_dict``)."""
+
+    clock_ghz: float = field(default=1.0, metadata={"unit": "GHz", "doc": "Clock frequency (for times in seconds)"})
+    setup: UnitConfig = _unit("setup")
+    tile_test: UnitConfig = _unit("tile_test")
+    sample_test: UnitConfig = _unit("sample_test")
+    depth: UnitConfig = _unit("depth")
+    shader: UnitConfig = _unit("shader")
+    texture: UnitConfig = _unit("texture")
+    tex_cache: TextureCacheConfig = field(default_factory=TextureCacheConfig, metadata={
+        "doc": "Texture cache geometry and latencies", "section": True})
+    memory_bytes_per_clock: float = field(default=32.0, metadata={
+        "unit": "bytes/clock", "doc": "Memory bandwidth shared by texture misses and depth traffic"})
+
+    def __post_init__(self):
+        for f in dataclasses.fields(self):
+            v = getattr(self, f.name)
+            if isinstance(v, dict):  # nested sections given as dicts
+                object.__setattr__(self, f.name, _nested(f.name, v))
+        check_float("HardwareConfig", "clock_ghz", self.clock_ghz, lo=0.0, lo_open=True, hi=1e3)
+        check_float("HardwareConfig", "memory_bytes_per_clock", self.memory_bytes_per_clock, lo=0.0,
+                    lo_open=True, hi=1e9)
+        for name in _UNIT_DEFAULTS:
+            unit = getattr(self, name)
+            if not isinstance(unit, UnitConfig):
+                raise ConfigError(f"HardwareConfig.{name}: expected a unit section, got {unit!r}")
+            unit.validate(f"HardwareConfig.{name}")
+        if not isinstance(self.tex_cache, TextureCacheConfig):
+            raise ConfigError(f"HardwareConfig.tex_cache: expected a cache section, got {self.tex_cache!r}")
+        self.tex_cache.validate("HardwareConfig.tex_cache")
+
+    @classmethod
+    def from_dict(cls, d: dict | None) -> "HardwareConfig":
+        return _nested_of(cls, "HardwareConfig", d or {})
+
+    @classmethod
+    def field_docs(cls) -> dict[str, dict]:
+        """{field: {"default", "unit", "doc", "fields"?}}; nested sections carry their own fields."""
+        return _docs(cls)
+
+    def describe(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+def _docs(cls) -> dict[str, dict]:
+    out = {}
+    for f in dataclasses.fields(cls):
+        default = f.default if f.default is not dataclasses.MISSING else f.default_factory()
+        entry = {"default": default, "unit": f.metadata.get("unit", ""), "doc": f.metadata["doc"]}
+        if dataclasses.is_dataclass(default):
+            entry["fields"] = _docs(type(default))
+            entry["default"] = dataclasses.asdict(default)
+        out[f.name] = entry
+    return out
+
+
+def _nested_of(cls, owner: str, d: dict):
+    if not isinstance(d, dict):
+        raise ConfigError(f"{owner}: expected a mapping, got {d!r}")
+    known = {f.name for f in dataclasses.fields(cls)}
+    unknown = sorted(set(d) - known)
+    if unknown:
+        raise ConfigError(f"{owner}: unknown key {unknown[0]!r} (known: {', '.join(sorted(known))})")
+    return cls(**d)
+
+
+def _nested(name: str, d: dict):
+    """A partial section dict, completed from that section's own defaults."""
+    if name == "tex_cache":
+        cls, base = TextureCacheConfig, {}
+    else:
+        tp, lat, fifo, _ = _UNIT_DEFAULTS[name]
+        cls, base = UnitConfig, {"throughput": tp, "latency_cycles": lat, "fifo_entries": fifo}
+    owner = f"HardwareConfig.{name}"
+    _nested_of(cls, owner, d)  # names the unknown key
+    return cls(**{**base, **d})
