@@ -25,6 +25,12 @@ def counters_markdown() -> str:
         lines.append(f"| `{d.name}` | {d.unit} | derived | {d.description} |")
     for name, (unit, desc) in MEASURED.items():
         lines.append(f"| `{name}` | {unit} | measured | {desc} |")
+    from sim.timing import DERIVED as TIMING_DERIVED  # docs/timing.md
+
+    for name, (unit, desc) in sim._core.timing_docs().items():
+        lines.append(f"| `{name}` | {unit} | timing | {desc} |")
+    for name, unit, desc, _formula in TIMING_DERIVED:
+        lines.append(f"| `{name}` | {unit} | timing, derived | {desc} |")
     return "\n".join(lines) + "\n"
 
 

@@ -18,6 +18,7 @@ from .camera import Camera
 from .render import Result, memory_estimate, render
 from .sample_table import SampleTable
 from .stats import counter_docs
+from . import timing
 
 __all__ = [
     "Camera",
@@ -35,5 +36,6 @@ __all__ = [
     "linear_to_srgb8",
     "memory_estimate",
     "render",
+    "timing",
     "write_png",
 ]

@@ -93,6 +93,14 @@ class HardwareConfig:
         "doc": "Texture cache geometry and latencies", "section": True})
     memory_bytes_per_clock: float = field(default=32.0, metadata={
         "unit": "bytes/clock", "doc": "Memory bandwidth shared by texture misses and depth traffic"})
+    memory_latency_cycles: int = field(default=0, metadata={
+        "unit": "clocks", "doc": "Timing model: clocks from the memory unit accepting a record's traffic to "
+                                 "its completion (texture read latency is tex_cache.miss_latency_cycles)"})
+    memory_fifo_entries: int = field(default=64, metadata={
+        "unit": "entries", "doc": "Timing model: depth of the memory unit's input FIFO"})
+    cores: int = field(default=1, metadata={
+        "unit": "pipelines", "doc": "Timing model: parallel pipelines; screen bins are dealt round-robin, "
+                                    "memory bandwidth is split evenly (docs/timing.md)"})
 
     def __post_init__(self):
         for f in dataclasses.fields(self):
@@ -102,6 +110,9 @@ class HardwareConfig:
         check_float("HardwareConfig", "clock_ghz", self.clock_ghz, lo=0.0, lo_open=True, hi=1e3)
         check_float("HardwareConfig", "memory_bytes_per_clock", self.memory_bytes_per_clock, lo=0.0,
                     lo_open=True, hi=1e9)
+        check_int("HardwareConfig", "memory_latency_cycles", self.memory_latency_cycles, 0, 1_000_000)
+        check_int("HardwareConfig", "memory_fifo_entries", self.memory_fifo_entries, 1, 1_000_000)
+        check_int("HardwareConfig", "cores", self.cores, 1, 4096)
         for name in _UNIT_DEFAULTS:
             unit = getattr(self, name)
             if not isinstance(unit, UnitConfig):

@@ -10,6 +10,7 @@ import numpy as np
 from . import _core
 from .camera import Camera
 from .errors import ConfigError, SceneInputError
+from .hardware import HardwareConfig
 from .pipeline import PipelineConfig
 from .stats import flat_stats, nest
 
@@ -25,6 +26,9 @@ class Result:
     flat_stats  flat dict: {"raster.samples_tested": ..., "ops.total": ..., "time.wall_s": ...}
     sample_depth, sample_triangle  (H, W, spp) per-sample depth z = 1 - near/w (+inf empty) and
                 winning triangle index (-1 empty), only with render(..., export_samples=True)
+    timing_records  the timing model's work records (sim.timing.RECORD_DTYPE), None with
+                render(..., timing=False); sim.timing.estimate(result.timing_records, hw) re-times
+                the same render on other hardware
     """
 
     image: np.ndarray
@@ -32,6 +36,7 @@ class Result:
     config: dict = field(default_factory=dict)
     sample_depth: np.ndarray | None = None
     sample_triangle: np.ndarray | None = None
+    timing_records: np.ndarray | None = None
 
     @property
     def stats(self) -> dict:
@@ -94,11 +99,17 @@ def memory_estimate(camera: Camera, spp: int, n_triangles: int, config: Pipeline
 
 
 def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *,
-           export_samples: bool = False) -> Result:
+           export_samples: bool = False, hardware: HardwareConfig | None = None, timing: bool = True) -> Result:
     """Render ``scene`` through ``camera`` with sample ``table``. Raises ConfigError/SceneInputError
-    (ValueErrors naming the field and value) for bad input; KeyboardInterrupt on Ctrl-C."""
+    (ValueErrors naming the field and value) for bad input; KeyboardInterrupt on Ctrl-C.
+    ``hardware`` (default HardwareConfig()) feeds the timing model (docs/timing.md), whose figures
+    are in ``stats["timing"]``; ``timing=False`` skips it."""
     if config is None:
         config = PipelineConfig()
+    if hardware is None:
+        hardware = HardwareConfig()
+    if not isinstance(hardware, HardwareConfig):
+        raise ConfigError(f"hardware: expected sim.HardwareConfig, got {type(hardware).__name__}")
     if not isinstance(camera, Camera):
         raise ConfigError(f"camera: expected sim.Camera, got {type(camera).__name__}")
     if not isinstance(config, PipelineConfig):
@@ -142,6 +153,7 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     # lens) or t = 0 (no time). A constant non-zero t still places moving triangles at that t.
     params.table_has_lens = bool(np.any(samples[..., 2:4] != 0))
     params.table_has_time = bool(np.any(samples[..., 4] != 0))
+    params.record_timing = bool(timing)
     if getattr(table, "n_lens", 0):
         lens_index = np.ascontiguousarray(table.lens_index, dtype=np.int32)
         lens_uv = np.ascontiguousarray(table.lens_positions(camera.lens), dtype=np.float32)
@@ -156,7 +168,14 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
         raise ConfigError(str(e)) from None
     wall = time.perf_counter() - t0
     flat = flat_stats(out["counters"], {"time.wall_s": wall})
+    records = out.get("timing_records")
+    if records is not None:
+        from .timing import estimate
+
+        flat = dict(sorted({**flat, **estimate(records, hardware)}.items()))
     desc = {"camera": camera.describe(), "pipeline": config.describe(),
-            "table": table.describe() if hasattr(table, "describe") else {}, "lens_grid": grid}
+            "table": table.describe() if hasattr(table, "describe") else {}, "lens_grid": grid,
+            "hardware": hardware.describe()}
     return Result(image=out["image"], flat_stats=flat, config=desc,
-                  sample_depth=out.get("sample_depth"), sample_triangle=out.get("sample_triangle"))
+                  sample_depth=out.get("sample_depth"), sample_triangle=out.get("sample_triangle"),
+                  timing_records=records)

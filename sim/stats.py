@@ -57,6 +57,9 @@ def counter_docs() -> dict[str, tuple[str, str]]:
     for d in DERIVED:
         docs[d.name] = (d.unit, d.description)
     docs.update(MEASURED)
+    from .timing import docs as timing_docs  # the timing model's figures (docs/timing.md)
+
+    docs.update(timing_docs())
     return docs
 
 

@@ -14,6 +14,7 @@
 #include "rast5d/kernel_costs.h"
 #include "rast5d/probe.h"
 #include "rast5d/render.h"
+#include "rast5d/timing.h"
 
 namespace py = pybind11;
 using namespace rast5d;
@@ -96,7 +97,11 @@ PYBIND11_MODULE(_core, m) {
       .def_readwrite("exact_ops", &RenderParams::exact_ops)
       .def_readwrite("count_optimal", &RenderParams::count_optimal)
       .def_readwrite("table_has_lens", &RenderParams::table_has_lens)
-      .def_readwrite("table_has_time", &RenderParams::table_has_time);
+      .def_readwrite("table_has_time", &RenderParams::table_has_time)
+      .def_readwrite("record_timing", &RenderParams::record_timing);
+
+  PYBIND11_NUMPY_DTYPE(TileWork, bin, triangles, tile_tests, sample_tests, depth_tests, quads, texel_fetches,
+                       tex_misses, memory_bytes);
 
   m.def(
       "render",
@@ -130,6 +135,11 @@ PYBIND11_MODULE(_core, m) {
         py::dict out;
         out["image"] = image;
         out["counters"] = counters_to_dict(res.counters);
+        if (p.record_timing) {
+          py::array_t<TileWork> recs(static_cast<py::ssize_t>(res.timing_records.size()));
+          std::copy(res.timing_records.begin(), res.timing_records.end(), recs.mutable_data());
+          out["timing_records"] = recs;
+        }
         if (export_samples) {
           const py::ssize_t spp = table.spp();
           py::array_t<float> depth({static_cast<py::ssize_t>(p.height), static_cast<py::ssize_t>(p.width), spp});
@@ -143,8 +153,8 @@ PYBIND11_MODULE(_core, m) {
       },
       py::arg("params"), py::arg("v0"), py::arg("v1"), py::arg("colors"), py::arg("samples"),
       py::arg("lens_index"), py::arg("lens_uv"), py::arg("export_samples") = false,
-      "Render pixel-homogeneous triangles; returns {'image', 'counters'[, 'sample_depth', "
-      "'sample_triangle']}. The GIL is released; Ctrl-C interrupts.");
+      "Render pixel-homogeneous triangles; returns {'image', 'counters'[, 'timing_records'][, "
+      "'sample_depth', 'sample_triangle']}. The GIL is released; Ctrl-C interrupts.");
 
   m.def(
       "lens_grid_buckets",
@@ -252,4 +262,58 @@ PYBIND11_MODULE(_core, m) {
       py::arg("trials") = 200, py::arg("seed") = 1,
       "Tile-test kernels with configuration-dependent costs: {name: (runs, mismatches, min documented, "
       "max documented)}; counted == documented on every run means mismatches == 0.");
+
+  // ---- timing model (issue 6 part B; docs/timing.md) ----
+  m.def("timing_record_dtype", []() { return py::dtype::of<TileWork>(); },
+        "The numpy structured dtype of one timing work record (rast5d::TileWork).");
+
+  m.def("timing_units", []() {
+    py::list l;
+    for (const auto& u : kUnitInfo)
+      l.append(py::make_tuple(std::string(u.name), std::string(u.currency), std::string(u.description)));
+    return l;
+  }, "[(name, currency, description)] of the timing model's units in pipeline order.");
+
+  m.def("timing_docs", []() {
+    py::dict d;
+    for (const auto& f : timing_figures()) d[py::str(f.name)] = py::make_tuple(f.unit, f.description);
+    return d;
+  }, "{name: (unit, description)} of the figures timing_estimate returns.");
+
+  m.def(
+      "timing_estimate",
+      [](const py::array_t<TileWork, py::array::c_style>& records, const std::vector<double>& throughput,
+         const std::vector<double>& latency, const std::vector<std::int64_t>& fifo, double tex_hit_latency,
+         double tex_miss_latency, int cores) {
+        if (records.ndim() != 1) throw std::invalid_argument("records: expected a 1-D array");
+        if (throughput.size() != kNumUnits || latency.size() != kNumUnits || fifo.size() != kNumUnits)
+          throw std::invalid_argument("throughput, latency, fifo: expected one value per unit (" +
+                                      std::to_string(kNumUnits) + ")");
+        TimingConfig cfg;
+        for (int k = 0; k < kNumUnits; ++k) cfg.units[k] = {throughput[k], latency[k], fifo[k]};
+        cfg.tex_hit_latency = tex_hit_latency;
+        cfg.tex_miss_latency = tex_miss_latency;
+        cfg.cores = cores;
+        TimingResult r;
+        {
+          py::gil_scoped_release release;
+          r = simulate_timing(records.data(), static_cast<std::size_t>(records.size()), cfg);
+        }
+        py::dict d;
+        d["timing.cycles"] = r.cycles;
+        d["timing.records"] = r.records;
+        d["timing.cores"] = r.cores;
+        for (int k = 0; k < kNumUnits; ++k) {
+          const std::string p = "timing." + std::string(kUnitInfo[k].name) + ".";
+          d[py::str(p + "work")] = r.units[k].work;
+          d[py::str(p + "busy_cycles")] = r.units[k].busy;
+          d[py::str(p + "blocked_cycles")] = r.units[k].blocked;
+          d[py::str(p + "starved_cycles")] = r.units[k].starved;
+        }
+        return d;
+      },
+      py::arg("records"), py::arg("throughput"), py::arg("latency"), py::arg("fifo"),
+      py::arg("tex_hit_latency"), py::arg("tex_miss_latency"), py::arg("cores") = 1,
+      "Run the timing model on work records (units in timing_units() order); returns flat "
+      "{'timing.cycles', 'timing.<unit>.busy_cycles', ...}. Raises ValueError for a bad configuration.");
 }

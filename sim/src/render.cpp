@@ -105,6 +105,9 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
   }
 
   // ---- traversal: workers take whole bins ----
+  // Timing records per bin: each bin is rasterized by exactly one worker, so its stream is
+  // written without locks and its content does not depend on the thread count.
+  std::vector<std::vector<TileWork>> bin_records(p.record_timing ? n_bins : 0);
   std::vector<ThreadState> states(n_threads);
   std::atomic<int> next_bin{0};
   std::atomic<bool> cancel{false};
@@ -127,7 +130,16 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
           if (cancel.load(std::memory_order_relaxed)) break;  // Ctrl-C: stop within one triangle
           const TriSetup& tri = setups[i];
           const bool home = (tri.by0 / B) * bins_x + (tri.bx0 / B) == b;
+          if (!p.record_timing) {
+            algo->rasterize(tri, r, home);
+            continue;
+          }
+          const Counters before = ts.counters;
           algo->rasterize(tri, r, home);
+          TileWork w = work_from_counters(before, ts.counters);
+          w.bin = b;
+          w.triangles = home ? 1u : 0u;  // setup is done once, charged in the triangle's first bin
+          bin_records[b].push_back(w);
         }
         ts.buffers.resolve(result.image.data(), p.width);
         if (export_samples)
@@ -169,6 +181,17 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
   result.counters[Counter::frame_samples] =
       static_cast<std::uint64_t>(p.width) * p.height * table.spp();
   result.counters[Counter::frame_bins] = static_cast<std::uint64_t>(n_bins);
+  if (p.record_timing && !result.interrupted) {
+    std::size_t total = static_cast<std::size_t>(scene.n) - live.size();
+    for (const auto& v : bin_records) total += v.size();
+    result.timing_records.reserve(total);
+    // Culled triangles still pass through setup: setup-only records, before the bins.
+    TileWork culled;
+    culled.bin = -1;
+    culled.triangles = 1;
+    result.timing_records.insert(result.timing_records.end(), static_cast<std::size_t>(scene.n) - live.size(), culled);
+    for (const auto& v : bin_records) result.timing_records.insert(result.timing_records.end(), v.begin(), v.end());
+  }
   return result;
 }
 

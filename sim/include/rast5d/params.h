@@ -38,6 +38,9 @@ struct RenderParams {
   // Sample table facts (filled by sim.render from the table).
   bool table_has_lens = true;
   bool table_has_time = true;
+  // Timing model (issue 6 part B, docs/timing.md): record one work record per (triangle, bin)
+  // visit for the cycle-approximate timing model.
+  bool record_timing = true;
 };
 
 }  // namespace rast5d

@@ -9,6 +9,7 @@
 #include "rast5d/counters.h"
 #include "rast5d/params.h"
 #include "rast5d/sample_table.h"
+#include "rast5d/timing.h"
 
 namespace rast5d {
 
@@ -27,6 +28,10 @@ struct RenderResult {
   // empty), height x width x spp; filled only when requested.
   std::vector<float> sample_depth;
   std::vector<std::int32_t> sample_triangle;
+  // Timing model input (p.record_timing): one record per culled triangle (setup only, bin -1),
+  // then per screen bin in raster order one record per (triangle, bin) visit in submission order.
+  // Independent of the thread count.
+  std::vector<TileWork> timing_records;
 };
 
 // Throws std::invalid_argument for bad parameters. `interrupted` is polled from the calling

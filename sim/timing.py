@@ -1,0 +1,133 @@
+"""The cycle-approximate timing model (docs/timing.md), on the engine's work records or on synthetic
+ones. The model itself is C++ (sim/src/timing.cpp); this module maps a HardwareConfig onto it,
+declares the derived timing figures and documents every figure.
+
+    recs = sim.timing.records(3)                 # zeroed structured array, RECORD_DTYPE
+    recs["sample_tests"] = [64, 128, 0]
+    sim.timing.estimate(recs, sim.HardwareConfig())["timing.cycles"]
+
+``sim.render`` runs the same model on the records of the render (``Result.timing_records``), so a
+hardware sweep can re-run ``estimate`` on one render's records without rendering again.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import _core
+from .errors import ConfigError
+from .hardware import HardwareConfig
+
+#: The units in pipeline order.
+UNITS: tuple[str, ...] = tuple(name for name, _currency, _desc in _core.timing_units())
+#: One work record (rast5d::TileWork): bin, then one amount per unit (tex_misses selects latency).
+RECORD_DTYPE: np.dtype = _core.timing_record_dtype()
+
+
+def records(n: int = 0) -> np.ndarray:
+    """n zeroed work records."""
+    return np.zeros(n, dtype=RECORD_DTYPE)
+
+
+def _as_records(recs) -> np.ndarray:
+    recs = np.asarray(recs)
+    if recs.dtype == RECORD_DTYPE:
+        return np.ascontiguousarray(recs).reshape(-1)
+    if recs.dtype.names is None:
+        raise ConfigError(f"records: expected a structured array with fields from {RECORD_DTYPE.names}, "
+                          f"got dtype {recs.dtype}")
+    unknown = [n for n in recs.dtype.names if n not in RECORD_DTYPE.names]
+    if unknown:
+        raise ConfigError(f"records: unknown field {unknown[0]!r} (known: {', '.join(RECORD_DTYPE.names)})")
+    out = records(recs.size)
+    for name in recs.dtype.names:  # missing fields stay zero
+        col = np.asarray(recs[name]).reshape(-1)
+        if name != "bin" and np.any(col < 0):
+            raise ConfigError(f"records.{name}: amounts must be >= 0, got {col.min()}")
+        out[name] = col
+    return out
+
+
+def _unit_params(hw: HardwareConfig) -> tuple[list[float], list[float], list[int]]:
+    tp, lat, fifo = [], [], []
+    for name in UNITS:
+        if name == "memory":
+            tp.append(float(hw.memory_bytes_per_clock))
+            lat.append(float(hw.memory_latency_cycles))
+            fifo.append(int(hw.memory_fifo_entries))
+        else:
+            u = getattr(hw, name)
+            tp.append(float(u.throughput))
+            lat.append(float(u.latency_cycles))
+            fifo.append(int(u.fifo_entries))
+    return tp, lat, fifo
+
+
+def estimate(recs, hardware: HardwareConfig | None = None) -> dict:
+    """Run the timing model on work records; flat {'timing.cycles': ..., 'timing.<unit>.busy_cycles':
+    ..., 'timing.bottleneck': name, ...} with the derived figures (docs: ``docs()``)."""
+    hw = HardwareConfig() if hardware is None else hardware
+    if not isinstance(hw, HardwareConfig):
+        raise ConfigError(f"hardware: expected sim.HardwareConfig, got {type(hw).__name__}")
+    tp, lat, fifo = _unit_params(hw)
+    try:
+        raw = _core.timing_estimate(_as_records(recs), tp, lat, fifo, float(hw.tex_cache.hit_latency_cycles),
+                                    float(hw.tex_cache.miss_latency_cycles), int(hw.cores))
+    except ValueError as e:
+        raise ConfigError(f"hardware: {e}") from None
+    return derive(raw)
+
+
+def _ratio(a: float, b: float) -> float:
+    return a / b if b else math.nan
+
+
+def _bottleneck(s: dict) -> str:
+    """The unit with the most busy clocks (first in pipeline order on ties); 'none' without work."""
+    best, best_busy = "none", 0.0
+    for u in UNITS:
+        if s[f"timing.{u}.busy_cycles"] > best_busy:
+            best, best_busy = u, s[f"timing.{u}.busy_cycles"]
+    return best
+
+
+def _bound(s: dict) -> float:
+    return max(s[f"timing.{u}.busy_cycles"] for u in UNITS) / s["timing.cores"]
+
+
+# Derived timing figures: (name, unit, description, formula over the flat timing dict).
+DERIVED: tuple[tuple[str, str, str, object], ...] = (
+    ("timing.bottleneck", "unit name",
+     "The unit with the most busy clocks (first in pipeline order on ties; 'none' without work)", _bottleneck),
+    ("timing.throughput_bound", "clocks",
+     "max over units of timing.<unit>.busy_cycles / timing.cores: no pipeline can be faster", _bound),
+    ("timing.bound_ratio", "ratio",
+     "timing.cycles / timing.throughput_bound (1 = throughput-bound; more = latency, FIFO and imbalance losses)",
+     lambda s: _ratio(s["timing.cycles"], _bound(s))),
+) + tuple(
+    item for u in UNITS for item in (
+        (f"timing.{u}.stall_cycles", "clocks",
+         f"timing.{u}.blocked_cycles + timing.{u}.starved_cycles: clocks the {u} unit does no work",
+         lambda s, u=u: s[f"timing.{u}.blocked_cycles"] + s[f"timing.{u}.starved_cycles"]),
+        (f"timing.{u}.utilization", "ratio",
+         f"timing.{u}.busy_cycles / (timing.cycles x timing.cores)",
+         lambda s, u=u: _ratio(s[f"timing.{u}.busy_cycles"], s["timing.cycles"] * s["timing.cores"])),
+    )
+)
+
+
+def derive(raw: dict) -> dict:
+    """Raw timing figures + derived ones."""
+    flat = dict(raw)
+    for name, _unit, _desc, formula in DERIVED:
+        flat[name] = formula(flat)
+    return flat
+
+
+def docs() -> dict[str, tuple[str, str]]:
+    """{name: (unit, description)} of every timing figure, raw and derived."""
+    d = dict(_core.timing_docs())
+    for name, unit, desc, _f in DERIVED:
+        d[name] = (unit, desc)
+    return d
