@@ -1,0 +1,272 @@
+"""The timing model (docs/timing.md): bounds and closed forms on synthetic record streams, a
+hand-computed two-unit example, and determinism and counter agreement on real renders."""
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import sim
+from sim import HardwareConfig, UnitConfig
+from sim.timing import UNITS
+
+pytestmark = pytest.mark.invariants
+
+HYPO = dict(deadline=None, derandomize=True, database=None,
+            suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+
+# The record field that carries each unit's work (docs/timing.md, "Units and currencies").
+WORK_FIELD = {"setup": "triangles", "tile_test": "tile_tests", "sample_test": "sample_tests",
+              "depth": "depth_tests", "shader": "quads", "texture": "texel_fetches", "memory": "memory_bytes"}
+REL = 1e-9  # the model sums in double precision, the tests in numpy: allow rounding only
+
+
+def unit_params(hw: HardwareConfig, name: str) -> tuple[float, int, int]:
+    if name == "memory":
+        return hw.memory_bytes_per_clock, hw.memory_latency_cycles, hw.memory_fifo_entries
+    u = getattr(hw, name)
+    return u.throughput, u.latency_cycles, u.fifo_entries
+
+
+def make_hw(units: dict[str, tuple[float, int, int]], **extra) -> HardwareConfig:
+    """HardwareConfig from {unit: (throughput, latency, fifo)}; unnamed units get zero latency."""
+    kw = {}
+    for name in UNITS:
+        tp, lat, fifo = units.get(name, (1.0, 0, 1_000_000))
+        if name == "memory":
+            kw.update(memory_bytes_per_clock=tp, memory_latency_cycles=lat, memory_fifo_entries=fifo)
+        else:
+            kw[name] = UnitConfig(tp, lat, fifo)
+    kw.setdefault("tex_cache", sim.TextureCacheConfig(hit_latency_cycles=0, miss_latency_cycles=0))
+    kw.update(extra)
+    return HardwareConfig(**kw)
+
+
+# --------------------------------------------------------------------------------- strategies
+
+unit_st = st.tuples(st.sampled_from([0.25, 0.5, 1.0, 1.5, 3.0, 4.0, 64.0]), st.integers(0, 40), st.integers(1, 6))
+
+
+@st.composite
+def streams(draw, max_records=40):
+    n = draw(st.integers(1, max_records))
+    recs = sim.timing.records(n)
+    for f in WORK_FIELD.values():
+        recs[f] = draw(st.lists(st.integers(0, 50), min_size=n, max_size=n))
+    recs["tex_misses"] = draw(st.lists(st.integers(0, 2), min_size=n, max_size=n))
+    recs["bin"] = draw(st.lists(st.integers(-1, 5), min_size=n, max_size=n))
+    return recs
+
+
+@st.composite
+def hardware(draw, cores=(1,)):
+    units = {name: draw(unit_st) for name in UNITS}
+    tex = sim.TextureCacheConfig(hit_latency_cycles=draw(st.integers(0, 10)), miss_latency_cycles=draw(st.integers(0, 100)))
+    return make_hw(units, tex_cache=tex, cores=draw(st.sampled_from(cores)))
+
+
+# ------------------------------------------------------------------------------------- bounds
+
+
+@settings(max_examples=300, **HYPO)
+@given(recs=streams(), hw=hardware(cores=(1, 2, 3)))
+def test_never_below_the_throughput_bound(recs, hw):
+    """cycles >= max over units of work / throughput (per core: memory bandwidth is split, other
+    units are replicated, so the bound is W_k / (tp_k x cores) and W_mem / tp_mem); and every unit's
+    clocks add up: busy + blocked + starved = cycles x cores."""
+    out = sim.timing.estimate(recs, hw)
+    bound = 0.0
+    for name in UNITS:
+        tp, _, _ = unit_params(hw, name)
+        work = float(np.sum(recs[WORK_FIELD[name]], dtype=np.float64))
+        assert out[f"timing.{name}.work"] == work
+        per_core = work / tp if name == "memory" else work / (tp * hw.cores)
+        bound = max(bound, per_core)
+        total = out[f"timing.{name}.busy_cycles"] + out[f"timing.{name}.blocked_cycles"] + out[f"timing.{name}.starved_cycles"]
+        assert total == pytest.approx(out["timing.cycles"] * hw.cores, rel=REL, abs=1e-9), name
+        assert min(out[f"timing.{name}.blocked_cycles"], out[f"timing.{name}.starved_cycles"]) >= -1e-9
+    assert out["timing.cycles"] >= bound * (1 - REL)
+    if hw.cores == 1:  # one pipeline: the derived bound is exactly this one
+        assert out["timing.throughput_bound"] == pytest.approx(bound, rel=REL)
+
+
+@settings(max_examples=300, **HYPO)
+@given(recs=streams(), hw=hardware(cores=(1, 2)), unit=st.sampled_from(UNITS), extra=st.integers(1, 50))
+def test_deeper_fifos_are_never_slower(recs, hw, unit, extra):
+    """Deepening one unit's FIFO (or every FIFO) never increases the estimate (exactly: the model is
+    max and + only, and rounding is monotone)."""
+    base = sim.timing.estimate(recs, hw)["timing.cycles"]
+    tp, lat, fifo = unit_params(hw, unit)
+    units = {name: unit_params(hw, name) for name in UNITS}
+    units[unit] = (tp, lat, fifo + extra)
+    deeper = make_hw(units, tex_cache=hw.tex_cache, cores=hw.cores)
+    assert sim.timing.estimate(recs, deeper)["timing.cycles"] <= base
+    all_deeper = make_hw({k: (t, lt, f + extra) for k, (t, lt, f) in units.items()}, tex_cache=hw.tex_cache, cores=hw.cores)
+    assert sim.timing.estimate(recs, all_deeper)["timing.cycles"] <= base
+
+
+# -------------------------------------------------------------------------------- closed forms
+
+
+@settings(max_examples=200, **HYPO)
+@given(unit=st.sampled_from(UNITS), tp=st.sampled_from([0.5, 1.0, 3.0, 32.0]),
+       latencies=st.lists(st.integers(0, 30), min_size=len(UNITS), max_size=len(UNITS)),
+       work=st.lists(st.integers(1, 100), min_size=1, max_size=60), hit_latency=st.integers(0, 9))
+def test_one_busy_unit_closed_form(unit, tp, latencies, work, hit_latency):
+    """Only one unit has work and every FIFO is deep enough: the unit never starves after the pipeline
+    has filled and never blocks, so cycles = (sum of latencies) + (sum of work) / throughput."""
+    n = len(work)
+    recs = sim.timing.records(n)
+    recs[WORK_FIELD[unit]] = work
+    units = {name: (1.0, lat, n) for name, lat in zip(UNITS, latencies)}
+    units[unit] = (tp, latencies[UNITS.index(unit)], n)
+    hw = make_hw(units, tex_cache=sim.TextureCacheConfig(hit_latency_cycles=hit_latency, miss_latency_cycles=0))
+    # Records with texel fetches and no misses also wait the cache's hit latency.
+    texture_extra = hit_latency if unit == "texture" else 0
+    expected = sum(latencies) + texture_extra + sum(work) / tp
+    out = sim.timing.estimate(recs, hw)
+    assert out["timing.cycles"] == pytest.approx(expected, rel=REL)
+    assert out[f"timing.{unit}.busy_cycles"] == pytest.approx(sum(work) / tp, rel=REL)
+    assert out[f"timing.{unit}.blocked_cycles"] == 0
+    assert out["timing.bottleneck"] == unit
+
+
+@settings(max_examples=200, **HYPO)
+@given(unit=st.sampled_from([u for u in UNITS if u != "setup"]), s_work=st.integers(1, 8),
+       up_latency=st.integers(0, 60), fifo=st.integers(1, 6), n=st.integers(1, 40),
+       other_latencies=st.lists(st.integers(0, 20), min_size=len(UNITS), max_size=len(UNITS)))
+def test_credit_loop_closed_form(unit, s_work, up_latency, fifo, n, other_latencies):
+    """One busy unit b with a shallow input FIFO F behind an upstream latency L (unit b-1): each record
+    needs the credit of the record F before it, which returns L clocks late. Then
+    S(i) = L0 + max over c in {0, floor(i/F)} of (c L + (i - c F) s)   (L0 = sum of latencies before b)
+    and cycles = S(n-1) + s + (sum of latencies from b on): the latency-bound regime
+    (rate min(1/s, F/L) records per clock), written here independently of the model's recursion."""
+    b = UNITS.index(unit)
+    lat = list(other_latencies)
+    lat[b - 1] = up_latency
+    units = {name: (1.0, lat[k], 1_000_000) for k, name in enumerate(UNITS)}
+    units[unit] = (1.0, lat[b], fifo)
+    hw = make_hw(units)
+    recs = sim.timing.records(n)
+    recs[WORK_FIELD[unit]] = s_work
+    L0 = sum(lat[:b])
+    s = float(s_work)
+
+    def start(i):
+        q = i // fifo
+        return L0 + max(i * s, q * up_latency + (i - q * fifo) * s)
+
+    expected = start(n - 1) + s + sum(lat[b:])
+    assert sim.timing.estimate(recs, hw)["timing.cycles"] == pytest.approx(expected, rel=REL)
+
+
+def test_two_unit_example_by_hand():
+    """setup (1 triangle/clock, latency 2) feeding tile_test (1 test/clock, latency 1, FIFO 1).
+    Records (triangles, tile tests): (1, 4), (1, 1), (1, 1). By hand (S start, C done, D leave):
+      r0: setup S0 C1 D1 -> tile arrives 3: S3 C7 D7, out at 8
+      r1: setup S1 C2, waits for r0 to leave the tile FIFO (starts at 3): D3 (blocked 1), arrives 5;
+          tile S7 C8 D8, out at 9
+      r2: setup S3 C4, credit of r1 (tile start 7): D7 (blocked 3), arrives 9; tile S9 C10, out at 11
+    cycles 11; setup busy 3, blocked 4, starved 4; tile busy 6, blocked 0, starved 3 + 1 + 1 = 5.
+    With a 2-entry FIFO: r1 leaves setup at 2 (arrives 4, starts 7), r2 needs r0's credit (3):
+    D3, arrives 5, tile S8 C9, out at 10."""
+    recs = sim.timing.records(3)
+    recs["triangles"] = 1
+    recs["tile_tests"] = [4, 1, 1]
+    hw = make_hw({"setup": (1.0, 2, 16), "tile_test": (1.0, 1, 1)})
+    out = sim.timing.estimate(recs, hw)
+    assert out["timing.cycles"] == 11
+    got = {(u, k): out[f"timing.{u}.{k}_cycles"] for u in ("setup", "tile_test") for k in ("busy", "blocked", "starved")}
+    assert got == {("setup", "busy"): 3, ("setup", "blocked"): 4, ("setup", "starved"): 4,
+                   ("tile_test", "busy"): 6, ("tile_test", "blocked"): 0, ("tile_test", "starved"): 5}
+    assert out["timing.bottleneck"] == "tile_test"
+    assert out["timing.tile_test.stall_cycles"] == 5
+    assert out["timing.throughput_bound"] == 6 and out["timing.bound_ratio"] == pytest.approx(11 / 6)
+    hw2 = make_hw({"setup": (1.0, 2, 16), "tile_test": (1.0, 1, 2)})
+    assert sim.timing.estimate(recs, hw2)["timing.cycles"] == 10
+
+
+def test_texture_miss_latency_and_cores():
+    """A record with a texture-cache miss waits the miss latency instead of the hit latency; two cores
+    take alternate bins and split the memory bandwidth (hand-computed)."""
+    recs = sim.timing.records(2)
+    recs["texel_fetches"] = [4, 4]
+    recs["tex_misses"] = [0, 1]
+    tex = sim.TextureCacheConfig(hit_latency_cycles=5, miss_latency_cycles=100)
+    hw = make_hw({"texture": (4.0, 2, 64)}, tex_cache=tex)
+    # r0: S0 C1, out at 1 + 2 + 5 = 8; r1: S1 C2, out at 2 + 2 + 100 = 104.
+    assert sim.timing.estimate(recs, hw)["timing.cycles"] == 104
+    recs = sim.timing.records(4)
+    recs["bin"] = [0, 1, 2, 3]
+    recs["memory_bytes"] = [64, 64, 64, 0]
+    hw = make_hw({"memory": (32.0, 0, 64)}, cores=2)
+    # Core 0: bins 0 and 2, 128 bytes at 16 bytes/clock = 8; core 1: 64 bytes = 4 (then starves 4).
+    out = sim.timing.estimate(recs, hw)
+    assert out["timing.cycles"] == 8
+    assert out["timing.memory.busy_cycles"] == 12 and out["timing.memory.starved_cycles"] == 4
+
+
+def test_empty_stream_and_bad_input():
+    out = sim.timing.estimate(sim.timing.records(0))
+    assert out["timing.cycles"] == 0 and out["timing.bottleneck"] == "none"
+    with pytest.raises(sim.ConfigError, match="unknown field 'bogus'"):
+        sim.timing.estimate(np.zeros(2, dtype=[("bogus", "u8")]))
+    with pytest.raises(sim.ConfigError, match="sample_tests"):
+        sim.timing.estimate(np.array([(-1,)], dtype=[("sample_tests", "i8")]))
+    with pytest.raises(sim.ConfigError, match="HardwareConfig.cores"):
+        HardwareConfig(cores=0)
+    with pytest.raises(sim.ConfigError, match="memory_fifo_entries"):
+        HardwareConfig(memory_fifo_entries=0)
+    with pytest.raises(sim.ConfigError, match="hardware"):
+        sim.timing.estimate(sim.timing.records(1), hardware={"cores": 2})
+
+
+# ------------------------------------------------------------------------------- real renders
+
+
+@functools.lru_cache(maxsize=None)
+def _scene():
+    import models
+
+    return models.named("spot_wall")
+
+
+def _render(threads, algorithm="tile", coc=12.0, **kw):
+    cam = sim.Camera(width=96, height=96, fov_y_deg=40, focus_distance=4.0, coc_px=coc, eye=(0, 0.3, 0), target=(0, 0.3, -4))
+    table = sim.SampleTable.stratified(spp=16, seed=3)
+    return sim.render(_scene(), cam, table, sim.PipelineConfig(algorithm=algorithm, threads=threads), **kw)
+
+
+@pytest.mark.parametrize("algorithm", ["tile", "interval", "bruteforce"])
+def test_render_timing_identical_for_any_thread_count(algorithm):
+    one, two = _render(1, algorithm), _render(2, algorithm)
+    assert one.timing_records.tobytes() == two.timing_records.tobytes()
+    t1 = {k: v for k, v in one.flat_stats.items() if k.startswith("timing.")}
+    t2 = {k: v for k, v in two.flat_stats.items() if k.startswith("timing.")}
+    assert t1 == t2 and t1["timing.cycles"] > 0
+
+
+def test_render_records_add_up_to_the_counters():
+    """The records are deltas of the engine's counters: their sums are the frame's counters."""
+    res = _render(2, "tile", hardware=HardwareConfig(cores=2))
+    recs, st_ = res.timing_records, res.flat_stats
+    assert recs["triangles"].sum() == st_["setup.triangles"]
+    assert (recs["bin"] < 0).sum() == st_["setup.triangles"] - np.sum(recs["triangles"][recs["bin"] >= 0])
+    assert recs["tile_tests"].sum() == st_["tile.visited"] > 0
+    assert recs["sample_tests"].sum() == st_["raster.samples_tested"] > 0
+    assert recs["depth_tests"].sum() == st_["depth.tests"]
+    assert recs["memory_bytes"].sum() == 4 * st_["depth.tests"] + 4 * st_["depth.passes"]  # placeholder
+    assert recs["bin"].max() < st_["frame.bins"]
+    assert st_["timing.cores"] == 2 and st_["timing.records"] == len(recs)
+    # Re-timing the stored records gives the render's figures.
+    again = sim.timing.estimate(recs, HardwareConfig(cores=2))
+    assert all(st_[k] == v for k, v in again.items())
+
+
+def test_render_without_timing():
+    res = _render(1, timing=False)
+    assert res.timing_records is None and not any(k.startswith("timing.") for k in res.flat_stats)
+    assert res.flat_stats["raster.samples_tested"] == _render(1).flat_stats["raster.samples_tested"]
