@@ -37,6 +37,7 @@ class RenderParams:
     count_optimal: bool
     table_has_lens: bool
     table_has_time: bool
+    record_timing: bool  # record timing work records (Result.timing_records); docs/timing.md
     def __init__(self) -> None: ...
 
 def render(
@@ -49,7 +50,8 @@ def render(
     lens_uv: npt.NDArray[np.float32],  # (N_lens, 2) or empty
     export_samples: bool = False,
 ) -> dict[str, Any]:
-    """Returns {'image': (H, W, 3) float32, 'counters': {name: int}} and, with export_samples,
+    """Returns {'image': (H, W, 3) float32, 'counters': {name: int}}, with params.record_timing
+    'timing_records' (timing_record_dtype(), culled triangles then bins in raster order) and, with export_samples,
     'sample_depth' (H, W, spp) float32 and 'sample_triangle' (H, W, spp) int32. Releases the GIL;
     Ctrl-C raises KeyboardInterrupt. Raises ValueError for invalid parameters."""
 
@@ -75,3 +77,23 @@ def measure_kernel_costs(trials: int = 100, seed: int = 1) -> dict[str, tuple[in
 def measure_tile_kernel_costs(trials: int = 200, seed: int = 1) -> dict[str, tuple[int, int, int, int]]:
     """Tile-test kernels whose cost depends on the configuration: {name: (runs, mismatches between
     counted and documented, min documented, max documented)}."""
+
+# ---- timing model (docs/timing.md) ----
+def timing_record_dtype() -> np.dtype:
+    """numpy structured dtype of one work record: bin (int32), triangles (uint32), tile_tests,
+    sample_tests, depth_tests, quads, texel_fetches, tex_misses, memory_bytes (uint64)."""
+def timing_units() -> list[tuple[str, str, str]]:
+    """[(name, currency, description)] of the units in pipeline order."""
+def timing_docs() -> dict[str, tuple[str, str]]:
+    """{name: (unit, description)} of the figures timing_estimate returns."""
+def timing_estimate(
+    records: npt.NDArray[Any],  # timing_record_dtype()
+    throughput: list[float],  # per unit, items/clock (> 0)
+    latency: list[float],  # per unit, clocks (>= 0)
+    fifo: list[int],  # per unit, input FIFO entries (>= 1)
+    tex_hit_latency: float,
+    tex_miss_latency: float,
+    cores: int = 1,
+) -> dict[str, float]:
+    """Flat {'timing.cycles', 'timing.records', 'timing.cores', 'timing.<unit>.work',
+    'timing.<unit>.busy_cycles', '...blocked_cycles', '...starved_cycles'}. ValueError for a bad config."""

@@ -85,8 +85,9 @@ def _scene_arrays(scene) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def memory_estimate(camera: Camera, spp: int, n_triangles: int, config: PipelineConfig, threads: int,
-                    export_samples: bool = False) -> int:
-    """Bytes the engine will allocate (image, per-thread bin buffers, setup, bin lists, exports)."""
+                    export_samples: bool = False, timing: bool = True) -> int:
+    """Bytes the engine will allocate (image, per-thread bin buffers, setup, bin lists, exports,
+    timing records)."""
     b = config.bin_size
     image = camera.width * camera.height * 3 * 4 * 2  # engine buffer + the numpy copy
     bins = threads * b * b * spp * (4 + 12 + 4)
@@ -95,7 +96,10 @@ def memory_estimate(camera: Camera, spp: int, n_triangles: int, config: Pipeline
     bins_y = -(-camera.height // b)
     bin_lists = n_triangles * 4 * 4 + bins_x * bins_y * 32
     export = camera.width * camera.height * spp * 8 * 2 if export_samples else 0
-    return int(image + bins + setup + bin_lists + export)
+    # One 64-byte record per (triangle, bin) visit (about 4 bins per triangle, as for the bin
+    # lists), held per bin, concatenated and copied to numpy: three copies.
+    timing_records = n_triangles * 4 * 64 * 3 if timing else 0
+    return int(image + bins + setup + bin_lists + export + timing_records)
 
 
 def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *,
@@ -119,7 +123,7 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     spp = int(samples.shape[2])
     grid = config.resolved_lens_grid(spp)
     threads = config.threads or (os.cpu_count() or 1)
-    need = memory_estimate(camera, spp, p0.shape[0], config, threads, export_samples)
+    need = memory_estimate(camera, spp, p0.shape[0], config, threads, export_samples, timing)
     if need > config.memory_limit_bytes:
         raise ConfigError(
             f"memory: estimated {need / 2**30:.2f} GiB exceeds PipelineConfig.memory_limit_bytes="

@@ -1,0 +1,165 @@
+"""`python -m experiments.timing_report [CONFIG]`: render the sweep of configs/paper/cycles.yaml and
+write reports/timing/cycles.{md,csv,png}: estimated cycles per frame (docs/timing.md) vs CoC and spp
+for each algorithm, with the bottleneck unit.
+
+A stand-in until the declarative report machinery (issue 4) runs configs/paper/cycles.yaml itself: it
+reads the same file, maps its `samples:` section onto the current `sample_table:` schema and its
+`hardware:` section onto sim.HardwareConfig, and renders every sweep point once. Because the timing
+model runs on stored work records, it also re-times every render on a few hardware variants
+(sim.timing.estimate on Result.timing_records) without rendering again.
+"""
+from __future__ import annotations
+
+import argparse
+import copy
+import itertools
+import sys
+import time
+from pathlib import Path
+
+from .config import REPO, _set_dotted, build, load_dict, validate
+
+OUT = REPO / "reports" / "timing"
+# Re-timed on the same records: what changes when one resource is scaled.
+VARIANTS = {
+    "default": {},
+    "memory x4 (128 B/clk)": {"memory_bytes_per_clock": 128.0},
+    "sample lanes x4 (256)": {"sample_test": {"throughput": 256.0}},
+}
+
+
+def _points(data: dict) -> list[tuple[dict, dict, dict]]:
+    """[(point, render config dict, hardware dict)] for the cartesian product of data['sweep']."""
+    base = {k: copy.deepcopy(v) for k, v in data.items() if k not in ("sweep", "outputs", "executor", "hardware")}
+    if "samples" in base:  # issue 4's section name -> the current schema
+        s = dict(base.pop("samples"))
+        s["generator"] = s.pop("kind", "stratified")
+        base["sample_table"] = s
+    sweep = data.get("sweep", {})
+    keys = [k for k in sweep if k != "zip"]
+    if "zip" in sweep:
+        raise NotImplementedError("zip sweeps: use the issue 4 runner")
+    out = []
+    for values in itertools.product(*(sweep[k] for k in keys)):
+        d, hw = copy.deepcopy(base), copy.deepcopy(data.get("hardware") or {})
+        point = dict(zip(keys, values))
+        for k, v in point.items():
+            if k.startswith("hardware."):
+                _set_dotted(hw, k[len("hardware."):], v, "sweep")
+            else:
+                _set_dotted(d, k.replace("samples.", "sample_table.", 1), v, "sweep")
+        out.append((point, d, hw))
+    return out
+
+
+def run(config_path: Path) -> "pd.DataFrame":  # noqa: F821
+    import pandas as pd
+
+    import sim
+
+    data = load_dict(config_path)
+    rows = []
+    points = _points(data)
+    t0 = time.perf_counter()
+    for i, (point, d, hw_dict) in enumerate(points):
+        cfg = validate(d, f"{config_path} {point}")
+        scene, camera, table, pipeline = build(cfg)
+        hw = sim.HardwareConfig.from_dict(hw_dict)
+        res = sim.render(scene, camera, table, pipeline, hardware=hw)
+        for variant, change in VARIANTS.items():
+            vhw = sim.HardwareConfig.from_dict({**hw_dict, **change})
+            timing = res.flat_stats if not change else sim.timing.estimate(res.timing_records, vhw)
+            row = {"variant": variant, **point, "spp": table.spp, "coc_px": camera.coc_px,
+                   "algorithm": pipeline.algorithm}
+            row.update({k: v for k, v in res.flat_stats.items() if not k.startswith("timing.")})
+            row.update({k: v for k, v in timing.items() if k.startswith("timing.")})
+            rows.append(row)
+        print(f"  [{i + 1}/{len(points)}] {point}: {res.flat_stats['timing.cycles'] / 1e6:.3f} Mcycles, "
+              f"bottleneck {res.flat_stats['timing.bottleneck']}, wall {res.flat_stats['time.wall_s']:.2f} s",
+              flush=True)
+    print(f"{len(points)} renders in {time.perf_counter() - t0:.0f} s")
+    return pd.DataFrame(rows)
+
+
+def _table(df, variant: str, spp: int) -> list[str]:
+    sub = df[(df["variant"] == variant) & (df["spp"] == spp)]
+    algos = list(dict.fromkeys(sub["algorithm"]))
+    cocs = sorted(set(sub["coc_px"]))
+    lines = ["| algorithm | " + " | ".join(f"CoC {c:g}" for c in cocs) + " |", "|---|" + "---|" * len(cocs)]
+    for a in algos:
+        cells = []
+        for c in cocs:
+            r = sub[(sub["algorithm"] == a) & (sub["coc_px"] == c)].iloc[0]
+            cells.append(f"{r['timing.cycles'] / 1e6:.3f} **{r['timing.bottleneck']}** ({r['timing.bound_ratio']:.2f})")
+        lines.append(f"| {a} | " + " | ".join(cells) + " |")
+    return lines
+
+
+def write(df, config_path: Path, out: Path = OUT) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out.mkdir(parents=True, exist_ok=True)
+    df.to_csv(out / "cycles.csv", index=False)
+    spps = sorted(set(df["spp"]))
+    d0 = df[df["variant"] == "default"]
+    fig, axes = plt.subplots(1, len(spps), figsize=(5.5 * len(spps), 4), squeeze=False)
+    markers = {u: m for u, m in zip(("setup", "tile_test", "sample_test", "depth", "shader", "texture", "memory"),
+                                    "v^so*Dx")}
+    for ax, spp in zip(axes[0], spps):
+        for algo in dict.fromkeys(d0["algorithm"]):
+            s = d0[(d0["spp"] == spp) & (d0["algorithm"] == algo)].sort_values("coc_px")
+            line, = ax.plot(s["coc_px"], s["timing.cycles"] / 1e6, label=algo)
+            for _, r in s.iterrows():
+                ax.plot(r["coc_px"], r["timing.cycles"] / 1e6, markers.get(r["timing.bottleneck"], "."),
+                        color=line.get_color(), ms=7)
+        ax.set_yscale("log")
+        ax.set_xlabel("CoC [px]")
+        ax.set_ylabel("estimated Mcycles per frame")
+        ax.set_title(f"{spp} spp (marker = bottleneck: o sample_test, x memory, ^ tile_test)")
+        ax.title.set_fontsize(8)
+        ax.legend(fontsize=8)
+        ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(out / "cycles.png", dpi=110)
+    plt.close(fig)
+    rel = config_path.relative_to(REPO) if config_path.is_relative_to(REPO) else config_path
+    lines = ["# Estimated cycles per frame vs CoC and spp (timing model)", "",
+             f"Made by `python -m experiments.timing_report {rel}` (a stand-in for the issue 4 report "
+             "runner, which will render the same config into reports/paper/cycles.md).", "",
+             load_dict(config_path).get("outputs", {}).get("text", "").strip(), "",
+             "Each cell: estimated **Mcycles** per frame, the **bottleneck** unit (most busy clocks) and, in "
+             "parentheses, cycles / throughput bound (1.00 = the bottleneck unit is busy the whole frame).",
+             "The hardware variants re-time the same work records (no re-render).", "",
+             "![cycles](cycles.png)", ""]
+    for variant in VARIANTS:
+        for spp in spps:
+            lines += [f"## {variant}, {spp} spp", ""] + _table(df, variant, spp) + [""]
+    # Busy clocks per unit for the default hardware: where the time goes.
+    lines += ["## Busy Mcycles per unit (default hardware)", "",
+              "| spp | algorithm | CoC | samples tested | STE | setup | tile_test | sample_test | depth | memory | cycles |",
+              "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for _, r in d0.sort_values(["spp", "algorithm", "coc_px"]).iterrows():
+        lines.append(f"| {r['spp']} | {r['algorithm']} | {r['coc_px']:g} | {r['raster.samples_tested']:,} | "
+                     f"{r['raster.ste']:.3f} | " + " | ".join(
+                         f"{r[f'timing.{u}.busy_cycles'] / 1e6:.3f}" for u in
+                         ("setup", "tile_test", "sample_test", "depth", "memory")) +
+                     f" | {r['timing.cycles'] / 1e6:.3f} |")
+    (out / "cycles.md").write_text("\n".join(lines) + "\n")
+    print(f"wrote {(out / 'cycles.md').relative_to(REPO)}, cycles.csv, cycles.png")
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("config", nargs="?", default=str(REPO / "configs" / "paper" / "cycles.yaml"))
+    parser.add_argument("--out", default=str(OUT))
+    args = parser.parse_args(argv)
+    path = Path(args.config).resolve()
+    write(run(path), path, Path(args.out))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
