@@ -81,6 +81,47 @@ def run(config_path: Path) -> "pd.DataFrame":  # noqa: F821
     return pd.DataFrame(rows)
 
 
+def sensitivity(config_path: Path) -> list[str]:
+    """Two checks of the model on one point (tile, CoC 10, 16 spp): record granularity (bin size,
+    re-rendered) and FIFO depth (every FIFO set to one depth, re-timed on the same records)."""
+    import sim
+
+    data = load_dict(config_path)
+    point, d, hw_dict = _points({**data, "sweep": {}})[0]
+    d["camera"]["coc_px"] = 10
+    d["sample_table"]["spp"] = 16
+    d["pipeline"]["algorithm"] = "tile"
+    lines = ["## Sensitivity (tile, CoC 10, 16 spp)", "",
+             "Record granularity: records are (triangle, screen bin) visits, so the bin size sets how "
+             "lumpy the work is (the engine's counters do not change with it).", "",
+             "| bin size [px] | records | Mcycles | bottleneck | cycles / bound |", "|---|---|---|---|---|"]
+    base = None
+    for bin_size in (8, 16, 32, 64, 128):
+        dd = copy.deepcopy(d)
+        dd["pipeline"]["bin_size"] = bin_size
+        scene, camera, table, pipeline = build(validate(dd, f"{config_path} bin_size={bin_size}"))
+        res = sim.render(scene, camera, table, pipeline, hardware=sim.HardwareConfig.from_dict(hw_dict))
+        st = res.flat_stats
+        lines.append(f"| {bin_size} | {st['timing.records']:,} | {st['timing.cycles'] / 1e6:.3f} | "
+                     f"{st['timing.bottleneck']} | {st['timing.bound_ratio']:.3f} |")
+        if bin_size == 64:
+            base = res
+    lines += ["", "FIFO depth (every unit's FIFO, re-timed on the 64-px records; default hardware otherwise, "
+              "and with memory x4 so that the compute units limit):", "",
+              "| FIFO entries | Mcycles | bottleneck | cycles / bound | Mcycles, memory x4 | bottleneck | cycles / bound |",
+              "|---|---|---|---|---|---|---|"]
+    for depth in (1, 2, 4, 8, 16, 64, 256):
+        cells = []
+        for extra in ({}, {"memory_bytes_per_clock": 128.0}):
+            hw = {**hw_dict, **extra, "memory_fifo_entries": depth}
+            for u in ("setup", "tile_test", "sample_test", "depth", "shader", "texture"):
+                hw[u] = {**hw_dict.get(u, {}), "fifo_entries": depth}
+            t = sim.timing.estimate(base.timing_records, sim.HardwareConfig.from_dict(hw))
+            cells += [f"{t['timing.cycles'] / 1e6:.3f}", t["timing.bottleneck"], f"{t['timing.bound_ratio']:.3f}"]
+        lines.append(f"| {depth} | " + " | ".join(cells) + " |")
+    return lines + [""]
+
+
 def _table(df, variant: str, spp: int) -> list[str]:
     sub = df[(df["variant"] == variant) & (df["spp"] == spp)]
     algos = list(dict.fromkeys(sub["algorithm"]))
@@ -95,7 +136,7 @@ def _table(df, variant: str, spp: int) -> list[str]:
     return lines
 
 
-def write(df, config_path: Path, out: Path = OUT) -> None:
+def write(df, config_path: Path, out: Path = OUT, extra: list[str] = ()) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -147,6 +188,7 @@ def write(df, config_path: Path, out: Path = OUT) -> None:
                          f"{r[f'timing.{u}.busy_cycles'] / 1e6:.3f}" for u in
                          ("setup", "tile_test", "sample_test", "depth", "memory")) +
                      f" | {r['timing.cycles'] / 1e6:.3f} |")
+    lines += ["", *extra]
     (out / "cycles.md").write_text("\n".join(lines) + "\n")
     print(f"wrote {(out / 'cycles.md').relative_to(REPO)}, cycles.csv, cycles.png")
 
@@ -157,7 +199,8 @@ def main(argv=None) -> int:
     parser.add_argument("--out", default=str(OUT))
     args = parser.parse_args(argv)
     path = Path(args.config).resolve()
-    write(run(path), path, Path(args.out))
+    df = run(path)
+    write(df, path, Path(args.out), sensitivity(path))
     return 0
 
 

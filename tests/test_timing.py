@@ -270,3 +270,45 @@ def test_render_without_timing():
     res = _render(1, timing=False)
     assert res.timing_records is None and not any(k.startswith("timing.") for k in res.flat_stats)
     assert res.flat_stats["raster.samples_tested"] == _render(1).flat_stats["raster.samples_tested"]
+
+
+def reference_cycles(recs: np.ndarray, hw: HardwareConfig) -> float:
+    """docs/timing.md's recursion written out directly (lists of all start times, no ring buffers),
+    for streams with several cores and texture latencies."""
+    cores = hw.cores
+    params = [unit_params(hw, u) for u in UNITS]
+    ends = []
+    for c in range(cores):
+        idx = [i for i in range(len(recs)) if recs["bin"][i] >= 0 and recs["bin"][i] % cores == c]
+        unbinned = [i for i in range(len(recs)) if recs["bin"][i] < 0]
+        idx += [i for j, i in enumerate(unbinned) if j % cores == c]
+        idx.sort()
+        K = len(UNITS)
+        S = [[0.0] * K for _ in idx]
+        D = [[0.0] * K for _ in idx]
+        end = 0.0
+        for n, i in enumerate(idx):
+            arrive = 0.0
+            for k, u in enumerate(UNITS):
+                tp, lat, _ = params[k]
+                if u == "memory":
+                    tp = tp / cores
+                S[n][k] = max(arrive, D[n - 1][k] if n else 0.0)
+                C = S[n][k] + float(recs[WORK_FIELD[u]][i]) / tp
+                D[n][k] = C
+                if k + 1 < K:
+                    F = params[k + 1][2]
+                    if n - F >= 0:
+                        D[n][k] = max(C, S[n - F][k + 1])
+                if u == "texture" and recs["texel_fetches"][i]:
+                    lat += hw.tex_cache.miss_latency_cycles if recs["tex_misses"][i] else hw.tex_cache.hit_latency_cycles
+                arrive = D[n][k] + lat
+            end = max(end, arrive)
+        ends.append(end)
+    return max(ends)
+
+
+@settings(max_examples=150, **HYPO)
+@given(recs=streams(max_records=25), hw=hardware(cores=(1, 2, 3)))
+def test_model_matches_the_documented_recursion(recs, hw):
+    assert sim.timing.estimate(recs, hw)["timing.cycles"] == pytest.approx(reference_cycles(recs, hw), rel=REL, abs=1e-9)
