@@ -146,23 +146,25 @@ def write(df, config_path: Path, out: Path = OUT, extra: list[str] = ()) -> None
     df.to_csv(out / "cycles.csv", index=False)
     spps = sorted(set(df["spp"]))
     d0 = df[df["variant"] == "default"]
-    fig, axes = plt.subplots(1, len(spps), figsize=(5.5 * len(spps), 4), squeeze=False)
+    plotted = list(VARIANTS)[:2]  # default, and memory x4 where the compute units limit
+    fig, axes = plt.subplots(len(plotted), len(spps), figsize=(5.5 * len(spps), 3.8 * len(plotted)), squeeze=False)
     markers = {u: m for u, m in zip(("setup", "tile_test", "sample_test", "depth", "shader", "texture", "memory"),
-                                    "v^so*Dx")}
-    for ax, spp in zip(axes[0], spps):
-        for algo in dict.fromkeys(d0["algorithm"]):
-            s = d0[(d0["spp"] == spp) & (d0["algorithm"] == algo)].sort_values("coc_px")
-            line, = ax.plot(s["coc_px"], s["timing.cycles"] / 1e6, label=algo)
-            for _, r in s.iterrows():
-                ax.plot(r["coc_px"], r["timing.cycles"] / 1e6, markers.get(r["timing.bottleneck"], "."),
-                        color=line.get_color(), ms=7)
-        ax.set_yscale("log")
-        ax.set_xlabel("CoC [px]")
-        ax.set_ylabel("estimated Mcycles per frame")
-        ax.set_title(f"{spp} spp (marker = bottleneck: o sample_test, x memory, ^ tile_test)")
-        ax.title.set_fontsize(8)
-        ax.legend(fontsize=8)
-        ax.grid(alpha=0.3)
+                                    "v^os*Dx")}
+    for row, variant in zip(axes, plotted):
+        dv = df[df["variant"] == variant]
+        for ax, spp in zip(row, spps):
+            for algo in dict.fromkeys(dv["algorithm"]):
+                s = dv[(dv["spp"] == spp) & (dv["algorithm"] == algo)].sort_values("coc_px")
+                line, = ax.plot(s["coc_px"], s["timing.cycles"] / 1e6, label=algo)
+                for _, r in s.iterrows():
+                    ax.plot(r["coc_px"], r["timing.cycles"] / 1e6, markers.get(r["timing.bottleneck"], "."),
+                            color=line.get_color(), ms=7)
+            ax.set_xlabel("CoC [px]")
+            ax.set_ylabel("estimated Mcycles per frame")
+            ax.set_title(f"{variant}, {spp} spp (marker = bottleneck: x memory, o sample_test, ^ tile_test)",
+                         fontsize=8)
+            ax.legend(fontsize=8)
+            ax.grid(alpha=0.3)
     fig.tight_layout()
     fig.savefig(out / "cycles.png", dpi=110)
     plt.close(fig)
