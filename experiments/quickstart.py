@@ -13,8 +13,8 @@ from .runner import render_point
 
 CONFIG = REPO / "configs" / "spot_wall.yaml"
 COLUMNS = [
-    ("coc_px", "CoC [px]", "{:g}"),
-    ("spp", "spp", "{}"),
+    ("camera.coc_px", "CoC [px]", "{:g}"),
+    ("samples.spp", "spp", "{}"),
     ("raster.samples_tested", "samples tested", "{:,}"),
     ("raster.samples_hit", "samples hit", "{:,}"),
     ("raster.ste", "STE", "{:.3f}"),
@@ -42,7 +42,7 @@ def main(argv=None) -> int:
     print(f"rast5d quickstart: {CONFIG.relative_to(REPO)} (algorithm tile), CoC {args.coc} px, spp {args.spp}")
     for spp in args.spp:
         for coc in args.coc:
-            config = load_config(CONFIG, [f"camera.coc_px={coc}", f"sample_table.spp={spp}"])
+            config = load_config(CONFIG, [f"camera.coc_px={coc}", f"samples.spp={spp}"])
             image = out / f"spot_wall_coc{coc:g}_spp{spp}.png"
             row, _ = render_point(config, image)
             rows.append(row)
@@ -55,7 +55,7 @@ def main(argv=None) -> int:
         "# Quickstart: spot_wall",
         "",
         "Made by `make run` (`python -m experiments.quickstart`) from `configs/spot_wall.yaml`: "
-        f"{df['width'][0]}x{df['height'][0]} pixels, algorithm `tile`, stratified samples. The cow moves during "
+        f"{df['camera.width'][0]}x{df['camera.height'][0]} pixels, algorithm `tile`, stratified samples. The cow moves during "
         "the shutter (motion blur, 3D/5D triangles); the wall and floor are static (2D/4D).",
         "Spot model by Keenan Crane (public domain); see models/assets/README.md.",
         "",
