@@ -214,9 +214,9 @@ def _paper_x(spec, group) -> list | None:
 def _draw_bar(ax, spec, d, hues):
     xs = _unique(d[spec.x])
     if spec.stacked:
-        cats = [(x, h) for x in xs for h in hues if len(d[[_same(a, x) for a in d[spec.x]]
-                                                          & ([True] * len(d) if h is None else
-                                                             [_same(b, h) for b in d[spec.hue]])])]
+        cats = [(x, h) for x in xs for h in hues
+                if any(_same(a, x) and (h is None or _same(b, h))
+                       for a, b in zip(d[spec.x], d[spec.hue] if spec.hue else [None] * len(d)))]
         bottom = np.zeros(len(cats))
         for j, y in enumerate(spec.ys):
             vals = np.array([_cell(d, {spec.x: x, **({} if h is None else {spec.hue: h})}, y)[0] for x, h in cats],

@@ -40,7 +40,7 @@ def quick_overrides(data: dict) -> list[str]:
     cam = data.get("camera") or {}
     w, h = cam.get("width"), cam.get("height")
     if w and h:
-        s = QUICK_SIZE / max(w, h)
+        s = min(1.0, QUICK_SIZE / max(w, h))
         return [f"camera.width={max(8, round(w * s))}", f"camera.height={max(8, round(h * s))}"]
     return [f"camera.width={QUICK_SIZE}", f"camera.height={QUICK_SIZE}"]
 

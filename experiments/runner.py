@@ -230,7 +230,7 @@ def _dask(todo, address, finished):
             # pure=False: never reuse another submission's result; the store is the cache.
             futures[client.submit(run_point, *args, pure=False, key=f"rast5d-{key}-{time.time_ns()}")] = (key, args)
         try:
-            for fut in as_completed(list(futures)):
+            for fut in as_completed(list(futures), loop=client.loop):
                 key, args = futures[fut]
                 try:
                     row = fut.result()
