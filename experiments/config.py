@@ -134,7 +134,9 @@ class PlotSpec(_Strict):
     kind: Literal["line", "bar", "table", "scatter"] = Field("line", description="line | bar | table | scatter")
     x: Optional[str] = Field(None, description="Column on the x axis (table: the row key)")
     y: Union[str, list[str]] = Field(..., description="Column(s) on the y axis (table: the value columns)")
-    hue: Optional[str] = Field(None, description="Column whose values get one line/bar colour (table: one column each)")
+    hue: Optional[Union[str, list[str]]] = Field(None, description=(
+        "Column whose values get one line/bar colour (table: one column each); a list of columns combines "
+        "their values with spaces ('tile 1')"))
     style: Optional[str] = Field(None, description="scatter only: column whose values get one marker shape each")
     facet: Optional[str] = Field(None, description="Column whose values get one panel each")
     where: dict[str, Any] = Field(default_factory=dict, description="Equality filter {column: value or [values]}")
@@ -153,6 +155,11 @@ class PlotSpec(_Strict):
         "Published numbers {hue value (or y column without hue): {x value: number or text}}, drawn/tabulated "
         "beside ours"))
     format: Optional[str] = Field(None, description="Python format of the numbers in tables, e.g. '{:.2f}'")
+    columns: list[str] = Field(default_factory=list, description=(
+        "scatter and x-less tables: extra columns shown in the data table (e.g. samples.spp)"))
+    optional: bool = Field(False, description=(
+        "Leave the plot out (silently) when a column it names is missing, e.g. timing.cycles before the timing "
+        "model exists"))
 
     @model_validator(mode="after")
     def _check(self):

@@ -89,11 +89,15 @@ def _sorted_x(values) -> list:
 
 
 def _check_columns(df, spec):
-    for col in [spec.x, spec.hue, spec.facet, spec.style, *spec.ys]:
+    for col in [spec.x, spec.hue, spec.facet, spec.style, *spec.ys, *spec.columns]:
         if col is not None and col not in df.columns:
             near = [c for c in df.columns if col.split(".")[-1] in c][:6]
             raise PlotError(f"plot {spec.title or spec.kind!r}: unknown column {col!r}"
                             + (f" (similar: {near})" if near else ""))
+
+
+def _missing(v) -> bool:
+    return v is None or (isinstance(v, float) and math.isnan(v))
 
 
 def _label(v) -> str:
@@ -254,9 +258,10 @@ def pareto_front(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     return np.array(front, dtype=int)
 
 
-def _draw_scatter(ax, spec, d, hues):
+def _draw_scatter(ax, spec, d, hues, styles=None):
+    """Colour by hue, marker by style; the figure legend shows the two separately (proxies)."""
     y = spec.ys[0]
-    styles = _unique(d[spec.style]) if spec.style else [None]
+    styles = styles or [None]
     for i, h in enumerate(hues):
         for j, s in enumerate(styles):
             sub = d
@@ -266,15 +271,31 @@ def _draw_scatter(ax, spec, d, hues):
                 sub = sub[[_same(v, s) for v in sub[spec.style]]]
             if not len(sub):
                 continue
-            label = " / ".join(_label(v) for v in (h, s) if v is not None) or y
             ax.scatter(sub[spec.x].astype(float), sub[y].astype(float), s=14, color=COLORS[i % len(COLORS)],
-                       marker=MARKERS[j % len(MARKERS)], alpha=0.8, label=label, linewidths=0)
+                       marker=MARKERS[j % len(MARKERS)], alpha=0.8, linewidths=0)
     if spec.pareto:
         ok = d[[spec.x, y]].astype(float).dropna()
         idx = pareto_front(ok[spec.x].to_numpy(), ok[y].to_numpy())
         fx, fy = ok[spec.x].to_numpy()[idx], ok[y].to_numpy()[idx]
-        ax.step(fx, fy, where="post", color="black", linewidth=0.8, zorder=1, label="Pareto front")
+        ax.step(fx, fy, where="post", color="black", linewidth=0.8, zorder=1)
         ax.scatter(fx, fy, s=40, facecolors="none", edgecolors="black", linewidths=0.8, zorder=3)
+
+
+def _scatter_legend(spec, hues, styles):
+    from matplotlib.lines import Line2D
+
+    handles = []
+    for i, h in enumerate(hues):
+        if h is not None:
+            handles.append(Line2D([], [], linestyle="", marker="o", color=COLORS[i % len(COLORS)], label=_label(h)))
+    for j, s in enumerate(styles):
+        if s is not None:
+            handles.append(Line2D([], [], linestyle="", marker=MARKERS[j % len(MARKERS)], color="0.4",
+                                  label=_label(s)))
+    if spec.pareto:
+        handles.append(Line2D([], [], color="black", marker="o", markerfacecolor="none", linewidth=0.8,
+                              label="Pareto front"))
+    return handles
 
 
 # ---- tables --------------------------------------------------------------------------------------
@@ -283,11 +304,11 @@ def data_table(spec, d, hues) -> list[str]:
     """Our numbers, one row per (facet, x) and one column per (y, hue), paper columns beside them."""
     facets = _unique(d[spec.facet]) if spec.facet else [None]
     if spec.kind == "scatter":
-        cols = [c for c in (spec.facet, spec.hue, spec.style, spec.x, spec.ys[0]) if c]
+        cols = list(dict.fromkeys(c for c in (spec.facet, spec.hue, spec.style, *spec.columns, spec.x, spec.ys[0]) if c))
         rows = [[_fmt(r[c], spec.format) for c in cols] for _, r in d[cols].iterrows()]
         return md_table(cols, rows)
     if spec.x is None:  # plain listing of the y columns
-        cols = [c for c in (spec.facet, spec.hue) if c] + spec.ys
+        cols = list(dict.fromkeys([c for c in (spec.facet, spec.hue) if c] + spec.columns + spec.ys))
         rows = [[_fmt(r[c], spec.format) for c in cols] for _, r in d[cols].iterrows()]
         return md_table(cols, rows)
     groups = []  # (hue, y, header)
@@ -370,6 +391,17 @@ def render_plot(spec, df, out_base: Path | None) -> dict:
     ``df`` already carries the derived columns; failed rows (status != ok) are left out."""
     if "status" in df.columns:
         df = df[df["status"] == "ok"]
+    if isinstance(spec.hue, list):  # several hue columns: one combined label column
+        for col in spec.hue:
+            if col not in df.columns:
+                raise PlotError(f"plot {spec.title or spec.kind!r}: unknown hue column {col!r}")
+        name = " / ".join(spec.hue)
+        df = df.assign(**{name: [" ".join(_label(v) for v in vals if not _missing(v))
+                                 for vals in zip(*(df[c] for c in spec.hue))]})
+        spec = spec.model_copy(update={"hue": name})
+    if spec.optional and any(c is not None and c not in df.columns
+                             for c in [spec.x, spec.facet, spec.style, *spec.ys, *spec.where]):
+        return {"files": [], "markdown": [], "fits": [], "skipped": True}
     _check_columns(df, spec)
     d = apply_where(df, spec.where)
     if not len(d):
@@ -384,22 +416,43 @@ def render_plot(spec, df, out_base: Path | None) -> dict:
     import matplotlib
 
     with matplotlib.rc_context(STYLE):
+        from matplotlib.ticker import NullFormatter
+
         facets = _unique(d[spec.facet]) if spec.facet else [None]
+        styles = _unique(d[spec.style]) if spec.style else [None]
         fig, axes = _panels(plt, len(facets))
         for ax, f in zip(axes, facets):
             sub = d if f is None else d[[_same(v, f) for v in d[spec.facet]]]
-            {"line": _draw_line, "bar": _draw_bar, "scatter": _draw_scatter}[spec.kind](ax, spec, sub, hues)
+            if spec.kind == "scatter":
+                _draw_scatter(ax, spec, sub, hues, styles)
+            else:
+                {"line": _draw_line, "bar": _draw_bar}[spec.kind](ax, spec, sub, hues)
             if spec.logx:
                 ax.set_xscale("log", base=2 if spec.x and "spp" in spec.x else 10)
+                ax.xaxis.set_minor_formatter(NullFormatter())
             if spec.logy:
                 ax.set_yscale("log")
+                ax.yaxis.set_minor_formatter(NullFormatter())
             ax.set_xlabel(spec.xlabel or spec.x)
             ax.set_ylabel(spec.ylabel or (spec.ys[0] if len(spec.ys) == 1 else "value"))
             if f is not None:
                 ax.set_title(f"{spec.facet.split('.')[-1]} = {_label(f)}")
-            handles, labels = ax.get_legend_handles_labels()
-            if len(labels) > 1 or (labels and spec.hue):
-                ax.legend(handles, labels, ncols=1 if len(labels) < 8 else 2)
+        # One legend for the figure (every panel uses the same colours), outside the panels when long.
+        if spec.kind == "scatter":
+            handles = _scatter_legend(spec, hues, styles)
+        else:
+            seen = {}
+            for ax in axes:
+                for hnd, lab in zip(*ax.get_legend_handles_labels()):
+                    seen.setdefault(lab, hnd)
+            handles = [h.__class__ and h for h in seen.values()]
+            for hnd, lab in zip(handles, seen):
+                hnd.set_label(lab)
+        if len(handles) > 1 or (handles and spec.hue):
+            if len(axes) == 1 and len(handles) <= 6:
+                axes[0].legend(handles=handles)
+            else:
+                fig.legend(handles=handles, loc="outside right upper")
         if spec.title:
             fig.suptitle(spec.title, fontsize=9)
         files = []

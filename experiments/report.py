@@ -72,6 +72,8 @@ def section_markdown(config: RenderConfig, config_path: Path, df, out_dir: Path,
         except PlotError as e:
             lines += [f"**Plot error:** {e}", ""]
             continue
+        if res.get("skipped"):
+            continue
         if spec.title and spec.kind == "table":
             lines += [f"**{spec.title}**", ""]
         if res["files"]:
@@ -126,6 +128,7 @@ def paper_configs() -> list[Path]:
 
 def main(only=None, workers=None, scheduler=None, force=False, quick=False, configs_dir: Path | None = None,
          reports_dir: Path | None = None) -> int:
+    from . import report_tables  # noqa: F401 - registers the page tables
     from .runner import results_dir, run_sweep
 
     configs_dir = configs_dir or CONFIGS
