@@ -2,22 +2,20 @@
 write reports/timing/cycles.{md,csv,png}: estimated cycles per frame (docs/timing.md) vs CoC and spp
 for each algorithm, with the bottleneck unit.
 
-A stand-in until the declarative report machinery (issue 4) runs configs/paper/cycles.yaml itself: it
-reads the same file, maps its `samples:` section onto the current `sample_table:` schema and its
-`hardware:` section onto sim.HardwareConfig, and renders every sweep point once. Because the timing
-model runs on stored work records, it also re-times every render on a few hardware variants
-(sim.timing.estimate on Result.timing_records) without rendering again.
+The declarative report (`rast5d report --only cycles`) draws the sweep itself; this script adds
+what a sweep cannot express cheaply. It loads the same config (experiments.config), renders every
+sweep point once and, because the timing model runs on stored work records, re-times every render on
+a few hardware variants (sim.timing.estimate on Result.timing_records) without rendering again; then
+it checks the estimate's sensitivity to the record granularity (bin size) and the FIFO depth.
 """
 from __future__ import annotations
 
 import argparse
-import copy
-import itertools
 import sys
 import time
 from pathlib import Path
 
-from .config import REPO, _set_dotted, build, load_dict, validate
+from .config import REPO, build, expand_sweep, load_config, load_dict
 
 OUT = REPO / "reports" / "timing"
 # Re-timed on the same records: what changes when one resource is scaled.
@@ -28,28 +26,9 @@ VARIANTS = {
 }
 
 
-def _points(data: dict) -> list[tuple[dict, dict, dict]]:
-    """[(point, render config dict, hardware dict)] for the cartesian product of data['sweep']."""
-    base = {k: copy.deepcopy(v) for k, v in data.items() if k not in ("sweep", "outputs", "executor", "hardware")}
-    if "samples" in base:  # issue 4's section name -> the current schema
-        s = dict(base.pop("samples"))
-        s["generator"] = s.pop("kind", "stratified")
-        base["sample_table"] = s
-    sweep = data.get("sweep", {})
-    keys = [k for k in sweep if k != "zip"]
-    if "zip" in sweep:
-        raise NotImplementedError("zip sweeps: use the issue 4 runner")
-    out = []
-    for values in itertools.product(*(sweep[k] for k in keys)):
-        d, hw = copy.deepcopy(base), copy.deepcopy(data.get("hardware") or {})
-        point = dict(zip(keys, values))
-        for k, v in point.items():
-            if k.startswith("hardware."):
-                _set_dotted(hw, k[len("hardware."):], v, "sweep")
-            else:
-                _set_dotted(d, k.replace("samples.", "sample_table.", 1), v, "sweep")
-        out.append((point, d, hw))
-    return out
+def _points(config_path: Path, overrides=()) -> list[tuple[dict, object]]:
+    """[(point, RenderConfig)] for every sweep point of the config (experiments.config)."""
+    return expand_sweep(load_config(config_path, list(overrides)), str(config_path))
 
 
 def run(config_path: Path) -> "pd.DataFrame":  # noqa: F821
@@ -57,17 +36,16 @@ def run(config_path: Path) -> "pd.DataFrame":  # noqa: F821
 
     import sim
 
-    data = load_dict(config_path)
     rows = []
-    points = _points(data)
+    points = _points(config_path)
     t0 = time.perf_counter()
-    for i, (point, d, hw_dict) in enumerate(points):
-        cfg = validate(d, f"{config_path} {point}")
+    for i, (point, cfg) in enumerate(points):
         scene, camera, table, pipeline = build(cfg)
-        hw = sim.HardwareConfig.from_dict(hw_dict)
+        hw = cfg.hardware_config()
+        hw_dict = hw.describe()
         res = sim.render(scene, camera, table, pipeline, hardware=hw)
         for variant, change in VARIANTS.items():
-            vhw = sim.HardwareConfig.from_dict({**hw_dict, **change})
+            vhw = sim.HardwareConfig.from_dict(_merge(hw_dict, change))
             timing = res.flat_stats if not change else sim.timing.estimate(res.timing_records, vhw)
             row = {"variant": variant, **point, "spp": table.spp, "coc_px": camera.coc_px,
                    "algorithm": pipeline.algorithm}
@@ -81,26 +59,28 @@ def run(config_path: Path) -> "pd.DataFrame":  # noqa: F821
     return pd.DataFrame(rows)
 
 
+def _merge(base: dict, change: dict) -> dict:
+    out = {k: (dict(v) if isinstance(v, dict) else v) for k, v in base.items()}
+    for k, v in change.items():
+        out[k] = {**out[k], **v} if isinstance(v, dict) else v
+    return out
+
+
 def sensitivity(config_path: Path) -> list[str]:
     """Two checks of the model on one point (tile, CoC 10, 16 spp): record granularity (bin size,
     re-rendered) and FIFO depth (every FIFO set to one depth, re-timed on the same records)."""
     import sim
 
-    data = load_dict(config_path)
-    point, d, hw_dict = _points({**data, "sweep": {}})[0]
-    d["camera"]["coc_px"] = 10
-    d["sample_table"]["spp"] = 16
-    d["pipeline"]["algorithm"] = "tile"
+    cfg = load_config(config_path, ["sweep={}", "camera.coc_px=10", "samples.spp=16", "pipeline.algorithm=tile"])
+    hw_dict = cfg.hardware_config().describe()
     lines = ["## Sensitivity (tile, CoC 10, 16 spp)", "",
              "Record granularity: records are (triangle, screen bin) visits, so the bin size sets how "
              "lumpy the work is (the engine's counters do not change with it).", "",
              "| bin size [px] | records | Mcycles | bottleneck | cycles / bound |", "|---|---|---|---|---|"]
     base = None
     for bin_size in (8, 16, 32, 64, 128):
-        dd = copy.deepcopy(d)
-        dd["pipeline"]["bin_size"] = bin_size
-        scene, camera, table, pipeline = build(validate(dd, f"{config_path} bin_size={bin_size}"))
-        res = sim.render(scene, camera, table, pipeline, hardware=sim.HardwareConfig.from_dict(hw_dict))
+        scene, camera, table, pipeline = build(cfg)
+        res = sim.render(scene, camera, table, pipeline.replace(bin_size=bin_size), hardware=cfg.hardware_config())
         st = res.flat_stats
         lines.append(f"| {bin_size} | {st['timing.records']:,} | {st['timing.cycles'] / 1e6:.3f} | "
                      f"{st['timing.bottleneck']} | {st['timing.bound_ratio']:.3f} |")
@@ -113,9 +93,9 @@ def sensitivity(config_path: Path) -> list[str]:
     for depth in (1, 2, 4, 8, 16, 64, 256):
         cells = []
         for extra in ({}, {"memory_bytes_per_clock": 128.0}):
-            hw = {**hw_dict, **extra, "memory_fifo_entries": depth}
+            hw = _merge(hw_dict, {**extra, "memory_fifo_entries": depth})
             for u in ("setup", "tile_test", "sample_test", "depth", "shader", "texture"):
-                hw[u] = {**hw_dict.get(u, {}), "fifo_entries": depth}
+                hw[u] = {**hw_dict[u], "fifo_entries": depth}
             t = sim.timing.estimate(base.timing_records, sim.HardwareConfig.from_dict(hw))
             cells += [f"{t['timing.cycles'] / 1e6:.3f}", t["timing.bottleneck"], f"{t['timing.bound_ratio']:.3f}"]
         lines.append(f"| {depth} | " + " | ".join(cells) + " |")
@@ -170,9 +150,9 @@ def write(df, config_path: Path, out: Path = OUT, extra: list[str] = ()) -> None
     plt.close(fig)
     rel = config_path.relative_to(REPO) if config_path.is_relative_to(REPO) else config_path
     lines = ["# Estimated cycles per frame vs CoC and spp (timing model)", "",
-             f"Made by `python -m experiments.timing_report {rel}` (a stand-in for the issue 4 report "
-             "runner, which will render the same config into reports/paper/cycles.md).", "",
-             load_dict(config_path).get("outputs", {}).get("text", "").strip(), "",
+             f"Made by `python -m experiments.timing_report {rel}` (the declarative page of the same "
+             "config is reports/paper/cycles.md; this one adds hardware variants and sensitivity checks).", "",
+             load_dict(config_path)[0].get("outputs", {}).get("text", "").strip(), "",
              "Each cell: estimated **Mcycles** per frame, the **bottleneck** unit (most busy clocks) and, in "
              "parentheses, cycles / throughput bound (1.00 = the bottleneck unit is busy the whole frame).",
              "The hardware variants re-time the same work records (no re-render).", "",
