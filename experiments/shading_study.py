@@ -252,7 +252,7 @@ def study_multiview():
         "## Stereo and multi-view with the shading cache (002 §8)",
         "",
         f"`{name}` (moving cow, defocused wall), {W}x{H}, square lens; V views side by side on a camera line: the "
-        "lens is V times wider in u (CoC 10 or 3 px per view), view k's {spp_v} samples per pixel use the k-th "
+        f"lens is V times wider in u (CoC 10 or 3 px per view), view k's {spp_v} samples per pixel use the k-th "
         "u-interval (002 Fig. 16), so the table has 8V spp. `tile` (2x2), `shading: cache` with 1024 entries, "
         "key (triangle, pixel of the lens-centre view at shutter open), one cache per 64x64 bin. Invocations = "
         "shading-cache misses (`shade.lanes_live`); with helper lanes = `shade.invocations`. Supersampled "

@@ -116,16 +116,23 @@ class ShadeState {
       }
       const std::uint64_t quad = (static_cast<std::uint64_t>(y >> 1) << 42) | (static_cast<std::uint64_t>(x >> 1) << 21) |
                                  (sub & 0x1FFFFF);
-      const int lane = (x & 1) | ((y & 1) << 1);
-      keys_[i] = {quad, (static_cast<std::uint64_t>(lane) << 32) | static_cast<std::uint32_t>(i)};
+      const std::uint64_t lane = static_cast<std::uint64_t>((x & 1) | ((y & 1) << 1));
+      // Within a lane, the record of the first (py, px, s) stands for it (its uv is the lane's), so
+      // the counts do not depend on the order the algorithm pushed the samples in.
+      const std::uint64_t order = (lane << 62) | (static_cast<std::uint64_t>(r.py & 0xFFFF) << 44) |
+                                  (static_cast<std::uint64_t>(r.px & 0xFFFF) << 28) |
+                                  static_cast<std::uint64_t>(r.s & 0xFFFFFFF);
+      keys_[i] = {quad, order, i};
     }
-    std::sort(keys_.begin(), keys_.end());
+    std::sort(keys_.begin(), keys_.end(), [](const Key& a, const Key& b) {
+      return a.quad != b.quad ? a.quad < b.quad : a.order < b.order;
+    });
     for (int i = 0; i < n;) {
       int j = i;
       int first[4] = {-1, -1, -1, -1};
-      while (j < n && keys_[j].first == keys_[i].first) {
-        const int lane = static_cast<int>(keys_[j].second >> 32);
-        if (first[lane] < 0) first[lane] = static_cast<int>(keys_[j].second & 0xFFFFFFFFu);
+      while (j < n && keys_[j].quad == keys_[i].quad) {
+        const int lane = static_cast<int>(keys_[j].order >> 62);
+        if (first[lane] < 0) first[lane] = keys_[j].index;
         ++j;
       }
       if (mode == ShadingMode::kCache) {
@@ -144,7 +151,7 @@ class ShadeState {
           }
         }
       }
-      shade_quad(first, keys_[i].first);
+      shade_quad(first, keys_[i].quad);
       i = j;
     }
     recs_.clear();
@@ -232,7 +239,11 @@ class ShadeState {
   std::vector<std::uint32_t>* stream_ = nullptr;
   std::uint32_t tri_ = 0;
   std::vector<Rec> recs_;
-  std::vector<std::pair<std::uint64_t, std::uint64_t>> keys_;
+  struct Key {
+    std::uint64_t quad, order;
+    int index;
+  };
+  std::vector<Key> keys_;
 };
 
 // Run the per-bin texture-cache line streams through `count` caches in bin raster order (bin b to
