@@ -7,7 +7,7 @@ STAMPS := .make-stamps
 SOURCES := $(shell find sim/src sim/include sim/bindings -type f 2>/dev/null) CMakeLists.txt pyproject.toml
 export CMAKE_BUILD_PARALLEL_LEVEL ?= $(shell nproc 2>/dev/null || echo 2)
 
-.PHONY: install run test test-all bench golden report clean
+.PHONY: install run test test-all bench golden report report-quick clean
 
 install: $(STAMPS)/install
 
@@ -38,6 +38,9 @@ golden: install
 
 report: install
 	$(VENV)/bin/rast5d report
+
+report-quick: install
+	$(VENV)/bin/rast5d report --quick
 
 clean:
 	rm -rf build $(VENV) $(STAMPS) .pytest_cache .hypothesis

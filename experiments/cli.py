@@ -9,10 +9,10 @@ from pathlib import Path
 
 
 def _summary(row: dict) -> str:
-    return (f"{row['scene']}: {row['algorithm']}, CoC {row['coc_px']:g} px, {row['spp']} spp, "
-            f"{row['width']}x{row['height']} -> samples tested {row['raster.samples_tested']:,}, "
-            f"STE {row['raster.ste']:.3f}, ops/pixel {row['ops.per_pixel']:,.0f}, "
-            f"wall {row['time.wall_s']:.2f} s")
+    return (f"{row['scene.name'] or row['scene.path']}: {row['pipeline.algorithm']}, CoC {row['camera.coc_px']:g} px, "
+            f"{row['samples.spp']} spp ({row['samples.kind']}), {row['camera.width']}x{row['camera.height']} -> "
+            f"samples tested {row['raster.samples_tested']:,}, STE {row['raster.ste']:.3f}, "
+            f"ops/pixel {row['ops.per_pixel']:,.0f}, wall {row['time.wall_s']:.2f} s")
 
 
 def _json_safe(x):
@@ -29,11 +29,11 @@ def cmd_render(args) -> int:
 
     config = load_config(args.config, args.set or [])
     if config.sweep:
-        print(f"{args.config}: has a sweep ({', '.join(config.sweep)}); use `rast5d run` for sweeps",
-              file=sys.stderr)
+        print(f"{args.config}: has a sweep ({', '.join(k for k in config.sweep if k != 'zip')}); use `rast5d run` "
+              "for sweeps", file=sys.stderr)
         return 2
-    image = args.output or config.output.image
-    stats_path = args.stats or config.output.stats
+    image = args.output or config.outputs.image
+    stats_path = args.stats or config.outputs.stats
     row, result = render_point(config, image)
     print(_summary(row))
     if image:
@@ -49,24 +49,26 @@ def cmd_render(args) -> int:
 
 
 def cmd_run(args) -> int:
-    from .config import load_config
+    from .config import load_dict, validate, expand_sweep
+    from .report import write_config_page
     from .runner import run_sweep
 
-    if args.scheduler:
-        print("--scheduler: distributed (Dask) execution is not implemented yet; use --workers N "
-              "for a local process pool", file=sys.stderr)
-        return 2
-    config = load_config(args.config, args.set or [])
-    out = Path(args.out or Path("results") / (config.name or Path(args.config).stem))
-    df = run_sweep(config, out, source=str(args.config), workers=args.workers, use_cache=not args.no_cache,
-                   images=args.images)
-    return 0 if (df["status"] == "ok").all() else 1
+    data, lines = load_dict(args.config, args.set or [])
+    config = validate(data, str(args.config), lines)
+    expand_sweep(config, str(args.config), lines)
+    df = run_sweep(config, source=str(args.config), workers=args.workers, scheduler=args.scheduler,
+                   force=args.force, lines=lines)
+    if config.outputs.plots and not args.no_report:
+        page = write_config_page(config, args.config, df, overrides=args.set or [])
+        print(f"report -> {page}")
+    return 0 if len(df) and (df["status"] == "ok").all() else 1
 
 
 def cmd_report(args) -> int:
-    from . import paper
+    from .report import main as report_main
 
-    return paper.main(only=args.only, workers=args.workers, use_cache=not args.no_cache)
+    return report_main(only=args.only, workers=args.workers, scheduler=args.scheduler, force=args.force,
+                       quick=args.quick)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -81,20 +83,23 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--stats", help="JSON statistics path")
     p.set_defaults(func=cmd_render)
 
-    p = sub.add_parser("run", help="run a sweep (config.sweep) into a results table")
+    p = sub.add_parser("run", help="run a sweep (config.sweep) into the result store (results/<name>.parquet)")
     p.add_argument("config")
-    p.add_argument("--set", action="append", metavar="KEY=VALUE")
-    p.add_argument("--out", help="output directory (default results/<name>)")
-    p.add_argument("--workers", type=int, default=1, help="local worker processes")
-    p.add_argument("--scheduler", help="Dask scheduler address (not implemented yet)")
-    p.add_argument("--no-cache", action="store_true", help="re-render points found in results/cache")
-    p.add_argument("--images", action="store_true", help="also write each point's image")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a key (repeatable)")
+    p.add_argument("--workers", type=int, default=None,
+                   help="local worker processes (default: executor.workers or the core count; 0 = in-process)")
+    p.add_argument("--scheduler", metavar="ADDRESS", help="run on a Dask distributed scheduler, e.g. tcp://host:8786")
+    p.add_argument("--force", action="store_true", help="re-render points found in the result store")
+    p.add_argument("--no-report", action="store_true", help="do not write the config's report page")
     p.set_defaults(func=cmd_run)
 
-    p = sub.add_parser("report", help="regenerate reports/ from configs/paper/")
-    p.add_argument("--only", action="append", metavar="NAME", help="only these reports (repeatable)")
-    p.add_argument("--workers", type=int, default=1)
-    p.add_argument("--no-cache", action="store_true")
+    p = sub.add_parser("report", help="run configs/paper/ (cached) and regenerate reports/")
+    p.add_argument("--only", action="append", metavar="NAME", help="only these configs or pages (repeatable)")
+    p.add_argument("--quick", action="store_true",
+                   help="small-resolution variant into reports/quick/ with its own result store (results/quick/)")
+    p.add_argument("--workers", type=int, default=None)
+    p.add_argument("--scheduler", metavar="ADDRESS")
+    p.add_argument("--force", action="store_true")
     p.set_defaults(func=cmd_report)
 
     args = parser.parse_args(argv)

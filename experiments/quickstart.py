@@ -1,6 +1,6 @@
-"""`make run`: the default experiment. Renders spot the cow in front of a wall, with depth of field
-and motion blur, at a few CoC radii and sample counts, and writes reports/quickstart/ (images, a
-statistics table in CSV and Markdown, and a short summary on stdout)."""
+"""`make run`: the default experiment (configs/quickstart.yaml). Runs a small CoC x spp x algorithm
+sweep on spot_wall through the result store (cached), and writes reports/quickstart/: README.md with
+the plots (PNG + PDF), the tables, the speed-vs-error chart and an image grid."""
 from __future__ import annotations
 
 import argparse
@@ -8,71 +8,71 @@ import sys
 import time
 from pathlib import Path
 
-from .config import REPO, load_config
-from .runner import render_point
+from .config import REPO, load_dict, validate
+from .report import section_markdown
+from .runner import results_dir, run_sweep
 
-CONFIG = REPO / "configs" / "spot_wall.yaml"
-COLUMNS = [
-    ("coc_px", "CoC [px]", "{:g}"),
-    ("spp", "spp", "{}"),
-    ("raster.samples_tested", "samples tested", "{:,}"),
-    ("raster.samples_hit", "samples hit", "{:,}"),
-    ("raster.ste", "STE", "{:.3f}"),
-    ("ops.per_pixel", "ops/pixel", "{:,.0f}"),
-    ("ops.setup", "ops setup", "{:,}"),
-    ("ops.tile", "ops tile", "{:,}"),
-    ("ops.sample", "ops sample", "{:,}"),
-    ("tile.tested_over_optimal", "tested/optimal", "{:.2f}"),
-    ("time.wall_s", "wall [s]", "{:.2f}"),
-]
+CONFIG = REPO / "configs" / "quickstart.yaml"
+
+
+def image_grid(df, images: Path, out: Path, algorithm: str = "tile") -> Path:
+    """Rows: spp; columns: CoC; one algorithm (every exact algorithm renders the same image)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from PIL import Image
+
+    from .plots import STYLE
+
+    d = df[(df["pipeline.algorithm"] == algorithm) & (df["status"] == "ok")]
+    spps, cocs = sorted(d["samples.spp"].unique()), sorted(d["camera.coc_px"].unique())
+    with matplotlib.rc_context(STYLE):
+        fig, axes = plt.subplots(len(spps), len(cocs), figsize=(1.9 * len(cocs), 1.9 * len(spps)), squeeze=False)
+        for i, spp in enumerate(spps):
+            for j, coc in enumerate(cocs):
+                ax = axes[i][j]
+                row = d[(d["samples.spp"] == spp) & (d["camera.coc_px"] == coc)]
+                if len(row):
+                    ax.imshow(Image.open(images / f"{row['config_hash'].iloc[0]}.png"))
+                    rmse = row["metric.rmse"].iloc[0] if "metric.rmse" in row else float("nan")
+                    ax.set_title(f"CoC {coc:g}, {spp} spp\nRMSE {rmse:.3f}", fontsize=7)
+                ax.set_axis_off()
+        fig.savefig(out, dpi=150)
+        plt.close(fig)
+    return out
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--out", default=str(REPO / "reports" / "quickstart"))
-    parser.add_argument("--coc", type=float, nargs="+", default=[0.0, 10.0, 30.0])
-    parser.add_argument("--spp", type=int, nargs="+", default=[16, 64])
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override a config key")
+    parser.add_argument("--workers", type=int, default=None)
     args = parser.parse_args(argv)
-    import pandas as pd
-
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    rows = []
     t0 = time.perf_counter()
-    print(f"rast5d quickstart: {CONFIG.relative_to(REPO)} (algorithm tile), CoC {args.coc} px, spp {args.spp}")
-    for spp in args.spp:
-        for coc in args.coc:
-            config = load_config(CONFIG, [f"camera.coc_px={coc}", f"sample_table.spp={spp}"])
-            image = out / f"spot_wall_coc{coc:g}_spp{spp}.png"
-            row, _ = render_point(config, image)
-            rows.append(row)
-            print(f"  CoC {coc:>4g} px, {spp:>3} spp: tested {row['raster.samples_tested']:>12,}  "
-                  f"STE {row['raster.ste']:.3f}  ops/pixel {row['ops.per_pixel']:>8,.0f}  "
-                  f"wall {row['time.wall_s']:.2f} s  -> {image.relative_to(REPO)}")
-    df = pd.DataFrame(rows)
-    df.to_csv(out / "stats.csv", index=False)
-    lines = [
-        "# Quickstart: spot_wall",
-        "",
-        "Made by `make run` (`python -m experiments.quickstart`) from `configs/spot_wall.yaml`: "
-        f"{df['width'][0]}x{df['height'][0]} pixels, algorithm `tile`, stratified samples. The cow moves during "
-        "the shutter (motion blur, 3D/5D triangles); the wall and floor are static (2D/4D).",
-        "Spot model by Keenan Crane (public domain); see models/assets/README.md.",
-        "",
-        "| " + " | ".join(c[1] for c in COLUMNS) + " |",
-        "|" + "---|" * len(COLUMNS),
-    ]
-    for _, r in df.iterrows():
-        cells = []
-        for key, _, fmt in COLUMNS:
-            v = r[key]
-            cells.append("n/a" if v != v else fmt.format(v))  # NaN
-        lines.append("| " + " | ".join(cells) + " |")
-    lines += ["", "Images: " + ", ".join(f"`{p.name}`" for p in sorted(out.glob("spot_wall_*.png")))]
-    (out / "stats.md").write_text("\n".join(lines) + "\n")
-    print(f"wrote {out.relative_to(REPO)}/ (stats.csv, stats.md, {len(rows)} images) "
-          f"in {time.perf_counter() - t0:.1f} s")
-    return 0
+    data, lines = load_dict(CONFIG, args.set)
+    config = validate(data, str(CONFIG), lines)
+    images = results_dir() / "images" / config.name
+    df = run_sweep(config, source="configs/quickstart.yaml", workers=args.workers, images_dir=images, lines=lines)
+    elapsed = time.perf_counter() - t0
+    cmd = "make run" + ("" if not args.set else " (python -m experiments.quickstart "
+                        + " ".join(f"--set {s}" for s in args.set) + ")")
+    md = [f"# {config.outputs.page}", ""]
+    md += section_markdown(config, CONFIG, df, out, cmd, args.set, elapsed)
+    grid = image_grid(df, images, out / "image_grid.png")
+    md += ["## Images (tile; every exact algorithm renders the same image)", "", f"![image grid]({grid.name})", "",
+           f"`make run` took {time.perf_counter() - t0:.0f} s on this run ({df.attrs['summary']['rendered']} points "
+           f"rendered, {df.attrs['summary']['cached']} from the cache in results/).", ""]
+    (out / "README.md").write_text("\n".join(md) + "\n")
+    ok = df[df["status"] == "ok"]
+    for _, r in ok[ok["samples.spp"] == 16].iterrows():
+        print(f"  CoC {r['camera.coc_px']:>4g} px, 16 spp, {r['pipeline.algorithm']:<10}: tested "
+              f"{r['raster.samples_tested']:>10,.0f}  STE {r['raster.ste']:.3f}  ops/pixel {r['ops.per_pixel']:>8,.0f}  "
+              f"RMSE {r['metric.rmse']:.4f}")
+    print(f"wrote {out}/README.md ({len(df)} points) in {time.perf_counter() - t0:.1f} s")
+    return 0 if (df["status"] == "ok").all() else 1
 
 
 if __name__ == "__main__":

@@ -1,5 +1,6 @@
 """The rast5d command line: render, run (sweeps keep finished points when one fails), errors."""
 import json
+import os
 import subprocess
 import sys
 
@@ -12,7 +13,7 @@ CONFIG = """
 name: tiny
 scene: {name: quad}
 camera: {width: 32, height: 32, coc_px: 4}
-sample_table: {spp: 4, seed: 1}
+samples: {spp: 4, seed: 1}
 pipeline: {algorithm: tile}
 """
 
@@ -39,7 +40,7 @@ def test_render_writes_image_and_stats(tmp_path):
 
 
 @pytest.mark.parametrize("override,message", [("camera.cocpx=3", "unknown key 'camera.cocpx'"),
-                                              ("sample_table.spp=0", "spp"),
+                                              ("samples.spp=0", "spp"),
                                               ("pipeline.algorithm=nope", "algorithm")])
 def test_render_errors_exit_cleanly(tmp_path, override, message):
     cfg = tmp_path / "tiny.yaml"
@@ -51,12 +52,15 @@ def test_render_errors_exit_cleanly(tmp_path, override, message):
 def test_run_sweep_keeps_finished_points(tmp_path):
     cfg = tmp_path / "sweep.yaml"
     # spp 5000 is out of range: those points fail when built, the others are kept.
-    cfg.write_text(CONFIG + "sweep:\n  sample_table.spp: [4, 5000]\n  camera.coc_px: [0, 4]\n")
-    r = rast5d("run", str(cfg), "--out", str(tmp_path / "res"), "--no-cache")
+    cfg.write_text(CONFIG + "sweep:\n  samples.spp: [4, 5000]\n  camera.coc_px: [0, 4]\n")
+    env = {**os.environ, "RAST5D_RESULTS": str(tmp_path / "res")}
+    r = subprocess.run([sys.executable, "-m", "experiments.cli", "run", str(cfg), "--workers", "2"],
+                       capture_output=True, text=True, env=env)
     assert r.returncode == 1, r.stderr
-    df = pd.read_csv(tmp_path / "res" / "results.csv")
+    df = pd.read_parquet(tmp_path / "res" / "tiny.parquet")
     assert len(df) == 4
     assert (df["status"] == "ok").sum() == 2 and (df["status"] == "error").sum() == 2
     assert df[df["status"] == "error"]["error"].str.contains("spp").all()
-    assert len((tmp_path / "res" / "results.jsonl").read_text().splitlines()) == 4
+    assert sorted(df[df["status"] == "error"]["samples.spp"]) == [5000, 5000]
+    assert len(list((tmp_path / "res" / "points").glob("*.parquet"))) == 2  # only finished points are cached
     assert "2 failed" in r.stdout

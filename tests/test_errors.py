@@ -125,7 +125,7 @@ def test_unknown_yaml_key(tmp_path):
 
     cfg = tmp_path / "c.yaml"
     cfg.write_text("scene: {name: quad}\ncamera: {widht: 32}\n")
-    with pytest.raises(ConfigError, match=r"c\.yaml: unknown key 'camera\.widht'"):
+    with pytest.raises(ConfigError, match=r"c\.yaml:2: unknown key 'camera\.widht'"):
         load_config(cfg)
     cfg.write_text("scene: {name: quad}\nscene: {name: bunny}\n")
     with pytest.raises(ConfigError, match="duplicate key 'scene'"):

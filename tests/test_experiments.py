@@ -1,0 +1,340 @@
+"""Experiments: config schema errors (file:line), extends, overrides, sweep expansion with and without
+zip, the Parquet result store and its cache, failure isolation, Dask == local pool, plots and the
+report (--quick on a tiny config set)."""
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from experiments import config as xc
+from experiments import plots, report, runner
+
+pytestmark = pytest.mark.smoke
+
+BASE = """\
+scene: {name: quad}
+camera: {width: 24, height: 24, coc_px: 4}
+samples: {spp: 4, seed: 1}
+pipeline: {algorithm: tile}
+"""
+
+
+@pytest.fixture
+def store(tmp_path, monkeypatch):
+    """A private result store (worker processes inherit the environment)."""
+    monkeypatch.setenv("RAST5D_RESULTS", str(tmp_path / "results"))
+    return tmp_path / "results"
+
+
+def write(tmp_path, name, text):
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+# ---- schema --------------------------------------------------------------------------------------
+
+def test_unknown_key_names_key_file_and_line(tmp_path):
+    p = write(tmp_path, "c.yaml", "scene: {name: quad}\ncamera:\n  width: 24\n  heigth: 24\n")
+    with pytest.raises(xc.ConfigError, match=r"c\.yaml:4: unknown key 'camera\.heigth'"):
+        xc.load_config(p)
+    p = write(tmp_path, "d.yaml", "scene: {name: quad}\nhardware:\n  tex_cache:\n    size_bytes: 4096\n    wayz: 2\n")
+    with pytest.raises(xc.ConfigError, match=r"d\.yaml:5: unknown key 'hardware\.tex_cache\.wayz'"):
+        xc.load_config(p)
+    p = write(tmp_path, "e.yaml", "scene: {name: quad}\noutputs:\n  plots:\n    - {kind: line, x: a, y: b}\n"
+                                  "    - {kind: line, x: a, y: b, colour: red}\n")
+    with pytest.raises(xc.ConfigError, match=r"e\.yaml:5: unknown key 'outputs\.plots\.1\.colour'"):
+        xc.load_config(p)
+    p = write(tmp_path, "f.yaml", "scene: {name: quad}\nsweeps: {camera.coc_px: [1]}\n")
+    with pytest.raises(xc.ConfigError, match=r"f\.yaml:2: unknown key 'sweeps'"):
+        xc.load_config(p)
+
+
+def test_wrong_types_and_values_name_the_field(tmp_path):
+    p = write(tmp_path, "c.yaml", BASE.replace("spp: 4", "spp: many"))
+    with pytest.raises(xc.ConfigError, match=r"c\.yaml:3: samples\.spp: .*integer.*'many'"):
+        xc.load_config(p)
+    p = write(tmp_path, "c.yaml", BASE.replace("kind", "x").replace("spp: 4", "kind: halton, spp: 4"))
+    with pytest.raises(xc.ConfigError, match=r"samples\.kind.*'halton'"):
+        xc.load_config(p)
+    p = write(tmp_path, "c.yaml", BASE + "hardware: {tex_cache: {line_bytes: 48}}\n")
+    with pytest.raises(xc.ConfigError, match=r"c\.yaml:5: hardware: .*line_bytes.*power of two.*48"):
+        xc.load_config(p)
+    p = write(tmp_path, "c.yaml", BASE + "executor: {kind: dask}\n")
+    with pytest.raises(xc.ConfigError, match="executor.*address"):
+        xc.load_config(p)
+    with pytest.raises(xc.ConfigError, match=r"--set camera\.coc_px=big: camera\.coc_px"):
+        xc.load_config(write(tmp_path, "c.yaml", BASE), ["camera.coc_px=big"])
+
+
+def test_extends_deep_merges_recursively_and_rejects_cycles_and_missing_bases(tmp_path):
+    write(tmp_path, "base.yaml", BASE + "hardware: {tex_cache: {ways: 8}}\n")
+    (tmp_path / "sub").mkdir()
+    write(tmp_path, "sub/mid.yaml", "extends: ../base.yaml\ncamera: {coc_px: 9}\nhardware: {tex_cache: {count: 2}}\n")
+    leaf = write(tmp_path, "sub/leaf.yaml", "extends: mid.yaml\nsamples: {spp: 8}\n")
+    c = xc.load_config(leaf, ["hardware.setup.latency_cycles=3"])
+    assert c.name == "leaf"  # names are not inherited
+    assert (c.camera.width, c.camera.coc_px, c.samples.spp, c.samples.seed) == (24, 9, 8, 1)
+    hw = c.hardware_config()
+    assert (hw.tex_cache.ways, hw.tex_cache.count, hw.setup.latency_cycles) == (8, 2, 3)
+    assert hw.setup.throughput == 1.0  # untouched keys keep sim.HardwareConfig's defaults
+
+    write(tmp_path, "a.yaml", "extends: b.yaml\nscene: {name: quad}\n")
+    write(tmp_path, "b.yaml", "extends: a.yaml\n")
+    with pytest.raises(xc.ConfigError, match=r"extends: cycle .*a\.yaml -> .*b\.yaml -> .*a\.yaml"):
+        xc.load_config(tmp_path / "a.yaml")
+    p = write(tmp_path, "m.yaml", "scene: {name: quad}\nextends: nowhere.yaml\n")
+    with pytest.raises(xc.ConfigError, match=r"m\.yaml:2: extends: base config 'nowhere\.yaml' not found"):
+        xc.load_config(p)
+    p = write(tmp_path, "n.yaml", "extends: base.yaml\ncamera: {zoom: 2}\n")
+    with pytest.raises(xc.ConfigError, match=r"n\.yaml:2: unknown key 'camera\.zoom'"):
+        xc.load_config(p)
+    p = write(tmp_path, "o.yaml", "extends: base.yaml\ncamera: {width: wide}\n")
+    with pytest.raises(xc.ConfigError, match=r"o\.yaml:2: camera\.width"):
+        xc.load_config(p)
+
+
+# ---- sweeps --------------------------------------------------------------------------------------
+
+def test_sweep_cartesian_product_in_file_order():
+    pts = xc.sweep_points({"a": [1, 2], "b": ["x", "y", "z"]})
+    assert pts == [{"a": a, "b": b} for a in (1, 2) for b in ("x", "y", "z")]
+    assert xc.sweep_points({}) == [{}]
+
+
+def test_sweep_zip_groups_vary_together():
+    sweep = {"a": [1, 2, 3], "k": ["p", "q"], "b": [10, 20, 30], "zip": [["a", "b"]]}
+    pts = xc.sweep_points(sweep)
+    expected = [{"a": a, "b": b, "k": k} for a, b in ((1, 10), (2, 20), (3, 30)) for k in ("p", "q")]
+    assert pts == expected
+
+
+@pytest.mark.parametrize("sweep,message", [
+    ("camera.coc_px: [0, 4]\n  samples.spp: [4]\n  zip: [[camera.coc_px, samples.spp]]", "equal lengths"),
+    ("camera.coc_px: [0, 4]\n  zip: [[camera.coc_px, samples.spp]]", "'samples.spp' is not a swept key"),
+    ("camera.coc_px: 4", "expected a non-empty list"),
+    ("camera.cocpx: [1, 2]", "unknown key 'camera.cocpx'"),
+])
+def test_bad_sweeps_are_errors(tmp_path, sweep, message):
+    p = write(tmp_path, "c.yaml", BASE + "sweep:\n  " + sweep + "\n")
+    with pytest.raises(xc.ConfigError, match=message.replace(".", r"\.").replace("[", r"\[")):
+        xc.load_config(p)
+
+
+def test_expand_sweep_sets_whole_sections_and_dotted_keys(tmp_path):
+    p = write(tmp_path, "c.yaml", BASE + "sweep:\n  scene: [{name: quad}, {name: single_triangle}]\n"
+                                         "  samples.kind: [random, interleaved]\n  samples.n_lens: [null, 64]\n"
+                                         "  zip: [[samples.kind, samples.n_lens]]\n")
+    pts = xc.expand_sweep(xc.load_config(p))
+    got = [(c.scene.name, c.samples.kind, c.samples.n_lens) for _, c in pts]
+    assert got == [("quad", "random", None), ("quad", "interleaved", 64),
+                   ("single_triangle", "random", None), ("single_triangle", "interleaved", 64)]
+    assert len({xc.config_hash(c) for _, c in pts}) == 4
+
+
+def test_config_hash_ignores_threads_and_presentation_but_not_hardware(tmp_path):
+    p = write(tmp_path, "c.yaml", BASE)
+    h = xc.config_hash(xc.load_config(p))
+    assert xc.config_hash(xc.load_config(p, ["pipeline.threads=1", "outputs.title=x", "name=y"])) == h
+    assert xc.config_hash(xc.load_config(p, ["hardware.clock_ghz=2"])) != h
+    assert xc.config_hash(xc.load_config(p, ["camera.coc_px=5"])) != h
+
+
+# ---- store, cache, failures, executors -----------------------------------------------------------
+
+SWEEP = BASE + "sweep:\n  camera.coc_px: [0, 6]\n  pipeline.algorithm: [bruteforce, tile]\n"
+
+
+def test_second_run_computes_zero_points_and_force_recomputes(tmp_path, store):
+    c = xc.load_config(write(tmp_path, "s.yaml", SWEEP))
+    df1 = runner.run_sweep(c, workers=2, progress=False)
+    assert df1.attrs["summary"]["rendered"] == 4 and (df1["status"] == "ok").all()
+    df2 = runner.run_sweep(c, workers=2, progress=False)
+    assert df2.attrs["summary"] == {**df2.attrs["summary"], "rendered": 0, "cached": 4}
+    assert df2["raster.samples_tested"].tolist() == df1["raster.samples_tested"].tolist()
+    loaded = runner.load("s")
+    assert len(loaded) == 4 and list(loaded["pipeline.algorithm"]) == ["bruteforce", "tile"] * 2
+    for col in ("camera.coc_px", "camera.width", "samples.kind", "hardware.tex_cache.size_bytes", "ops.total",
+                "time.wall_s", "engine.version", "engine.git_rev", "config_hash"):
+        assert col in loaded.columns, col
+    assert loaded["camera.width"].tolist() == [24] * 4
+    # Counters against an independent count: bruteforce tests every sample of every covered pixel's
+    # candidates, so it tests at least as many samples as tile (tile is conservative but culls).
+    bf = loaded[loaded["pipeline.algorithm"] == "bruteforce"]["raster.samples_tested"].to_numpy()
+    tl = loaded[loaded["pipeline.algorithm"] == "tile"]["raster.samples_tested"].to_numpy()
+    assert (bf >= tl).all()
+    df3 = runner.run_sweep(c, workers=0, force=True, progress=False)
+    assert df3.attrs["summary"]["rendered"] == 4
+    # A changed point renders alone.
+    c2 = xc.load_config(write(tmp_path, "s.yaml", SWEEP.replace("[0, 6]", "[0, 6, 9]")))
+    assert runner.run_sweep(c2, workers=0, progress=False).attrs["summary"]["rendered"] == 2
+
+
+def test_a_failing_point_is_recorded_and_the_others_finish(tmp_path, store):
+    c = xc.load_config(write(tmp_path, "f.yaml", BASE + "sweep:\n  samples.spp: [4, 9999, 8]\n"))
+    df = runner.run_sweep(c, workers=2, progress=False)
+    assert df["status"].tolist() == ["ok", "error", "ok"]
+    assert "spp" in df["error"].iloc[1] and df["samples.spp"].tolist() == [4, 9999, 8]
+    assert df.attrs["summary"]["failed"] == 1
+    # Failed points are not cached: a rerun retries only them.
+    assert runner.run_sweep(c, workers=0, progress=False).attrs["summary"]["rendered"] == 1
+
+
+@pytest.mark.filterwarnings("ignore::DeprecationWarning", "ignore::ResourceWarning",
+                            "ignore::pytest.PytestUnraisableExceptionWarning")
+def test_dask_local_cluster_gives_the_same_rows_as_the_local_pool(tmp_path, store):
+    distributed = pytest.importorskip("distributed")
+    c = xc.load_config(write(tmp_path, "d.yaml", SWEEP))
+    local = runner.run_sweep(c, workers=2, progress=False, force=True)
+    with distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1, dashboard_address=None) as cl:
+        remote = runner.run_sweep(c, scheduler=cl.scheduler_address, progress=False, force=True)
+    assert remote.attrs["summary"]["rendered"] == 4
+    counters = [k for k in local.columns if k.split(".")[0] in ("raster", "ops", "tile", "setup", "bin")]
+    assert len(counters) > 10
+    pd.testing.assert_frame_equal(local[counters + ["config_hash"]], remote[counters + ["config_hash"]])
+
+
+def test_ctrl_c_stops_and_keeps_the_finished_points(tmp_path):
+    env = {**os.environ, "RAST5D_RESULTS": str(tmp_path / "results")}
+    cfg = write(tmp_path, "slow.yaml", BASE.replace("width: 24, height: 24", "width: 256, height: 256")
+                + "sweep:\n  samples.spp: [1, 2, 4096, 4096, 4096, 4096]\n  samples.seed: [1, 2]\n")
+    proc = subprocess.Popen([sys.executable, "-m", "experiments.cli", "run", str(cfg), "--workers", "1"],
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    points = tmp_path / "results" / "points"
+    deadline = time.time() + 120
+    while time.time() < deadline and len(list(points.glob("*.parquet"))) < 2:
+        time.sleep(0.1)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    df = pd.read_parquet(tmp_path / "results" / "slow.parquet")
+    assert 2 <= len(df) < 12 and (df["status"] == "ok").all()
+    assert "Traceback" not in err
+
+
+# ---- plots ---------------------------------------------------------------------------------------
+
+def _frame():
+    rows = []
+    for algo, k in (("a", 1.0), ("b", 2.0)):
+        for x in (1, 2, 4, 8):
+            rows.append({"pipeline.algorithm": algo, "camera.coc_px": float(x), "ops.total": k * x ** 2,
+                         "raster.samples_hit": 2.0 * x, "scene.name": "s", "status": "ok"})
+    return pd.DataFrame(rows)
+
+
+def test_derived_columns_accept_dotted_names():
+    df = plots.apply_derived(_frame(), {"per_hit": "ops.total / raster.samples_hit", "twice": "2 * per_hit"})
+    np.testing.assert_allclose(df["twice"], 2 * df["ops.total"] / df["raster.samples_hit"])
+    with pytest.raises(plots.PlotError, match="derived 'bad'.*no_such"):
+        plots.apply_derived(_frame(), {"bad": "no_such.column + 1"})
+
+
+def test_plot_kinds_write_png_pdf_and_tables_with_paper_values(tmp_path):
+    df = _frame()
+    spec = xc.PlotSpec(kind="line", x="camera.coc_px", y="ops.total", hue="pipeline.algorithm", logy=True,
+                       paper={"b": {1: 2.5, 8: "130"}})
+    res = plots.render_plot(spec, df, tmp_path / "line")
+    assert [p.suffix for p in res["files"]] == [".png", ".pdf"]
+    assert res["files"][0].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and res["files"][1].read_bytes()[:4] == b"%PDF"
+    table = "\n".join(res["markdown"])
+    assert "| camera.coc_px | a | b | b (paper) |" in table
+    assert "| 8 | 64 | 128 | 130 |" in table and "| 1 | 1 | 2 | 2.5 |" in table
+    for kind in ("bar", "scatter"):
+        spec = xc.PlotSpec(kind=kind, x="camera.coc_px", y="ops.total", hue="pipeline.algorithm", pareto=kind == "scatter")
+        assert plots.render_plot(spec, df, tmp_path / kind)["files"][0].exists()
+    spec = xc.PlotSpec(kind="bar", x="pipeline.algorithm", y=["ops.total", "raster.samples_hit"], stacked=True,
+                       where={"camera.coc_px": 2})
+    assert plots.render_plot(spec, df, tmp_path / "stacked")["files"]
+    spec = xc.PlotSpec(kind="table", x="camera.coc_px", y="ops.total", where={"pipeline.algorithm": ["b"]})
+    assert "| 4 | 32 |" in "\n".join(plots.render_plot(spec, df, None)["markdown"])
+    with pytest.raises(plots.PlotError, match="unknown column 'ops.totl'"):
+        plots.render_plot(xc.PlotSpec(kind="line", x="camera.coc_px", y="ops.totl"), df, None)
+
+
+def test_pareto_front_against_brute_force():
+    rng = np.random.default_rng(3)
+    x, y = rng.random(60), rng.random(60)
+    front = set(plots.pareto_front(x, y).tolist())
+    brute = {i for i in range(60) if not any((x[j] <= x[i] and y[j] < y[i]) or (x[j] < x[i] and y[j] <= y[i])
+                                             for j in range(60))}
+    assert front == brute
+
+
+def test_powerlaw_fit_recovers_known_exponents():
+    rows = [{"samples.spp": s, "metric.rmse": 0.3 * s ** -a, "samples.kind": k}
+            for k, a in (("random", 0.5), ("sobol", 0.75)) for s in (1, 2, 4, 8, 16)]
+    spec = xc.PlotSpec(kind="table", x="samples.spp", y="metric.rmse", hue="samples.kind", fit="powerlaw")
+    res = plots.render_plot(spec, pd.DataFrame(rows), None)
+    alphas = {f["hue"]: f["alpha"] for f in res["fits"]}
+    assert alphas["random"] == pytest.approx(0.5) and alphas["sobol"] == pytest.approx(0.75)
+
+
+# ---- report --------------------------------------------------------------------------------------
+
+PAGE = BASE + """\
+sweep:
+  camera.coc_px: [0, 6]
+  pipeline.algorithm: [bruteforce, tile]
+outputs:
+  page: tiny
+  title: "Tiny: samples tested against CoC"
+  text: "What and how."
+  derived: {tested_per_hit: "raster.samples_tested / raster.samples_hit"}
+  plots:
+    - {kind: line, x: camera.coc_px, y: tested_per_hit, hue: pipeline.algorithm, paper: {tile: {0: 1.5}}}
+    - {kind: table, x: camera.coc_px, y: ops.total, hue: pipeline.algorithm}
+"""
+
+
+def test_report_quick_writes_pages_figures_and_index(tmp_path, store):
+    cdir = tmp_path / "configs"
+    cdir.mkdir()
+    write(cdir, "tiny.yaml", PAGE.replace("width: 24, height: 24", "width: 200, height: 100"))
+    write(cdir, "tiny2.yaml", "extends: _base.yaml\noutputs: {page: tiny, title: Second, order: -1, "
+                              "plots: [{kind: bar, x: pipeline.algorithm, y: ops.total}]}\n")
+    write(cdir, "_base.yaml", PAGE)
+    rc = report.main(configs_dir=cdir, reports_dir=tmp_path / "reports", quick=True, workers=2)
+    assert rc == 0
+    page = (tmp_path / "reports" / "quick" / "paper" / "tiny.md").read_text()
+    assert page.index("## Second") < page.index("## Tiny: samples tested against CoC")  # order
+    assert "![" in page and "(paper)" in page and "rast5d report --only tiny --quick" in page
+    assert "--set camera.width=64 --set camera.height=32" in page  # quick keeps the aspect ratio
+    assert (tmp_path / "reports" / "quick" / "paper" / "tiny_1.png").exists()
+    assert (tmp_path / "reports" / "quick" / "paper" / "tiny2.pdf").exists()
+    index = (tmp_path / "reports" / "quick" / "README.md").read_text()
+    assert "[tiny](paper/tiny.md)" in index and "Second" in index
+    assert (store / "quick" / "tiny.parquet").exists() and not (store / "tiny.parquet").exists()
+    df = pd.read_parquet(store / "quick" / "tiny.parquet")
+    assert df["camera.width"].tolist() == [64] * 4
+
+
+def test_rast5d_run_writes_the_config_page(tmp_path, store):
+    p = write(tmp_path, "tiny.yaml", PAGE)
+    r = subprocess.run([sys.executable, "-m", "experiments.cli", "run", str(p), "--workers", "0",
+                        "--set", "camera.coc_px=3"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    page = (store / "pages" / "tiny" / "tiny.md").read_text()
+    assert "rast5d run" in page and "--set camera.coc_px=3" in page and "| camera.coc_px |" in page
+
+
+def test_experiments_load_names_known_tables(store):
+    import experiments
+
+    with pytest.raises(FileNotFoundError, match="no results for 'nothing'"):
+        experiments.load("nothing")
+
+
+def test_every_paper_config_is_valid():
+    paths = report.paper_configs()
+    assert paths
+    for p in paths:
+        c = xc.load_config(p)
+        assert c.outputs.page and c.outputs.plots, f"{p.name}: no report spec"
+        data, _ = xc.load_dict(p, report.quick_overrides(xc.load_dict(p)[0]))
+        xc.expand_sweep(xc.validate(data, str(p)))
