@@ -90,7 +90,7 @@ def render_point(config: RenderConfig, image_path: str | Path | None = None, thr
     scene, camera, table, pipeline = build(config)
     if threads is not None and config.pipeline.threads == 0:
         pipeline = pipeline.replace(threads=threads)
-    result = sim.render(scene, camera, table, pipeline)
+    result = sim.render(scene, camera, table, pipeline, hardware=config.hardware_config())
     row = config_columns(config, camera)
     row["resolved.lens_grid"] = result.config.get("lens_grid")
     row["scene.triangles"] = scene.n_triangles

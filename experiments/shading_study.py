@@ -1,4 +1,4 @@
-"""Shading and texture-cache results of issue 6 (part A), written to reports/paper/shading.md.
+"""Shading and texture-cache results of issue 6 (part A), written to reports/paper/shading_study.md.
 
     .venv/bin/python -m experiments.shading_study [--only table3 thrash texcache hakura multiview]
 
@@ -282,7 +282,7 @@ def main(argv=None):
         page += text + ["", f"_({key}: {time.time() - t0:.0f} s)_", ""]
         print("\n".join(text), flush=True)
     OUT.mkdir(parents=True, exist_ok=True)
-    path = OUT / ("shading.md" if len(args.only) == len(STUDIES) else f"shading_{'_'.join(args.only)}.md")
+    path = OUT / ("shading_study.md" if len(args.only) == len(STUDIES) else f"shading_study_{'_'.join(args.only)}.md")
     path.write_text("\n".join(page) + "\n")
     print(f"wrote {path.relative_to(REPO)}")
 
