@@ -334,3 +334,42 @@ def test_shading_counts_same_on_counting_path():
         out.append(({k: v for k, v in r.flat_stats.items() if k.startswith(("shade.", "tex."))}, r.image))
     assert out[0][0] == out[1][0]
     np.testing.assert_array_equal(out[0][1], out[1][1])
+
+
+def test_sample_distribution_texture_adds_one_fetch_per_lane():
+    # 000 §5.3: one extra nearest texel per shaded lane, at a 1:1 pixel mapping (coherent: it should
+    # hardly ever miss once its few lines are in).
+    scene, cam = _textured_scene()
+    table = sim.SampleTable.stratified(spp=8, seed=3)
+    base = _shade(scene, cam, table, "tile", "msaa", texture_count=1)
+    with_sd = _shade(scene, cam, table, "tile", "msaa", texture_count=1, texture_sample_distribution=True)
+    assert with_sd["shade.invocations"] == base["shade.invocations"]
+    assert with_sd["tex.fetches"] - base["tex.fetches"] == base["shade.invocations"]
+    assert with_sd["tex.cache.accesses"] - base["tex.cache.accesses"] == base["shade.invocations"]
+    only_sd = _shade(scene, cam, table, "tile", "msaa", texture_sample_distribution=True)
+    assert only_sd["tex.fetches"] == base["shade.invocations"]
+    assert only_sd["tex.cache.hit_rate"] > 0.9
+
+
+@pytest.mark.parametrize("shading", ["per_sample", "msaa", "per_lens_cell", "cache", "none"])
+def test_every_option_combination_renders_the_same_image(shading):
+    scene = models.named("spot_wall")
+    cam = sim.Camera(**{**scene.camera_hint, "width": 32, "height": 32, "coc_px": 5.0})
+    table = sim.SampleTable.interleaved(spp=8, n_lens=16, seed=1)
+    ref = None
+    for algo in ("bruteforce", "tile", "interleave"):
+        for count, filt, layout, sd, grid in ((0, "bilinear", "linear", True, 1), (1, "bilinear", "morton", False, 2),
+                                              (3, "trilinear", "blocked", True, 3), (4, "trilinear", "linear", False, 1)):
+            cfg = sim.PipelineConfig(algorithm=algo, shading=shading, texture_count=count, texture_filter=filt,
+                                     texture_layout=layout, texture_sample_distribution=sd, shading_grid=grid,
+                                     shading_cache_entries=16, bin_size=16)
+            hw = sim.HardwareConfig(tex_cache={"size_bytes": 2048, "ways": 0, "line_bytes": 32, "count": 3})
+            r = sim.render(scene, cam, table, cfg, hardware=hw)
+            if count == 3:
+                if ref is None:
+                    ref = r.image
+                np.testing.assert_array_equal(r.image, ref)
+            s = r.flat_stats
+            assert s["tex.cache.misses_conflict"] == 0  # fully associative
+            if shading != "none":
+                assert s["shade.invocations"] == 4 * s["shade.quad_requests"]

@@ -180,7 +180,9 @@ class ShadeState {
     const bool cache = sf_->mode == ShadingMode::kCache;
     const double step = cache ? 1.0 / sf_->grid : 1.0;  // lane spacing in pixels
     const int qx = static_cast<int>((quad >> 21) & 0x1FFFFF), qy = static_cast<int>(quad >> 42);
-    const double* J = &sf_->jac[static_cast<std::size_t>(tri_) * 4];
+    // No texture slots (only the sample-distribution texture): no uvs and no derivatives.
+    static constexpr double kNoJacobian[4] = {0, 0, 0, 0};
+    const double* J = sf_->tex_count > 0 ? &sf_->jac[static_cast<std::size_t>(tri_) * 4] : kNoJacobian;
     for (int l = 0; l < 4; ++l) {
       float u, v;
       if (first[l] >= 0) {
