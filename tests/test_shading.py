@@ -373,3 +373,21 @@ def test_every_option_combination_renders_the_same_image(shading):
             assert s["tex.cache.misses_conflict"] == 0  # fully associative
             if shading != "none":
                 assert s["shade.invocations"] == 4 * s["shade.quad_requests"]
+
+
+def test_bad_texture_inputs_raise_not_crash():
+    scene, cam = _triangle_scene(0.0, size=16)
+    table = sim.SampleTable.stratified(spp=4, seed=1)
+    bad_ids = models.Scene.from_arrays(scene.positions, uvs=np.full((1, 3, 2), np.float32(0.5)),
+                                       texture=np.ones((4, 4, 3), np.float32))
+    bad_ids.texture_ids = np.array([3], np.int32)  # past the one texture, set behind the validator's back
+    with pytest.raises(ValueError, match="tex_slots|texture"):
+        sim.render(bad_ids, cam, table, sim.PipelineConfig(shading="msaa", texture_count=1))
+    # Non-finite uvs from a duck-typed scene: defined (if meaningless) colours, no crash.
+    class Duck:
+        positions = scene.positions
+        uvs = np.full((1, 3, 2), np.nan, np.float32)
+        textures = [np.ones((4, 4, 3), np.float32)]
+        texture_ids = np.zeros(1, np.int32)
+    r = sim.render(Duck(), cam, table, sim.PipelineConfig(shading="msaa", texture_count=1))
+    assert r.flat_stats["shade.quad_requests"] > 0
