@@ -38,6 +38,18 @@ class RenderParams:
     table_has_lens: bool
     table_has_time: bool
     record_timing: bool  # record timing work records (Result.timing_records); docs/timing.md
+    # shading, texturing, texture cache (issue 6; docs/shading.md)
+    shading_mode: int  # 0 per_sample, 1 msaa, 2 per_lens_cell, 3 cache, 4 none
+    shading_cache_entries: int
+    shading_grid: int
+    tex_count: int
+    tex_filter: int  # 0 bilinear, 1 trilinear
+    tex_layout: int  # 0 linear, 1 blocked 4x4, 2 Morton 4x4 blocks
+    tex_sample_dist: int  # texture index of the sample-distribution texture, or -1
+    tex_cache_bytes: int
+    tex_cache_line_bytes: int
+    tex_cache_ways: int  # 0 = fully associative
+    tex_cache_count: int
     def __init__(self) -> None: ...
 
 def render(
@@ -49,6 +61,9 @@ def render(
     lens_index: npt.NDArray[np.int32],  # (P, P, spp) or empty
     lens_uv: npt.NDArray[np.float32],  # (N_lens, 2) or empty
     export_samples: bool = False,
+    uvs: npt.NDArray[np.float32] | None = None,  # (N, 3, 2) texture coordinates (issue 6)
+    tex_slots: npt.NDArray[np.int32] | None = None,  # (N, 4) texture index per slot, -1 unused
+    textures: list[npt.NDArray[np.float32]] = ...,  # (H, W, 1..4) linear images
 ) -> dict[str, Any]:
     """Returns {'image': (H, W, 3) float32, 'counters': {name: int}}, with params.record_timing
     'timing_records' (timing_record_dtype(), culled triangles then bins in raster order) and, with export_samples,
@@ -97,3 +112,13 @@ def timing_estimate(
 ) -> dict[str, float]:
     """Flat {'timing.cycles', 'timing.records', 'timing.cores', 'timing.<unit>.work',
     'timing.<unit>.busy_cycles', '...blocked_cycles', '...starved_cycles'}. ValueError for a bad config."""
+# ---- issue 6: texture cache and texture unit (docs/shading.md) ----
+def simulate_cache(lines: npt.NDArray[np.uint64], n_lines: int, ways: int) -> dict[str, Any]:
+    """One set-associative LRU cache (ways 0 = fully associative) over a stream of line indices:
+    {'accesses', 'hits', 'misses', 'cold', 'capacity', 'conflict': int, 'hit': bool (M,)}."""
+def triangle_lod(v0: npt.NDArray[np.float32], uvs: npt.NDArray[np.float32], tex_width: int, tex_height: int,
+                 near_w: float = 0.0) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.float64]]:
+    """Per-triangle level of detail and uv Jacobian (du/dx, du/dy, dv/dx, dv/dy) from the vertices
+    projected through the lens centre at shutter open."""
+def texel_address(height: int, width: int, layout: int, level: int, x: int, y: int) -> int:
+    """Byte address of a texel of a lone texture (layout 0 linear, 1 blocked 4x4, 2 Morton blocks)."""

@@ -8,6 +8,7 @@ from . import _core
 from .errors import ConfigError, check_float, check_int
 
 _OWNER = "PipelineConfig"
+SHADING_MODES = ("per_sample", "msaa", "per_lens_cell", "cache", "none")
 
 
 def algorithm_names() -> list[str]:
@@ -54,6 +55,30 @@ class PipelineConfig:
         "unit": "px", "doc": "Screen bin edge for threading (multiple of 8 and of hinterleave_tile)"})
     memory_limit_bytes: int = field(default=4 << 30, metadata={
         "unit": "bytes", "doc": "Refuse renders whose memory estimate exceeds this"})
+    # ---- shading and texturing (issue 6 part A; docs/shading.md) ----
+    shading: str = field(default="none", metadata={
+        "doc": "What costs a shader lane: 'per_sample' (supersampling), 'msaa' (one per pixel per visit), "
+               "'per_lens_cell' (one per pixel and lens-grid cell per visit), 'cache' (memoising "
+               "shading cache, 002 §2) or 'none' (not modelled: no shade.*/tex.* counts, fastest); "
+               "the image is the same in every mode"})
+    shading_cache_entries: int = field(default=1024, metadata={
+        "unit": "entries", "doc": "Shading cache (shading: cache): LRU entries, key (triangle, shading-grid point)"})
+    shading_grid: int = field(default=1, metadata={
+        "unit": "points/px", "doc": "Shading cache: shading-grid points per pixel edge (1 = pixel grid, 2 = 2x2 per pixel, ...)"})
+    texture_count: int = field(default=0, metadata={
+        "unit": "textures", "doc": "Textures read per shader lane, 0..4 (0: untextured, the vertex colour)"})
+    texture_filter: str = field(default="trilinear", metadata={
+        "doc": "'bilinear' (nearest mip level) or 'trilinear'; level of detail from analytic per-triangle derivatives"})
+    texture_layout: str = field(default="blocked", metadata={
+        "doc": "Texel layout in memory: 'linear' (row-major), 'blocked' (4x4 texel blocks) or 'morton' (4x4 blocks in Morton order)"})
+    texture_source: str = field(default="auto", metadata={
+        "doc": "Slot 0: 'auto' (the scene's texture, else procedural), 'scene' (untextured triangles stay so) or 'procedural'"})
+    texture_procedural_size: int = field(default=512, metadata={
+        "unit": "texels", "doc": "Edge of the procedural textures (square)"})
+    texture_uv_scale: float = field(default=1.0, metadata={
+        "unit": "1/world unit", "doc": "Planar uvs for triangles without a scene texture: texture repeats per world unit"})
+    texture_sample_distribution: bool = field(default=False, metadata={
+        "doc": "Also fetch the sample-distribution texture of 000 §5.3 (one texel per lane, 1:1 with pixels)"})
 
     def __post_init__(self):
         names = algorithm_names()
@@ -87,6 +112,18 @@ class PipelineConfig:
         if self.bin_size % 8 or self.bin_size % self.hinterleave_tile:
             raise ConfigError(f"{_OWNER}.bin_size: expected a multiple of 8 and of hinterleave_tile, got {self.bin_size}")
         check_int(_OWNER, "memory_limit_bytes", self.memory_limit_bytes, 1 << 20, 1 << 50)
+        for name, allowed in (("shading", SHADING_MODES), ("texture_filter", ("bilinear", "trilinear")),
+                              ("texture_layout", ("linear", "blocked", "morton")),
+                              ("texture_source", ("auto", "scene", "procedural"))):
+            if getattr(self, name) not in allowed:
+                raise ConfigError(f"{_OWNER}.{name}: expected one of {', '.join(allowed)}, got {getattr(self, name)!r}")
+        check_int(_OWNER, "shading_cache_entries", self.shading_cache_entries, 1, 1 << 24)
+        check_int(_OWNER, "shading_grid", self.shading_grid, 1, 16)
+        check_int(_OWNER, "texture_count", self.texture_count, 0, 4)
+        check_int(_OWNER, "texture_procedural_size", self.texture_procedural_size, 1, 8192)
+        check_float(_OWNER, "texture_uv_scale", self.texture_uv_scale, lo=0.0, lo_open=True, hi=1e6)
+        if not isinstance(self.texture_sample_distribution, bool):
+            raise ConfigError(f"{_OWNER}.texture_sample_distribution: expected a bool, got {self.texture_sample_distribution!r}")
 
     @classmethod
     def field_docs(cls) -> dict[str, dict]:

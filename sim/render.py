@@ -11,7 +11,8 @@ from . import _core
 from .camera import Camera
 from .errors import ConfigError, SceneInputError
 from .hardware import HardwareConfig
-from .pipeline import PipelineConfig
+from .pipeline import SHADING_MODES, PipelineConfig
+from .texturing import texture_inputs
 from .stats import flat_stats, nest
 
 _LENS_ENUM = {"square": _core.LensShape.square, "disk": _core.LensShape.disk, "hexagon": _core.LensShape.hexagon}
@@ -106,8 +107,8 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
            export_samples: bool = False, hardware: HardwareConfig | None = None, timing: bool = True) -> Result:
     """Render ``scene`` through ``camera`` with sample ``table``. Raises ConfigError/SceneInputError
     (ValueErrors naming the field and value) for bad input; KeyboardInterrupt on Ctrl-C.
-    ``hardware`` (default HardwareConfig()) feeds the timing model (docs/timing.md), whose figures
-    are in ``stats["timing"]``; ``timing=False`` skips it."""
+    ``hardware`` (default HardwareConfig()) supplies the texture-cache geometry and feeds the timing
+    model (docs/timing.md), whose figures are in ``stats["timing"]``; ``timing=False`` skips it."""
     if config is None:
         config = PipelineConfig()
     if hardware is None:
@@ -164,10 +165,23 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     else:
         lens_index = np.zeros((0,), np.int32)
         lens_uv = np.zeros((0, 2), np.float32)
+    # Shading, texturing and the texture cache (docs/shading.md).
+    params.shading_mode = SHADING_MODES.index(config.shading)
+    params.shading_cache_entries = config.shading_cache_entries
+    params.shading_grid = config.shading_grid
+    params.tex_count = config.texture_count
+    params.tex_filter = ("bilinear", "trilinear").index(config.texture_filter)
+    params.tex_layout = ("linear", "blocked", "morton").index(config.texture_layout)
+    tc = hardware.tex_cache
+    params.tex_cache_bytes, params.tex_cache_line_bytes = tc.size_bytes, tc.line_bytes
+    params.tex_cache_ways, params.tex_cache_count = tc.ways, tc.count
+    uvs, slots, textures, sample_dist, col = texture_inputs(scene, p0, col, config, samples)
+    params.tex_sample_dist = sample_dist
     col32 = col.astype(np.float32)
     t0 = time.perf_counter()
     try:
-        out = _core.render(params, v0, v1, col32, samples, lens_index, lens_uv, export_samples)
+        out = _core.render(params, v0, v1, col32, samples, lens_index, lens_uv, export_samples,
+                           uvs=uvs, tex_slots=slots, textures=textures)
     except ValueError as e:  # invalid_argument from the engine: name it as a config error
         raise ConfigError(str(e)) from None
     wall = time.perf_counter() - t0

@@ -44,6 +44,18 @@ DERIVED: tuple[Derived, ...] = (
                              s["tile.visited"])),
     Derived("tile.cells_cull_rate", "ratio", "tile.cells_culled / tile.cells_tested",
             lambda s: _ratio(s["tile.cells_culled"], s["tile.cells_tested"])),
+    # shading and texturing (docs/shading.md)
+    Derived("shade.quads_per_sample", "quads/sample",
+            "shade.quad_requests / depth.passes: quad shading requests relative to supersampling (001 Table 3)",
+            lambda s: _ratio(s["shade.quad_requests"], s["depth.passes"])),
+    Derived("shade.helper_share", "ratio", "shade.lanes_helper / shade.invocations (000 §9.5 quad waste)",
+            lambda s: _ratio(s["shade.lanes_helper"], s["shade.invocations"])),
+    Derived("shade.cache_hit_rate", "ratio", "shade.cache_hits / (shade.cache_hits + shade.cache_misses)",
+            lambda s: _ratio(s["shade.cache_hits"], s["shade.cache_hits"] + s["shade.cache_misses"])),
+    Derived("tex.cache.hit_rate", "ratio", "tex.cache.hits / tex.cache.accesses",
+            lambda s: _ratio(s["tex.cache.hits"], s["tex.cache.accesses"])),
+    Derived("tex.cache.bytes_per_pixel", "bytes/pixel", "tex.cache.bytes_fetched / frame.pixels",
+            lambda s: _ratio(s["tex.cache.bytes_fetched"], s["frame.pixels"])),
 )
 
 MEASURED = {

@@ -15,6 +15,8 @@
 #include "rast5d/probe.h"
 #include "rast5d/render.h"
 #include "rast5d/timing.h"
+#include "rast5d/shading.h"
+#include "rast5d/texture.h"
 
 namespace py = pybind11;
 using namespace rast5d;
@@ -98,7 +100,18 @@ PYBIND11_MODULE(_core, m) {
       .def_readwrite("count_optimal", &RenderParams::count_optimal)
       .def_readwrite("table_has_lens", &RenderParams::table_has_lens)
       .def_readwrite("table_has_time", &RenderParams::table_has_time)
-      .def_readwrite("record_timing", &RenderParams::record_timing);
+      .def_readwrite("record_timing", &RenderParams::record_timing)
+      .def_readwrite("shading_mode", &RenderParams::shading_mode)
+      .def_readwrite("shading_cache_entries", &RenderParams::shading_cache_entries)
+      .def_readwrite("shading_grid", &RenderParams::shading_grid)
+      .def_readwrite("tex_count", &RenderParams::tex_count)
+      .def_readwrite("tex_filter", &RenderParams::tex_filter)
+      .def_readwrite("tex_layout", &RenderParams::tex_layout)
+      .def_readwrite("tex_sample_dist", &RenderParams::tex_sample_dist)
+      .def_readwrite("tex_cache_bytes", &RenderParams::tex_cache_bytes)
+      .def_readwrite("tex_cache_line_bytes", &RenderParams::tex_cache_line_bytes)
+      .def_readwrite("tex_cache_ways", &RenderParams::tex_cache_ways)
+      .def_readwrite("tex_cache_count", &RenderParams::tex_cache_count);
 
   PYBIND11_NUMPY_DTYPE(TileWork, bin, triangles, tile_tests, sample_tests, depth_tests, quads, texel_fetches,
                        tex_misses, memory_bytes);
@@ -106,13 +119,26 @@ PYBIND11_MODULE(_core, m) {
   m.def(
       "render",
       [](const RenderParams& p, const FArr& v0, const FArr& v1, const FArr& colors, const FArr& samples,
-         const IArr& lens_index, const FArr& lens_uv, bool export_samples) {
+         const IArr& lens_index, const FArr& lens_uv, bool export_samples, std::optional<FArr> uvs,
+         std::optional<IArr> tex_slots, std::vector<FArr> textures) {
         require_shape(v0, {-1, 3, 3}, "v0");
         const py::ssize_t n = v0.shape(0);
         require_shape(v1, {n, 3, 3}, "v1");
         require_shape(colors, {n, 3, 3}, "colors");
         SampleTable table = make_table(samples, p.lens_grid, lens_index, lens_uv);
         SceneArrays scene{static_cast<int>(n), v0.data(), v1.data(), colors.data()};
+        if (uvs && tex_slots) {  // texturing (issue 6): uvs (n, 3, 2), tex_slots (n, 4), textures (H, W, C)
+          require_shape(*uvs, {n, 3, 2}, "uvs");
+          require_shape(*tex_slots, {n, kMaxTexSlots}, "tex_slots");
+          scene.uvs = uvs->data(), scene.tex_slots = tex_slots->data();
+        }
+        for (const FArr& t : textures) {
+          require_shape(t, {-1, -1, -1}, "textures[i]");
+          if (t.shape(0) < 1 || t.shape(1) < 1 || t.shape(2) < 1 || t.shape(2) > 4)
+            throw std::invalid_argument("textures[i]: expected (H, W, 1..4) with H, W >= 1");
+          scene.textures.push_back({t.data(), static_cast<int>(t.shape(0)), static_cast<int>(t.shape(1)),
+                                    static_cast<int>(t.shape(2))});
+        }
         std::optional<py::error_already_set> pending;
         RenderResult res;
         {
@@ -152,7 +178,8 @@ PYBIND11_MODULE(_core, m) {
         return out;
       },
       py::arg("params"), py::arg("v0"), py::arg("v1"), py::arg("colors"), py::arg("samples"),
-      py::arg("lens_index"), py::arg("lens_uv"), py::arg("export_samples") = false,
+      py::arg("lens_index"), py::arg("lens_uv"), py::arg("export_samples") = false, py::arg("uvs") = py::none(),
+      py::arg("tex_slots") = py::none(), py::arg("textures") = std::vector<FArr>(),
       "Render pixel-homogeneous triangles; returns {'image', 'counters'[, 'timing_records'][, "
       "'sample_depth', 'sample_triangle']}. The GIL is released; Ctrl-C interrupts.");
 
@@ -316,4 +343,66 @@ PYBIND11_MODULE(_core, m) {
       py::arg("tex_hit_latency"), py::arg("tex_miss_latency"), py::arg("cores") = 1,
       "Run the timing model on work records (units in timing_units() order); returns flat "
       "{'timing.cycles', 'timing.<unit>.busy_cycles', ...}. Raises ValueError for a bad configuration.");
+
+  // ---- issue 6: texture cache and texture unit, exposed for tests against Python references ----
+  m.def(
+      "simulate_cache",
+      [](const py::array_t<std::uint64_t, py::array::c_style | py::array::forcecast>& lines, std::uint64_t n_lines,
+         std::uint64_t ways) {
+        if (n_lines < 1) throw std::invalid_argument("n_lines: expected >= 1");
+        if (ways && n_lines % ways) throw std::invalid_argument("ways: expected 0 or a divisor of n_lines");
+        SetAssocCache cache(n_lines, ways);
+        py::array_t<bool> hit(lines.size());
+        for (py::ssize_t i = 0; i < lines.size(); ++i) hit.mutable_data()[i] = cache.access(lines.data()[i]);
+        const CacheStats& st = cache.stats();
+        py::dict d;
+        d["accesses"] = st.accesses, d["hits"] = st.hits, d["misses"] = st.misses;
+        d["cold"] = st.cold, d["capacity"] = st.capacity, d["conflict"] = st.conflict;
+        d["hit"] = hit;
+        return d;
+      },
+      py::arg("lines"), py::arg("n_lines"), py::arg("ways"),
+      "Run a stream of line indices through one set-associative LRU cache (ways 0 = fully "
+      "associative) with the 3C miss classification; {'accesses', 'hits', 'misses', 'cold', "
+      "'capacity', 'conflict', 'hit' (per access)}.");
+
+  m.def(
+      "triangle_lod",
+      [](const FArr& v0, const FArr& uvs, int tex_width, int tex_height, double near_w) {
+        require_shape(v0, {-1, 3, 3}, "v0");
+        const py::ssize_t n = v0.shape(0);
+        require_shape(uvs, {n, 3, 2}, "uvs");
+        if (tex_width < 1 || tex_height < 1) throw std::invalid_argument("tex_width/tex_height: expected >= 1");
+        py::array_t<float> lod(n);
+        py::array_t<double> jac({n, static_cast<py::ssize_t>(4)});
+        for (py::ssize_t i = 0; i < n; ++i) {
+          float X[3], Y[3], W[3];
+          for (int j = 0; j < 3; ++j) {
+            X[j] = v0.data()[i * 9 + j * 3], Y[j] = v0.data()[i * 9 + j * 3 + 1], W[j] = v0.data()[i * 9 + j * 3 + 2];
+          }
+          double J[4];
+          uv_jacobian(X, Y, W, uvs.data() + i * 6, near_w, J);
+          for (int k = 0; k < 4; ++k) jac.mutable_data()[i * 4 + k] = J[k];
+          lod.mutable_data()[i] = lod_from_jacobian(J, tex_width, tex_height);
+        }
+        return py::make_tuple(lod, jac);
+      },
+      py::arg("v0"), py::arg("uvs"), py::arg("tex_width"), py::arg("tex_height"), py::arg("near_w") = 0.0,
+      "Per-triangle analytic uv derivatives (lens centre, shutter open) and level of detail for a "
+      "tex_width x tex_height texture: (lod (n,), jacobian (n, 4) = du/dx, du/dy, dv/dx, dv/dy).");
+
+  m.def(
+      "texel_address",
+      [](int height, int width, int layout, int level, int x, int y) {
+        if (layout < 0 || layout > 2) throw std::invalid_argument("layout: expected 0..2");
+        std::vector<float> img(static_cast<std::size_t>(height) * width, 0.0f);
+        TextureSet ts;
+        ts.add(img.data(), height, width, 1);
+        ts.layout(static_cast<TexLayout>(layout));
+        if (level < 0 || level >= ts.levels(0)) throw std::invalid_argument("level: out of range");
+        return ts.address(0, level, x, y);
+      },
+      py::arg("height"), py::arg("width"), py::arg("layout"), py::arg("level"), py::arg("x"), py::arg("y"),
+      "Byte address of texel (x, y) of a level of a lone height x width texture (layout 0 linear, 1 "
+      "blocked 4x4, 2 Morton-ordered 4x4 blocks).");
 }

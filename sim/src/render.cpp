@@ -48,6 +48,71 @@ void validate_params(const RenderParams& p, const SampleTable& table) {
     fail("threads: expected 0 (all) .. 1024, got " + std::to_string(p.threads));
   if (!(p.focus_w > 0)) fail("focus_w: expected > 0, got " + std::to_string(p.focus_w));
   if (!(p.near_w > 0)) fail("near_w: expected > 0, got " + std::to_string(p.near_w));
+  if (p.shading_mode < 0 || p.shading_mode > 4)
+    fail("shading_mode: expected 0..4, got " + std::to_string(p.shading_mode));
+  if (p.shading_cache_entries < 1 || p.shading_cache_entries > (1 << 24))
+    fail("shading_cache_entries: expected 1..16777216, got " + std::to_string(p.shading_cache_entries));
+  if (p.shading_grid < 1 || p.shading_grid > 16)
+    fail("shading_grid: expected 1..16, got " + std::to_string(p.shading_grid));
+  if (p.tex_count < 0 || p.tex_count > kMaxTexSlots)
+    fail("tex_count: expected 0..4, got " + std::to_string(p.tex_count));
+  if (p.tex_filter < 0 || p.tex_filter > 1) fail("tex_filter: expected 0..1, got " + std::to_string(p.tex_filter));
+  if (p.tex_layout < 0 || p.tex_layout > 2) fail("tex_layout: expected 0..2, got " + std::to_string(p.tex_layout));
+  const int lb = p.tex_cache_line_bytes;
+  if (lb < 4 || lb > 4096 || (lb & (lb - 1))) fail("tex_cache_line_bytes: expected a power of two in 4..4096");
+  if (p.tex_cache_bytes < lb || p.tex_cache_bytes % lb)
+    fail("tex_cache_bytes: expected a positive multiple of the line size, got " + std::to_string(p.tex_cache_bytes));
+  if (p.tex_cache_ways < 0 || (p.tex_cache_ways && (p.tex_cache_bytes / lb) % p.tex_cache_ways))
+    fail("tex_cache_ways: expected 0 or a divisor of the number of lines, got " + std::to_string(p.tex_cache_ways));
+  if (p.tex_cache_count < 1 || p.tex_cache_count > 1024)
+    fail("tex_cache_count: expected 1..1024, got " + std::to_string(p.tex_cache_count));
+}
+
+// The per-render shading constants: textures with mip chains and addresses, per-triangle texture
+// slots, uvs, analytic uv derivatives and levels of detail (texture.h).
+static void build_shade_frame(const RenderParams& p, const SceneArrays& scene, const std::vector<TriSetup>& setups,
+                              const std::vector<char>& alive, int n_bins, ShadeFrame& sf) {
+  sf.mode = static_cast<ShadingMode>(p.shading_mode);
+  sf.grid = p.shading_grid;
+  sf.cache_entries = p.shading_cache_entries;
+  sf.filter = static_cast<TexFilter>(p.tex_filter);
+  sf.line_bytes = p.tex_cache_line_bytes;
+  const bool have_tex = scene.uvs && scene.tex_slots && !scene.textures.empty();
+  sf.tex_count = have_tex ? p.tex_count : 0;
+  sf.sample_dist_tex = !scene.textures.empty() ? p.tex_sample_dist : -1;
+  if (sf.sample_dist_tex >= static_cast<int>(scene.textures.size()))
+    throw std::invalid_argument("tex_sample_dist: no texture " + std::to_string(sf.sample_dist_tex));
+  if (!sf.textured()) return;
+  for (const auto& t : scene.textures) sf.textures.add(t.data, t.height, t.width, t.channels);
+  sf.textures.layout(static_cast<TexLayout>(p.tex_layout));
+  if (sf.mode != ShadingMode::kNone) sf.streams.assign(static_cast<std::size_t>(n_bins), {});
+  if (sf.tex_count == 0) return;
+  const std::size_t n = static_cast<std::size_t>(scene.n);
+  sf.uvs.assign(scene.uvs, scene.uvs + n * 6);
+  sf.tex_ids.assign(scene.tex_slots, scene.tex_slots + n * kMaxTexSlots);
+  for (std::size_t i = 0; i < sf.tex_ids.size(); ++i) {
+    std::int32_t& id = sf.tex_ids[i];
+    if (static_cast<int>(i % kMaxTexSlots) >= sf.tex_count) {
+      id = -1;
+    } else if (id < -1 || id >= sf.textures.size()) {
+      throw std::invalid_argument("tex_slots: triangle " + std::to_string(i / kMaxTexSlots) + " uses texture " +
+                                  std::to_string(id) + ", expected -1.." + std::to_string(sf.textures.size() - 1));
+    }
+  }
+  sf.jac.assign(n * 4, 0.0);
+  sf.lod.assign(n * kMaxTexSlots, 0.0f);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!alive[i]) continue;
+    const TriSetup& t = setups[i];
+    uv_jacobian(t.X, t.Y, t.W, &sf.uvs[i * 6], p.near_w, &sf.jac[i * 4]);
+    for (int k = 0; k < kMaxTexSlots; ++k) {
+      const int id = sf.tex_ids[i * kMaxTexSlots + k];
+      if (id >= 0) {
+        const MipLevel& l0 = sf.textures[id].levels[0];
+        sf.lod[i * kMaxTexSlots + k] = lod_from_jacobian(&sf.jac[i * 4], l0.w, l0.h);
+      }
+    }
+  }
 }
 
 RenderResult render(const RenderParams& p, const SceneArrays& scene, const SampleTable& table,
@@ -104,11 +169,15 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
       for (int bx = t.bx0 / B; bx <= (t.bx1 - 1) / B; ++bx) bin_lists[by * bins_x + bx].push_back(i);
   }
 
+  ShadeFrame shade_frame;
+  build_shade_frame(p, scene, setups, alive, n_bins, shade_frame);
+
   // ---- traversal: workers take whole bins ----
   // Timing records per bin: each bin is rasterized by exactly one worker, so its stream is
   // written without locks and its content does not depend on the thread count.
   std::vector<std::vector<TileWork>> bin_records(p.record_timing ? n_bins : 0);
   std::vector<ThreadState> states(n_threads);
+  for (auto& s : states) s.shade.attach(&shade_frame, &s.counters);
   std::atomic<int> next_bin{0};
   std::atomic<bool> cancel{false};
   std::atomic<int> running{n_threads};
@@ -126,6 +195,7 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
         const int bx = b % bins_x, by = b / bins_x;
         BinRect r{bx * B, by * B, std::min(p.width, (bx + 1) * B), std::min(p.height, (by + 1) * B)};
         ts.buffers.begin(r, table.spp());
+        ts.shade.begin_bin(b);
         for (std::uint32_t i : bin_lists[b]) {
           if (cancel.load(std::memory_order_relaxed)) break;  // Ctrl-C: stop within one triangle
           const TriSetup& tri = setups[i];
@@ -141,6 +211,7 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
           w.triangles = home ? 1u : 0u;  // setup is done once, charged in the triangle's first bin
           bin_records[b].push_back(w);
         }
+        ts.shade.close_visit();  // algorithms end their visits; this only guards the contract
         ts.buffers.resolve(result.image.data(), p.width);
         if (export_samples)
           ts.buffers.export_samples(result.sample_depth.data(), result.sample_triangle.data(), p.width);
@@ -191,6 +262,19 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
     culled.triangles = 1;
     result.timing_records.insert(result.timing_records.end(), static_cast<std::size_t>(scene.n) - live.size(), culled);
     for (const auto& v : bin_records) result.timing_records.insert(result.timing_records.end(), v.begin(), v.end());
+  }
+  if (shade_frame.textured() && shade_frame.mode != ShadingMode::kNone && !result.interrupted) {
+    const std::uint64_t lines = static_cast<std::uint64_t>(p.tex_cache_bytes / p.tex_cache_line_bytes);
+    const CacheStats cs = simulate_texture_caches(shade_frame.streams, p.tex_cache_count, lines,
+                                                  static_cast<std::uint64_t>(p.tex_cache_ways));
+    Counters& c = result.counters;
+    c[Counter::tex_cache_accesses] = cs.accesses;
+    c[Counter::tex_cache_hits] = cs.hits;
+    c[Counter::tex_cache_misses] = cs.misses;
+    c[Counter::tex_cache_misses_cold] = cs.cold;
+    c[Counter::tex_cache_misses_capacity] = cs.capacity;
+    c[Counter::tex_cache_misses_conflict] = cs.conflict;
+    c[Counter::tex_cache_bytes_fetched] = cs.misses * static_cast<std::uint64_t>(p.tex_cache_line_bytes);
   }
   return result;
 }

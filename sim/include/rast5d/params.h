@@ -41,6 +41,18 @@ struct RenderParams {
   // Timing model (issue 6 part B, docs/timing.md): record one work record per (triangle, bin)
   // visit for the cycle-approximate timing model.
   bool record_timing = true;
+  // Shading, texturing and the texture cache (issue 6 part A; docs/shading.md).
+  int shading_mode = 4;             // ShadingMode: 0 per_sample, 1 msaa, 2 per_lens_cell, 3 cache, 4 none
+  int shading_cache_entries = 1024; // cache mode: LRU entries
+  int shading_grid = 1;             // cache mode: shading-grid points per pixel edge
+  int tex_count = 0;                // texture slots per shader, 0..4 (0: untextured)
+  int tex_filter = 1;               // TexFilter: 0 bilinear, 1 trilinear
+  int tex_layout = 1;               // TexLayout: 0 linear, 1 blocked 4x4, 2 blocked 4x4 Morton
+  int tex_sample_dist = -1;         // texture index of the 000 §5.3 sample-distribution texture, or -1
+  int tex_cache_bytes = 16384;      // hardware.tex_cache
+  int tex_cache_line_bytes = 64;
+  int tex_cache_ways = 4;           // 0 = fully associative
+  int tex_cache_count = 1;
 };
 
 }  // namespace rast5d

@@ -37,6 +37,7 @@
 #include "rast5d/sample_table.h"
 #include "rast5d/sample_test.h"
 #include "rast5d/setup.h"
+#include "rast5d/shading.h"
 
 namespace rast5d {
 
@@ -49,6 +50,7 @@ struct Frame {
 struct ThreadState {
   Counters counters;
   BinBuffers buffers;
+  ShadeState shade;  // the open shading visit, shading cache, texture stream (shading.h)
 };
 
 // The sample test and backend, shared by every algorithm.
@@ -65,7 +67,7 @@ class SamplePipeline {
   using F = typename A::f32;
 
   SamplePipeline(const Frame& f, ThreadState& ts)
-      : f_(f), c_(ts.counters), buf_(ts.buffers), cap_(std::max(kBatch, f.table.spp())) {
+      : f_(f), c_(ts.counters), buf_(ts.buffers), sh_(ts.shade), cap_(std::max(kBatch, f.table.spp())) {
     for (auto* v : {&gx_, &gy_, &gu_, &gv_, &gt_, &bdet_}) v->resize(cap_);
     for (auto* v : {&bpx_, &bpy_, &bs_, &bl_}) v->resize(cap_);
     be_.resize(3 * static_cast<std::size_t>(cap_));
@@ -160,6 +162,16 @@ class SamplePipeline {
       if (n_ > 0) run_batch(false);
       n_ = 0;
     }
+  }
+
+  // The end of a shading visit (shading.h): every sample pushed since the previous end_visit()
+  // belongs to one visit, whose shading work is counted now. Algorithms call it when they leave a
+  // screen tile (or finish a pass) for the current triangle, and always before rasterize() returns.
+  // Without a shading model (mode none) it does nothing, not even flush(): callers still flush.
+  inline void end_visit() {
+    if (!sh_.counting()) return;
+    flush();
+    sh_.close_visit();
   }
 
  private:
@@ -352,11 +364,43 @@ class SamplePipeline {
     buf_.set_triangle(slot, static_cast<std::int32_t>(tri.index));
     float* dst = buf_.color(slot);
     for (int ch = 0; ch < 3; ++ch) dst[ch] = raw(out[ch]);
+    if (const ShadeFrame* sf = sh_.frame(); sf && (sh_.counting() || sf->tex_count > 0)) shade_record(*sf, tri, raw(e[0]), raw(e[1]), raw(e[2]), raw(sum), px, py, s, dst);
+  }
+
+  // Texture the sample's colour (a function of triangle and sample only: the image stays the same
+  // for every algorithm and shading mode) and hand the sample to the open shading visit.
+  void shade_record(const ShadeFrame& sf, const TriSetup& tri, float e0, float e1, float e2, float sum, int px, int py,
+                    int s, float* dst) {
+    ShadeState::Rec r{px, py, s, 0, 0.0f, 0.0f, 0.0f, 0.0f};
+    const float inv = 1.0f / sum;
+    const float b0 = e0 * inv, b1 = e1 * inv, b2 = e2 * inv;
+    if (!sh_.counting() && sf.tex_count == 0) return;
+    if (sf.mode == ShadingMode::kPerLensCell) r.cell = f_.table.pixel(px, py).cell[s];
+    if (sf.mode == ShadingMode::kCache) {  // the hit point seen through the lens centre at shutter open
+      const float X = b0 * tri.X[0] + b1 * tri.X[1] + b2 * tri.X[2];
+      const float Y = b0 * tri.Y[0] + b1 * tri.Y[1] + b2 * tri.Y[2];
+      const float W = b0 * tri.W[0] + b1 * tri.W[1] + b2 * tri.W[2];
+      r.gx = X / W, r.gy = Y / W;
+    }
+    if (sf.tex_count > 0) {
+      const float* uv = &sf.uvs[static_cast<std::size_t>(tri.index) * 6];
+      r.u = b0 * uv[0] + b1 * uv[2] + b2 * uv[4];
+      r.v = b0 * uv[1] + b1 * uv[3] + b2 * uv[5];
+      for (int k = 0; k < sf.tex_count; ++k) {
+        const int id = sf.tex_ids[static_cast<std::size_t>(tri.index) * kMaxTexSlots + k];
+        if (id < 0) continue;
+        float t[3];
+        sf.textures.sample(id, sf.lod[static_cast<std::size_t>(tri.index) * kMaxTexSlots + k], sf.filter, r.u, r.v, t);
+        for (int ch = 0; ch < 3; ++ch) dst[ch] *= t[ch];
+      }
+    }
+    if (sh_.counting()) sh_.record(tri.index, r);
   }
 
   const Frame& f_;
   Counters& c_;
   BinBuffers& buf_;
+  ShadeState& sh_;
   // Pending batch (fast path).
   const TriSetup* tri_ = nullptr;
   bool sheared_ = false;

@@ -1,5 +1,6 @@
 // BRUTEFORCE (001_3248aaf17c219d5e.txt §6): test every sample of every pixel inside the triangle's
-// conservative screen bounds over the whole lens and shutter. No tile test.
+// conservative screen bounds over the whole lens and shutter. No tile test. Shading visit
+// (shading.h): the whole triangle in the bin, since each pixel is walked once per triangle.
 #include <algorithm>
 #include <vector>
 
@@ -19,6 +20,7 @@ class BruteForce final : public Traversal {
     pipe_.begin(tri);
     for (int py = y0; py < y1; ++py)
       for (int px = x0; px < x1; ++px) pipe_.push_pixel(px, py, f_.table.pixel(px, py));
+    pipe_.end_visit();  // a visit = the triangle's pixels in this bin, each walked once
     pipe_.flush();
   }
 

@@ -79,7 +79,8 @@ class Interleave final : public Traversal {
       } else {
         pass(tri, i, xs, ys, x0, x1, y0, y1);
       }
-      pipe_.flush();  // xs / ys are this iteration's
+      pipe_.end_visit();  // a visit = one lens-coordinate pass
+      pipe_.flush();      // xs / ys are this iteration's
     }
     pipe_.flush();
     if (charge_setup) {

@@ -47,6 +47,7 @@ class Interval final : public Traversal {
               for (int k = ps.cell_offsets[c]; k < ps.cell_offsets[c + 1]; ++k)
                 pipe_.push(px, py, ps, ps.cell_order[k]);
             }
+      pipe_.end_visit();  // a visit = one lens-cell pass
     }
     pipe_.flush();
     if (charge_setup) {

@@ -71,6 +71,7 @@ class Laine final : public Traversal {
                 c_[Counter::tile_samples_optimal] += in_exact_region(tri, fp, f_.fc, ps, cand_[i], tx, ty, T);
             for (int i = 0; i < n; ++i) pipe_.push(px, py, ps, cand_[i]);
           }
+        pipe_.end_visit();  // a visit = one tile
       }
     pipe_.flush();
   }

@@ -77,7 +77,7 @@ class Tile final : public Traversal {
     const int y0 = std::max(tri.by0, bin.y0), y1 = std::min(tri.by1, bin.y1);
     for (int ty = (y0 / T) * T; ty < y1; ty += T)
       for (int tx = (x0 / T) * T; tx < x1; tx += T)
-        fn(tx, ty, std::max(tx, x0), std::max(ty, y0), std::min(tx + T, x1), std::min(ty + T, y1));
+        fn(tx, ty, std::max(tx, x0), std::max(ty, y0), std::min(tx + T, x1), std::min(ty + T, y1)), pipe_.end_visit();  // a shading visit = one tile
   }
 
   // ---- 2D: standard tile test, every sample of accepted tiles --------------------------------
