@@ -93,6 +93,19 @@ def memory_estimate(camera: Camera, spp: int, n_triangles: int, config: Pipeline
     return int(image + bins + setup + bin_lists + export)
 
 
+def _issue5_params(params, config: PipelineConfig) -> None:
+    """Time/lens intervals, clip box, depth intervals and HiZ (docs/intervals.md)."""
+    params.motion_intervals = config.motion_test == "intervals"
+    params.time_splits = config.time_splits
+    for axis, (lo, hi) in config.clip.items():
+        setattr(params, f"clip_{axis}_lo", float(lo))
+        setattr(params, f"clip_{axis}_hi", float(hi))
+    params.zhat_planes = config.zhat == "planes"
+    params.zhat_stats = config.zhat_stats
+    params.hiz_enabled = config.hiz["enabled"]
+    params.hiz_tile = config.hiz["tile_size"]
+
+
 def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *,
            export_samples: bool = False) -> Result:
     """Render ``scene`` through ``camera`` with sample ``table``. Raises ConfigError/SceneInputError
@@ -138,6 +151,7 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     params.backface_cull = config.backface_cull
     params.exact_ops = config.op_count == "exact"
     params.count_optimal = config.count_optimal
+    _issue5_params(params, config)
     # The engine skips a dimension only where skipping is exact: every sample has u = v = 0 (no
     # lens) or t = 0 (no time). A constant non-zero t still places moving triangles at that t.
     params.table_has_lens = bool(np.any(samples[..., 2:4] != 0))

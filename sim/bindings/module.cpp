@@ -96,7 +96,22 @@ PYBIND11_MODULE(_core, m) {
       .def_readwrite("exact_ops", &RenderParams::exact_ops)
       .def_readwrite("count_optimal", &RenderParams::count_optimal)
       .def_readwrite("table_has_lens", &RenderParams::table_has_lens)
-      .def_readwrite("table_has_time", &RenderParams::table_has_time);
+      .def_readwrite("table_has_time", &RenderParams::table_has_time)
+      // issue 5
+      .def_readwrite("time_splits", &RenderParams::time_splits)
+      .def_readwrite("motion_intervals", &RenderParams::motion_intervals)
+      .def_readwrite("clip_u_lo", &RenderParams::clip_u_lo)
+      .def_readwrite("clip_u_hi", &RenderParams::clip_u_hi)
+      .def_readwrite("clip_v_lo", &RenderParams::clip_v_lo)
+      .def_readwrite("clip_v_hi", &RenderParams::clip_v_hi)
+      .def_readwrite("clip_t_lo", &RenderParams::clip_t_lo)
+      .def_readwrite("clip_t_hi", &RenderParams::clip_t_hi)
+      .def_readwrite("zhat_planes", &RenderParams::zhat_planes)
+      .def_readwrite("zhat_stats", &RenderParams::zhat_stats)
+      .def_readwrite("hiz_enabled", &RenderParams::hiz_enabled)
+      .def_readwrite("hiz_tile", &RenderParams::hiz_tile)
+      .def_readwrite("query_first", &RenderParams::query_first)
+      .def_readwrite("query_mode", &RenderParams::query_mode);
 
   m.def(
       "render",
@@ -107,6 +122,7 @@ PYBIND11_MODULE(_core, m) {
         require_shape(v1, {n, 3, 3}, "v1");
         require_shape(colors, {n, 3, 3}, "colors");
         SampleTable table = make_table(samples, p.lens_grid, lens_index, lens_uv);
+        table.set_time_strata(p.time_splits);  // (lens cell, time stratum) index, issue 5
         SceneArrays scene{static_cast<int>(n), v0.data(), v1.data(), colors.data()};
         std::optional<py::error_already_set> pending;
         RenderResult res;
