@@ -107,7 +107,7 @@ def _issue5_params(params, config: PipelineConfig) -> None:
 
 
 def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *,
-           export_samples: bool = False) -> Result:
+           export_samples: bool = False, query: tuple[int, int] | None = None) -> Result:
     """Render ``scene`` through ``camera`` with sample ``table``. Raises ConfigError/SceneInputError
     (ValueErrors naming the field and value) for bad input; KeyboardInterrupt on Ctrl-C."""
     if config is None:
@@ -152,6 +152,8 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     params.exact_ops = config.op_count == "exact"
     params.count_optimal = config.count_optimal
     _issue5_params(params, config)
+    if query is not None:  # (first query triangle, mode): set by sim.occlusion_query only
+        params.query_first, params.query_mode = int(query[0]), int(query[1])
     # The engine skips a dimension only where skipping is exact: every sample has u = v = 0 (no
     # lens) or t = 0 (no time). A constant non-zero t still places moving triangles at that t.
     params.table_has_lens = bool(np.any(samples[..., 2:4] != 0))

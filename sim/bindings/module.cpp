@@ -14,6 +14,9 @@
 #include "rast5d/kernel_costs.h"
 #include "rast5d/probe.h"
 #include "rast5d/render.h"
+#include "rast5d/conservative.h"
+#include "rast5d/intervals.h"
+#include <cstring>
 
 namespace py = pybind11;
 using namespace rast5d;
@@ -268,4 +271,43 @@ PYBIND11_MODULE(_core, m) {
       py::arg("trials") = 200, py::arg("seed") = 1,
       "Tile-test kernels with configuration-dependent costs: {name: (runs, mismatches, min documented, "
       "max documented)}; counted == documented on every run means mismatches == 0.");
+
+  // ---- issue 5: conservative rasterization mode (002 Fig. 2) ----
+  m.def(
+      "conservative_raster",
+      [](const RenderParams& p, const FArr& v0, const FArr& v1, bool reduce, std::uint64_t max_records) {
+        require_shape(v0, {-1, 3, 3}, "v0");
+        const py::ssize_t n = v0.shape(0);
+        require_shape(v1, {n, 3, 3}, "v1");
+        if (p.width < 1 || p.height < 1 || p.width > 16384 || p.height > 16384)
+          throw std::invalid_argument("width/height: expected 1..16384");
+        if (p.time_splits < 1 || p.time_splits > iv::kMaxSplits)
+          throw std::invalid_argument("time_splits: expected 1..16, got " + std::to_string(p.time_splits));
+        std::vector<float> colors(static_cast<std::size_t>(n) * 9, 0.0f);
+        SceneArrays scene{static_cast<int>(n), v0.data(), v1.data(), colors.data()};
+        ConservativeResult res;
+        {
+          py::gil_scoped_release release;
+          res = conservative_raster(p, scene, reduce, max_records);
+        }
+        py::dict out;
+        out["counters"] = counters_to_dict(res.counters);
+        if (reduce) {
+          py::array_t<float> tz({p.height, p.width, 4});
+          std::copy(res.tz_box.begin(), res.tz_box.end(), tz.mutable_data());
+          py::array_t<std::int32_t> cnt({p.height, p.width});
+          std::copy(res.count.begin(), res.count.end(), cnt.mutable_data());
+          out["tz_box"] = tz;
+          out["count"] = cnt;
+        } else {
+          const std::size_t bytes = res.records.size() * sizeof(ConservativeRecord);
+          py::array_t<std::uint8_t> raw(static_cast<py::ssize_t>(bytes));
+          if (bytes) std::memcpy(raw.mutable_data(), res.records.data(), bytes);
+          out["records"] = raw;
+          out["record_bytes"] = sizeof(ConservativeRecord);
+        }
+        return out;
+      },
+      py::arg("params"), py::arg("v0"), py::arg("v1"), py::arg("reduce"), py::arg("max_records"),
+      "Conservative rasterization (issue 5): fragment records or per-pixel tz-boxes.");
 }
