@@ -34,7 +34,7 @@ ConservativeResult conservative_raster(const RenderParams& p, const SceneArrays&
   iv::MotionSetup ms;
   iv::TileIntervals ti;
   iv::MovingPlanes planes;
-  const double lens_lo = fc.lens_active ? -1.0 : 0.0, lens_hi = fc.lens_active ? 1.0 : 0.0;
+  const double lens_lo = -1.0, lens_hi = 1.0;  // in focus / no blur: every lens point
   for (int i = 0; i < scene.n; ++i) {
     TriSetup tri;
     const float* v0 = scene.v0 + static_cast<std::size_t>(i) * 9;
@@ -80,7 +80,7 @@ ConservativeResult conservative_raster(const RenderParams& p, const SceneArrays&
           t0 = std::max(0.0, clip.t_lo), t1 = std::min(1.0, clip.t_hi);
           if (t1 < t0) continue;
         }
-        if (!lens && fc.lens_active) {  // in focus: every lens point of the clip box
+        if (!lens) {  // in focus: every lens point of the clip box
           u0 = std::max(-1.0, clip.u_lo), u1 = std::min(1.0, clip.u_hi);
           w0 = std::max(-1.0, clip.v_lo), w1 = std::min(1.0, clip.v_hi);
         }
