@@ -34,8 +34,9 @@ INTERLEAVED = ("interleave", "hinterleave", "tile_interleaved")
 
 # Issue 5 variants: the scene column reads "<scene>+<variant>" and the variant adds pipeline settings.
 VARIANTS = {
-    "splits1": {"time_splits": 1},
-    "splits16": {"time_splits": 16},
+    "splits4": {"time_splits": 4},
+    "splits16": {"time_splits": 16, "time_strata": 16},
+    "strata1": {"time_strata": 1},
     "bounds": {"motion_test": "bounds"},
     "clip": {"clip": {"u": [-0.5, 0.75], "v": [-1.0, 0.5], "t": [0.125, 0.75]}},
     "hiz": {"hiz": {"enabled": True, "tile_size": 8}, "zhat_stats": True},

@@ -58,9 +58,12 @@ class PipelineConfig:
     motion_test: str = field(default="intervals", metadata={
         "doc": "tile, moving triangles: 'intervals' (t̂ and lens sets per time sub-interval, samples "
                "indexed by time stratum) or 'bounds' (h_i lines over the shutter ends, no t̂)"})
-    time_splits: int = field(default=4, metadata={
+    time_splits: int = field(default=1, metadata={
         "doc": "Time sub-intervals S per shutter (1, 2, 4, 8, 16): tile computes t̂ (and 5D lens sets) "
-               "per sub-interval; the sample table is indexed by S time strata per lens cell"})
+               "per sub-interval"})
+    time_strata: int = field(default=8, metadata={
+        "doc": "Time strata per lens cell in the sample-table index (1..64, a multiple of time_splits): "
+               "tile walks only the strata that overlap t̂"})
     clip: dict = field(default_factory=dict, metadata={
         "doc": "User clip box {u: [lo, hi], v: [lo, hi], t: [lo, hi]} (002 §2; any subset): samples "
                "outside it are never hit, for every algorithm"})
@@ -113,6 +116,10 @@ class PipelineConfig:
             raise ConfigError(f"{_OWNER}.motion_test: expected 'intervals' or 'bounds', got {self.motion_test!r}")
         if isinstance(self.time_splits, bool) or self.time_splits not in (1, 2, 4, 8, 16):
             raise ConfigError(f"{_OWNER}.time_splits: expected 1, 2, 4, 8 or 16, got {self.time_splits!r}")
+        if (isinstance(self.time_strata, bool) or self.time_strata not in (1, 2, 4, 8, 16, 32, 64)
+                or self.time_strata % self.time_splits):
+            raise ConfigError(f"{_OWNER}.time_strata: expected 1, 2, 4, ..., 64 and a multiple of time_splits "
+                              f"({self.time_splits}), got {self.time_strata!r}")
         if not isinstance(self.clip, dict) or set(self.clip) - {"u", "v", "t"}:
             raise ConfigError(f"{_OWNER}.clip: expected {{u: [lo, hi], v: [lo, hi], t: [lo, hi]}}, got {self.clip!r}")
         clip = {}

@@ -97,6 +97,7 @@ def _issue5_params(params, config: PipelineConfig) -> None:
     """Time/lens intervals, clip box, depth intervals and HiZ (docs/intervals.md)."""
     params.motion_intervals = config.motion_test == "intervals"
     params.time_splits = config.time_splits
+    params.time_strata = config.time_strata
     for axis, (lo, hi) in config.clip.items():
         setattr(params, f"clip_{axis}_lo", float(lo))
         setattr(params, f"clip_{axis}_hi", float(hi))

@@ -63,7 +63,7 @@ def check_conservative(scene, cam, spp=16, time_splits=4, depth_rel_tol=2e-3):
     tab = table(spp)
     samples = tab.samples(cam.lens)  # (P, P, spp, 5)
     P = samples.shape[0]
-    cons = sim.conservative_raster(scene, cam, sim.PipelineConfig(time_splits=time_splits))
+    cons = sim.conservative_raster(scene, cam, sim.PipelineConfig(time_splits=time_splits, time_strata=max(8, time_splits)))
     rec = {(int(r["x"]), int(r["y"]), int(r["triangle"])): r for r in cons.records}
     checked = 0
     for i in range(scene.positions.shape[0]):
@@ -124,7 +124,8 @@ def test_conservative_adversarial(name, coc):
     for tile in (1, 2, 8):
         for splits in (1, 4, 16):
             res = sim.render(scene, cam, table(), sim.PipelineConfig(algorithm="tile", tile_size=tile,
-                                                                      time_splits=splits, threads=1),
+                                                                      time_splits=splits, time_strata=max(8, splits),
+                                                                      threads=1),
                              export_samples=True)
             assert np.array_equal(ref.sample_triangle, res.sample_triangle), (name, coc, tile, splits)
             assert ref.flat_stats["raster.samples_hit"] == res.flat_stats["raster.samples_hit"]
@@ -254,6 +255,7 @@ def test_static_pays_nothing_for_time_and_in_focus_nothing_for_lens():
     scene, cam = mixed_scene(), camera(8.0)
     r = sim.render(scene, cam, table(), sim.PipelineConfig(algorithm="tile", time_splits=4))
     f = r.flat_stats
+    assert f["interval.time_tests_3d"] % 4 == 0
     for cls in ("2d", "3d", "4d", "5d"):
         assert f[f"setup.class_{cls}"] > 0, cls
     assert f["interval.time_tests_2d"] == f["interval.time_tests_4d"] == 0
@@ -263,8 +265,9 @@ def test_static_pays_nothing_for_time_and_in_focus_nothing_for_lens():
     # the static triangles' work does not depend on the time machinery at all
     static = make_scene(scene.positions[0::2], scene.positions_t1[0::2])
     assert np.array_equal(static.positions, static.positions_t1)
-    runs = [sim.render(static, cam, table(), sim.PipelineConfig(algorithm="tile", time_splits=s, motion_test=m)).flat_stats
-            for s, m in ((1, "bounds"), (16, "intervals"))]
+    runs = [sim.render(static, cam, table(), sim.PipelineConfig(algorithm="tile", time_splits=s, time_strata=ns,
+                                                                motion_test=m)).flat_stats
+            for s, ns, m in ((1, 1, "bounds"), (16, 64, "intervals"))]
     keep = [k for k in runs[0] if k != "time.wall_s"]
     assert {k: runs[0][k] for k in keep} == {k: runs[1][k] for k in keep}
 
@@ -330,7 +333,7 @@ def test_occlusion_queries(coc):
 
 
 def test_config_errors():
-    for bad in (dict(time_splits=3), dict(clip={"w": [0, 1]}), dict(clip={"t": [0.5, 0.2]}), dict(clip={"u": 1}),
+    for bad in (dict(time_splits=3), dict(time_splits=16), dict(time_strata=12), dict(clip={"w": [0, 1]}), dict(clip={"t": [0.5, 0.2]}), dict(clip={"u": 1}),
                 dict(hiz={"enabled": True, "tile_size": 1}, tile_size=2), dict(hiz={"enabled": "yes"}),
                 dict(zhat="boxes"), dict(motion_test="x")):
         with pytest.raises(sim.ConfigError):

@@ -102,6 +102,7 @@ PYBIND11_MODULE(_core, m) {
       .def_readwrite("table_has_time", &RenderParams::table_has_time)
       // issue 5
       .def_readwrite("time_splits", &RenderParams::time_splits)
+      .def_readwrite("time_strata", &RenderParams::time_strata)
       .def_readwrite("motion_intervals", &RenderParams::motion_intervals)
       .def_readwrite("clip_u_lo", &RenderParams::clip_u_lo)
       .def_readwrite("clip_u_hi", &RenderParams::clip_u_hi)
@@ -125,7 +126,7 @@ PYBIND11_MODULE(_core, m) {
         require_shape(v1, {n, 3, 3}, "v1");
         require_shape(colors, {n, 3, 3}, "colors");
         SampleTable table = make_table(samples, p.lens_grid, lens_index, lens_uv);
-        table.set_time_strata(p.time_splits);  // (lens cell, time stratum) index, issue 5
+        table.set_time_strata(p.time_strata);  // (lens cell, time stratum) index, issue 5
         SceneArrays scene{static_cast<int>(n), v0.data(), v1.data(), colors.data()};
         std::optional<py::error_already_set> pending;
         RenderResult res;

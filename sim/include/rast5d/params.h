@@ -39,7 +39,8 @@ struct RenderParams {
   bool table_has_lens = true;
   bool table_has_time = true;
   // Issue 5, the 5D pipeline (sim/pipeline.py: time_splits, motion_test, clip, zhat, hiz):
-  int time_splits = 4;            // S time sub-intervals per shutter for moving triangles (tile)
+  int time_splits = 1;            // S time sub-intervals per shutter for moving triangles (tile)
+  int time_strata = 8;            // time strata per lens cell in the sample table index (multiple of S)
   bool motion_intervals = true;   // tile: t̂ / per-sub-interval lens sets (false: whole-shutter h_i)
   double clip_u_lo = -1.0, clip_u_hi = 1.0;  // user clip box (002 §2); samples outside are rejected
   double clip_v_lo = -1.0, clip_v_hi = 1.0;

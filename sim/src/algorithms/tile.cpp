@@ -396,6 +396,7 @@ class Tile final : public Traversal {
     const int T = p.tile_size, G = p.lens_grid, S = ms_.S;
     const bool lens = ms_.lens;
     const int spp = f_.table.spp();
+    const int NT = f_.table.time_strata(), per_sub = NT / S;  // NT is a multiple of S (validated)
     pipe_.begin(tri);
     iv::TileIntervals& ti = ti_;
     for_tiles(tri, bin, [&](int tx, int ty, int px0, int py0, int tx1, int ty1) {
@@ -425,6 +426,11 @@ class Tile final : public Traversal {
             if ((bx >> i & 1u) && lens_mask_.test(j * G + i)) list[n_cells[k]++] = j * G + i;
         }
         total_cells += n_cells[k];
+        // Time strata of the table index that overlap t̂_k (2 MUL): samples outside are never touched.
+        const D slo = D(ti.tlo[k]) * D(NT), shi = D(ti.thi[k]) * D(NT);
+        charge<A>(c_[Counter::ops_tile], 2);
+        strata_lo_[k] = std::max(k * per_sub, static_cast<int>(std::floor(raw(slo))));
+        strata_hi_[k] = std::min((k + 1) * per_sub - 1, static_cast<int>(std::floor(raw(shi))));
       }
       if (total_cells == 0) {
         ++c_[Counter::tile_culled_lens];
@@ -451,8 +457,10 @@ class Tile final : public Traversal {
             const std::uint64_t per = 2 + (lens ? sx.n_cmp + sy.n_cmp : 0) + (cu ? 2 : 0) + (cv ? 2 : 0);
             const int* list = &cell_lists_[static_cast<std::size_t>(k) * 256];
             int checked = 0;
-            for (int q = 0; q < n_cells[k]; ++q) {
-              const int b = list[q] * S + k;
+            const int j0 = strata_lo_[k], j1 = strata_hi_[k];
+            for (int q = 0; q < n_cells[k]; ++q)
+              for (int j = j0; j <= j1; ++j) {
+              const int b = list[q] * NT + j;
               for (int idx = ps.ct_offsets[b]; idx < ps.ct_offsets[b + 1]; ++idx) {
                 const int smp = ps.ct_order[idx];
                 ++checked;
@@ -499,6 +507,7 @@ class Tile final : public Traversal {
   const iv::ClipBox clip_ = iv::clip_box(f_.p);
   iv::MotionSetup ms_;
   iv::TileIntervals ti_;
+  int strata_lo_[iv::kMaxSplits], strata_hi_[iv::kMaxSplits];
   std::vector<int> cell_lists_ = std::vector<int>(256 * iv::kMaxSplits);
   const Footprint fp_dummy_{};  // in_exact_region reads no footprint for moving triangles
   iv::MovingPlanes planes_;
