@@ -37,6 +37,22 @@ class RenderParams:
     count_optimal: bool
     table_has_lens: bool
     table_has_time: bool
+    # issue 5 (docs/intervals.md)
+    time_splits: int
+    time_strata: int
+    motion_intervals: bool
+    clip_u_lo: float
+    clip_u_hi: float
+    clip_v_lo: float
+    clip_v_hi: float
+    clip_t_lo: float
+    clip_t_hi: float
+    zhat_planes: bool
+    zhat_stats: bool
+    hiz_enabled: bool
+    hiz_tile: int
+    query_first: int
+    query_mode: int  # 0 none, 1 sample-based, 2 interval-based occlusion query
     def __init__(self) -> None: ...
 
 def render(
@@ -75,3 +91,14 @@ def measure_kernel_costs(trials: int = 100, seed: int = 1) -> dict[str, tuple[in
 def measure_tile_kernel_costs(trials: int = 200, seed: int = 1) -> dict[str, tuple[int, int, int, int]]:
     """Tile-test kernels whose cost depends on the configuration: {name: (runs, mismatches between
     counted and documented, min documented, max documented)}."""
+
+def conservative_raster(
+    params: RenderParams,
+    v0: npt.NDArray[np.float32],  # (N, 3, 3) engine vertices at t = 0
+    v1: npt.NDArray[np.float32],  # (N, 3, 3) at t = 1
+    reduce: bool,
+    max_records: int,
+) -> dict[str, Any]:
+    """Conservative rasterization (issue 5): {'counters', 'records': uint8 bytes of (x, y, triangle,
+    u_lo, u_hi, v_lo, v_hi, t_lo, t_hi, z_lo, z_hi) records, 'record_bytes'} or, with reduce,
+    {'counters', 'tz_box': float32 (H, W, 4), 'count': int32 (H, W)}. ValueError past max_records."""
