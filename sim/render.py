@@ -123,6 +123,7 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     grid = config.resolved_lens_grid(spp)
     threads = config.threads or (os.cpu_count() or 1)
     need = memory_estimate(camera, spp, p0.shape[0], config, threads, export_samples)
+    need += samples.shape[0] ** 2 * (grid * grid * config.time_strata + 1 + spp) * 4  # (cell, time stratum) index
     if need > config.memory_limit_bytes:
         raise ConfigError(
             f"memory: estimated {need / 2**30:.2f} GiB exceeds PipelineConfig.memory_limit_bytes="

@@ -338,3 +338,15 @@ def test_config_errors():
                 dict(zhat="boxes"), dict(motion_test="x")):
         with pytest.raises(sim.ConfigError):
             sim.PipelineConfig(**bad)
+
+
+@pytest.mark.slow
+@settings(max_examples=300, **HYPO)
+@given(c0=st.tuples(st.floats(-40, 70), st.floats(-40, 60)), motion=st.tuples(st.floats(-600, 600), st.floats(-300, 300)),
+       d0=st.floats(0.2, 20.0), d1=st.floats(-1.0, 20.0), size=st.floats(0.3, 40.0), rot=st.floats(-3.2, 3.2),
+       coc=st.sampled_from([0.0, 2.0, 10.0, 40.0]), splits=st.sampled_from([1, 2, 8]))
+def test_conservative_random_large(c0, motion, d0, d1, size, rot, coc, splits):
+    """More and wilder triangles (depths through the lens plane, motion up to 600 px)."""
+    a, b = moving_tri(c0, (c0[0] + motion[0], c0[1] + motion[1]), d0, d1 if abs(d1) > 1e-3 else 1e-3,
+                      size=size, rot=rot)
+    check_conservative(make_scene(a[None], b[None]), camera(coc), spp=8, time_splits=splits)
