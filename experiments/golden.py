@@ -32,6 +32,18 @@ ARBITRARY = ("bruteforce", "interval", "tile", "laine")
 INTERLEAVED = ("interleave", "hinterleave", "tile_interleaved")
 
 
+# Issue 5 variants: the scene column reads "<scene>+<variant>" and the variant adds pipeline settings.
+VARIANTS = {
+    "splits4": {"time_splits": 4},
+    "splits16": {"time_splits": 16, "time_strata": 16},
+    "strata1": {"time_strata": 1},
+    "bounds": {"motion_test": "bounds"},
+    "clip": {"clip": {"u": [-0.5, 0.75], "v": [-1.0, 0.5], "t": [0.125, 0.75]}},
+    "hiz": {"hiz": {"enabled": True, "tile_size": 8}, "zhat_stats": True},
+    "hiz_vertex": {"hiz": {"enabled": True, "tile_size": 4}, "zhat": "vertex", "zhat_stats": True},
+}
+
+
 @dataclass(frozen=True)
 class Case:
     scene: str
@@ -59,6 +71,12 @@ def cases() -> list[Case]:
         out.append(Case("bunny", "tile", 10.0, tile=tile))
     out.append(Case("bunny", "tile", 20.0, spp=64, grid=8))
     out.append(Case("bunny", "interval", 20.0, spp=64, grid=8))
+    for variant in VARIANTS:  # issue 5: time intervals, clip planes, HiZ on the moving scene
+        for coc in (0.0, 10.0):
+            out.append(Case(f"moving_quads+{variant}", "tile", coc))
+    out.append(Case("moving_quads+clip", "bruteforce", 10.0))
+    for variant in ("hiz", "hiz_vertex"):
+        out.append(Case(f"spot+{variant}", "tile", 10.0))
     return out
 
 
@@ -70,10 +88,11 @@ def compute(case: Case) -> dict[str, int]:
     import models
     import sim
 
-    spec = SCENES[case.scene]
-    if case.scene not in _scene_cache:
-        _scene_cache[case.scene] = models.named(spec["name"], **spec["params"])
-    scene = _scene_cache[case.scene]
+    scene_name, _, variant = case.scene.partition("+")
+    spec = SCENES[scene_name]
+    if scene_name not in _scene_cache:
+        _scene_cache[scene_name] = models.named(spec["name"], **spec["params"])
+    scene = _scene_cache[scene_name]
     hint = scene.camera_hint
     w, h = spec["size"]
     camera = sim.Camera(width=w, height=h, fov_y_deg=hint.get("fov_y_deg", 45.0),
@@ -82,7 +101,8 @@ def compute(case: Case) -> dict[str, int]:
         table = sim.SampleTable.stratified(spp=case.spp, seed=7)
     else:
         table = sim.SampleTable.interleaved(spp=case.spp, n_lens=64, seed=7)
-    config = sim.PipelineConfig(algorithm=case.algorithm, tile_size=case.tile, lens_grid=case.grid, threads=2)
+    config = sim.PipelineConfig(algorithm=case.algorithm, tile_size=case.tile, lens_grid=case.grid, threads=2,
+                                **VARIANTS.get(variant, {}))
     result = sim.render(scene, camera, table, config)
     raw = set(sim._core.counter_docs())
     return {k: int(v) for k, v in result.flat_stats.items() if k in raw}

@@ -36,7 +36,7 @@ def register_scene(name: str) -> Callable[[SceneBuilder], SceneBuilder]:
 
 def _ensure_loaded() -> None:
     # Importing the modules runs their decorators.
-    from . import modern_hall, procedural, mesh_scenes  # noqa: F401
+    from . import modern_hall, procedural, mesh_scenes, motion_scenes  # noqa: F401
 
 
 def scene_names() -> list[str]:

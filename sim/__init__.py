@@ -17,11 +17,16 @@ from .png import linear_to_srgb8, write_png
 from .camera import Camera
 from .render import Result, memory_estimate, render
 from .sample_table import SampleTable
+from .intervals import ConservativeResult, OcclusionResult, conservative_raster, occlusion_query
 from .stats import counter_docs
 from . import timing
 
 __all__ = [
     "Camera",
+    "ConservativeResult",
+    "OcclusionResult",
+    "conservative_raster",
+    "occlusion_query",
     "ConfigError",
     "HardwareConfig",
     "PipelineConfig",

@@ -50,6 +50,22 @@ class RenderParams:
     tex_cache_line_bytes: int
     tex_cache_ways: int  # 0 = fully associative
     tex_cache_count: int
+    # issue 5 (docs/intervals.md)
+    time_splits: int
+    time_strata: int
+    motion_intervals: bool
+    clip_u_lo: float
+    clip_u_hi: float
+    clip_v_lo: float
+    clip_v_hi: float
+    clip_t_lo: float
+    clip_t_hi: float
+    zhat_planes: bool
+    zhat_stats: bool
+    hiz_enabled: bool
+    hiz_tile: int
+    query_first: int
+    query_mode: int  # 0 none, 1 sample-based, 2 interval-based occlusion query
     def __init__(self) -> None: ...
 
 def render(
@@ -122,3 +138,13 @@ def triangle_lod(v0: npt.NDArray[np.float32], uvs: npt.NDArray[np.float32], tex_
     projected through the lens centre at shutter open."""
 def texel_address(height: int, width: int, layout: int, level: int, x: int, y: int) -> int:
     """Byte address of a texel of a lone texture (layout 0 linear, 1 blocked 4x4, 2 Morton blocks)."""
+def conservative_raster(
+    params: RenderParams,
+    v0: npt.NDArray[np.float32],  # (N, 3, 3) engine vertices at t = 0
+    v1: npt.NDArray[np.float32],  # (N, 3, 3) at t = 1
+    reduce: bool,
+    max_records: int,
+) -> dict[str, Any]:
+    """Conservative rasterization (issue 5): {'counters', 'records': uint8 bytes of (x, y, triangle,
+    u_lo, u_hi, v_lo, v_hi, t_lo, t_hi, z_lo, z_hi) records, 'record_bytes'} or, with reduce,
+    {'counters', 'tz_box': float32 (H, W, 4), 'count': int32 (H, W)}. ValueError past max_records."""

@@ -79,6 +79,28 @@ class PipelineConfig:
         "unit": "1/world unit", "doc": "Planar uvs for triangles without a scene texture: texture repeats per world unit"})
     texture_sample_distribution: bool = field(default=False, metadata={
         "doc": "Also fetch the sample-distribution texture of 000 §5.3 (one texel per lane, 1:1 with pixels)"})
+    # ---- issue 5: the 5D pipeline (docs/intervals.md) ----
+    motion_test: str = field(default="intervals", metadata={
+        "doc": "tile, moving triangles: 'intervals' (t̂ and lens sets per time sub-interval, samples "
+               "indexed by time stratum) or 'bounds' (h_i lines over the shutter ends, no t̂)"})
+    time_splits: int = field(default=1, metadata={
+        "doc": "Time sub-intervals S per shutter (1, 2, 4, 8, 16): tile computes t̂ (and 5D lens sets) "
+               "per sub-interval"})
+    time_strata: int = field(default=8, metadata={
+        "doc": "Time strata per lens cell in the sample-table index (1..64, a multiple of time_splits): "
+               "tile walks only the strata that overlap t̂"})
+    clip: dict = field(default_factory=dict, metadata={
+        "doc": "User clip box {u: [lo, hi], v: [lo, hi], t: [lo, hi]} (002 §2; any subset): samples "
+               "outside it are never hit, for every algorithm"})
+    zhat: str = field(default="planes", metadata={
+        "doc": "Depth interval per (triangle, tile): 'planes' (moving box + moving planes, 002 App. A) "
+               "or 'vertex' (vertex min/max)"})
+    zhat_stats: bool = field(default=False, metadata={
+        "doc": "tile: compute the depth interval of every accepted pair and count its width "
+               "(zcull.width_zhat, zcull.width_vertex)"})
+    hiz: dict = field(default_factory=lambda: {"enabled": False, "tile_size": 8}, metadata={
+        "doc": "{enabled: bool, tile_size: px}: per-tile zmin/zmax (HiZ) with zmax- and zmin-culling "
+               "of (triangle, tile) pairs (tile algorithm); tile_size in 1, 2, 4, 8 and >= tile_size"})
 
     def __post_init__(self):
         names = algorithm_names()
@@ -124,6 +146,43 @@ class PipelineConfig:
         check_float(_OWNER, "texture_uv_scale", self.texture_uv_scale, lo=0.0, lo_open=True, hi=1e6)
         if not isinstance(self.texture_sample_distribution, bool):
             raise ConfigError(f"{_OWNER}.texture_sample_distribution: expected a bool, got {self.texture_sample_distribution!r}")
+        self._validate_issue5()
+
+    def _validate_issue5(self):
+        if self.motion_test not in ("intervals", "bounds"):
+            raise ConfigError(f"{_OWNER}.motion_test: expected 'intervals' or 'bounds', got {self.motion_test!r}")
+        if isinstance(self.time_splits, bool) or self.time_splits not in (1, 2, 4, 8, 16):
+            raise ConfigError(f"{_OWNER}.time_splits: expected 1, 2, 4, 8 or 16, got {self.time_splits!r}")
+        if (isinstance(self.time_strata, bool) or self.time_strata not in (1, 2, 4, 8, 16, 32, 64)
+                or self.time_strata % self.time_splits):
+            raise ConfigError(f"{_OWNER}.time_strata: expected 1, 2, 4, ..., 64 and a multiple of time_splits "
+                              f"({self.time_splits}), got {self.time_strata!r}")
+        if not isinstance(self.clip, dict) or set(self.clip) - {"u", "v", "t"}:
+            raise ConfigError(f"{_OWNER}.clip: expected {{u: [lo, hi], v: [lo, hi], t: [lo, hi]}}, got {self.clip!r}")
+        clip = {}
+        for axis, value in self.clip.items():
+            if not isinstance(value, (list, tuple)) or len(value) != 2:
+                raise ConfigError(f"{_OWNER}.clip.{axis}: expected [lo, hi], got {value!r}")
+            lo = check_float(_OWNER, f"clip.{axis}[0]", value[0])
+            hi = check_float(_OWNER, f"clip.{axis}[1]", value[1])
+            if not lo <= hi:
+                raise ConfigError(f"{_OWNER}.clip.{axis}: expected lo <= hi, got {list(value)!r}")
+            clip[axis] = [lo, hi]
+        object.__setattr__(self, "clip", clip)
+        if self.zhat not in ("planes", "vertex"):
+            raise ConfigError(f"{_OWNER}.zhat: expected 'planes' or 'vertex', got {self.zhat!r}")
+        if not isinstance(self.zhat_stats, bool):
+            raise ConfigError(f"{_OWNER}.zhat_stats: expected a bool, got {self.zhat_stats!r}")
+        if not isinstance(self.hiz, dict) or set(self.hiz) - {"enabled", "tile_size"}:
+            raise ConfigError(f"{_OWNER}.hiz: expected {{enabled: bool, tile_size: int}}, got {self.hiz!r}")
+        hiz = {"enabled": False, "tile_size": 8, **self.hiz}
+        if not isinstance(hiz["enabled"], bool):
+            raise ConfigError(f"{_OWNER}.hiz.enabled: expected a bool, got {hiz['enabled']!r}")
+        ts = hiz["tile_size"]
+        if isinstance(ts, bool) or ts not in (1, 2, 4, 8) or ts < self.tile_size:
+            raise ConfigError(f"{_OWNER}.hiz.tile_size: expected 1, 2, 4 or 8 and >= tile_size "
+                              f"({self.tile_size}), got {ts!r}")
+        object.__setattr__(self, "hiz", hiz)
 
     @classmethod
     def field_docs(cls) -> dict[str, dict]:
@@ -145,4 +204,6 @@ class PipelineConfig:
     def describe(self) -> dict:
         d = dataclasses.asdict(self)
         d["halfspace"] = dict(self.halfspace)
+        d["clip"] = {k: list(v) for k, v in self.clip.items()}
+        d["hiz"] = dict(self.hiz)
         return d

@@ -103,8 +103,23 @@ def memory_estimate(camera: Camera, spp: int, n_triangles: int, config: Pipeline
     return int(image + bins + setup + bin_lists + export + timing_records)
 
 
+def _issue5_params(params, config: PipelineConfig) -> None:
+    """Time/lens intervals, clip box, depth intervals and HiZ (docs/intervals.md)."""
+    params.motion_intervals = config.motion_test == "intervals"
+    params.time_splits = config.time_splits
+    params.time_strata = config.time_strata
+    for axis, (lo, hi) in config.clip.items():
+        setattr(params, f"clip_{axis}_lo", float(lo))
+        setattr(params, f"clip_{axis}_hi", float(hi))
+    params.zhat_planes = config.zhat == "planes"
+    params.zhat_stats = config.zhat_stats
+    params.hiz_enabled = config.hiz["enabled"]
+    params.hiz_tile = config.hiz["tile_size"]
+
+
 def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *,
-           export_samples: bool = False, hardware: HardwareConfig | None = None, timing: bool = True) -> Result:
+           export_samples: bool = False, hardware: HardwareConfig | None = None, timing: bool = True,
+           query: tuple[int, int] | None = None) -> Result:
     """Render ``scene`` through ``camera`` with sample ``table``. Raises ConfigError/SceneInputError
     (ValueErrors naming the field and value) for bad input; KeyboardInterrupt on Ctrl-C.
     ``hardware`` (default HardwareConfig()) supplies the texture-cache geometry and feeds the timing
@@ -125,6 +140,7 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     grid = config.resolved_lens_grid(spp)
     threads = config.threads or (os.cpu_count() or 1)
     need = memory_estimate(camera, spp, p0.shape[0], config, threads, export_samples, timing)
+    need += samples.shape[0] ** 2 * (grid * grid * config.time_strata + 1 + spp) * 4  # (cell, time stratum) index
     if need > config.memory_limit_bytes:
         raise ConfigError(
             f"memory: estimated {need / 2**30:.2f} GiB exceeds PipelineConfig.memory_limit_bytes="
@@ -154,6 +170,9 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     params.backface_cull = config.backface_cull
     params.exact_ops = config.op_count == "exact"
     params.count_optimal = config.count_optimal
+    _issue5_params(params, config)
+    if query is not None:  # (first query triangle, mode): set by sim.occlusion_query only
+        params.query_first, params.query_mode = int(query[0]), int(query[1])
     # The engine skips a dimension only where skipping is exact: every sample has u = v = 0 (no
     # lens) or t = 0 (no time). A constant non-zero t still places moving triangles at that t.
     params.table_has_lens = bool(np.any(samples[..., 2:4] != 0))

@@ -56,6 +56,15 @@ DERIVED: tuple[Derived, ...] = (
             lambda s: _ratio(s["tex.cache.hits"], s["tex.cache.accesses"])),
     Derived("tex.cache.bytes_per_pixel", "bytes/pixel", "tex.cache.bytes_fetched / frame.pixels",
             lambda s: _ratio(s["tex.cache.bytes_fetched"], s["frame.pixels"])),
+    # issue 5
+    Derived("depth.bytes", "bytes", "Per-sample depth traffic: depth.bytes_read + depth.bytes_written",
+            lambda s: s["depth.bytes_read"] + s["depth.bytes_written"]),
+    Derived("hiz.bytes", "bytes", "HiZ traffic: hiz.bytes_read + hiz.bytes_written",
+            lambda s: s["hiz.bytes_read"] + s["hiz.bytes_written"]),
+    Derived("zcull.cull_rate", "ratio", "zcull.pairs_culled / zcull.pairs",
+            lambda s: _ratio(s["zcull.pairs_culled"], s["zcull.pairs"])),
+    Derived("zcull.tightness", "ratio", "zcull.width_zhat / zcull.width_vertex (1 = no gain over vertex min/max)",
+            lambda s: _ratio(s["zcull.width_zhat"], s["zcull.width_vertex"])),
 )
 
 MEASURED = {

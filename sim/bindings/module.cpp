@@ -17,6 +17,9 @@
 #include "rast5d/timing.h"
 #include "rast5d/shading.h"
 #include "rast5d/texture.h"
+#include "rast5d/conservative.h"
+#include "rast5d/intervals.h"
+#include <cstring>
 
 namespace py = pybind11;
 using namespace rast5d;
@@ -111,7 +114,23 @@ PYBIND11_MODULE(_core, m) {
       .def_readwrite("tex_cache_bytes", &RenderParams::tex_cache_bytes)
       .def_readwrite("tex_cache_line_bytes", &RenderParams::tex_cache_line_bytes)
       .def_readwrite("tex_cache_ways", &RenderParams::tex_cache_ways)
-      .def_readwrite("tex_cache_count", &RenderParams::tex_cache_count);
+      .def_readwrite("tex_cache_count", &RenderParams::tex_cache_count)
+      // issue 5
+      .def_readwrite("time_splits", &RenderParams::time_splits)
+      .def_readwrite("time_strata", &RenderParams::time_strata)
+      .def_readwrite("motion_intervals", &RenderParams::motion_intervals)
+      .def_readwrite("clip_u_lo", &RenderParams::clip_u_lo)
+      .def_readwrite("clip_u_hi", &RenderParams::clip_u_hi)
+      .def_readwrite("clip_v_lo", &RenderParams::clip_v_lo)
+      .def_readwrite("clip_v_hi", &RenderParams::clip_v_hi)
+      .def_readwrite("clip_t_lo", &RenderParams::clip_t_lo)
+      .def_readwrite("clip_t_hi", &RenderParams::clip_t_hi)
+      .def_readwrite("zhat_planes", &RenderParams::zhat_planes)
+      .def_readwrite("zhat_stats", &RenderParams::zhat_stats)
+      .def_readwrite("hiz_enabled", &RenderParams::hiz_enabled)
+      .def_readwrite("hiz_tile", &RenderParams::hiz_tile)
+      .def_readwrite("query_first", &RenderParams::query_first)
+      .def_readwrite("query_mode", &RenderParams::query_mode);
 
   PYBIND11_NUMPY_DTYPE(TileWork, bin, triangles, tile_tests, sample_tests, depth_tests, quads, texel_fetches,
                        tex_misses, memory_bytes);
@@ -126,6 +145,7 @@ PYBIND11_MODULE(_core, m) {
         require_shape(v1, {n, 3, 3}, "v1");
         require_shape(colors, {n, 3, 3}, "colors");
         SampleTable table = make_table(samples, p.lens_grid, lens_index, lens_uv);
+        table.set_time_strata(p.time_strata);  // (lens cell, time stratum) index, issue 5
         SceneArrays scene{static_cast<int>(n), v0.data(), v1.data(), colors.data()};
         if (uvs && tex_slots) {  // texturing (issue 6): uvs (n, 3, 2), tex_slots (n, 4), textures (H, W, C)
           require_shape(*uvs, {n, 3, 2}, "uvs");
@@ -405,4 +425,43 @@ PYBIND11_MODULE(_core, m) {
       py::arg("height"), py::arg("width"), py::arg("layout"), py::arg("level"), py::arg("x"), py::arg("y"),
       "Byte address of texel (x, y) of a level of a lone height x width texture (layout 0 linear, 1 "
       "blocked 4x4, 2 Morton-ordered 4x4 blocks).");
+
+  // ---- issue 5: conservative rasterization mode (002 Fig. 2) ----
+  m.def(
+      "conservative_raster",
+      [](const RenderParams& p, const FArr& v0, const FArr& v1, bool reduce, std::uint64_t max_records) {
+        require_shape(v0, {-1, 3, 3}, "v0");
+        const py::ssize_t n = v0.shape(0);
+        require_shape(v1, {n, 3, 3}, "v1");
+        if (p.width < 1 || p.height < 1 || p.width > 16384 || p.height > 16384)
+          throw std::invalid_argument("width/height: expected 1..16384");
+        if (p.time_splits < 1 || p.time_splits > iv::kMaxSplits)
+          throw std::invalid_argument("time_splits: expected 1..16, got " + std::to_string(p.time_splits));
+        std::vector<float> colors(static_cast<std::size_t>(n) * 9, 0.0f);
+        SceneArrays scene{static_cast<int>(n), v0.data(), v1.data(), colors.data()};
+        ConservativeResult res;
+        {
+          py::gil_scoped_release release;
+          res = conservative_raster(p, scene, reduce, max_records);
+        }
+        py::dict out;
+        out["counters"] = counters_to_dict(res.counters);
+        if (reduce) {
+          py::array_t<float> tz({p.height, p.width, 4});
+          std::copy(res.tz_box.begin(), res.tz_box.end(), tz.mutable_data());
+          py::array_t<std::int32_t> cnt({p.height, p.width});
+          std::copy(res.count.begin(), res.count.end(), cnt.mutable_data());
+          out["tz_box"] = tz;
+          out["count"] = cnt;
+        } else {
+          const std::size_t bytes = res.records.size() * sizeof(ConservativeRecord);
+          py::array_t<std::uint8_t> raw(static_cast<py::ssize_t>(bytes));
+          if (bytes) std::memcpy(raw.mutable_data(), res.records.data(), bytes);
+          out["records"] = raw;
+          out["record_bytes"] = sizeof(ConservativeRecord);
+        }
+        return out;
+      },
+      py::arg("params"), py::arg("v0"), py::arg("v1"), py::arg("reduce"), py::arg("max_records"),
+      "Conservative rasterization (issue 5): fragment records or per-pixel tz-boxes.");
 }

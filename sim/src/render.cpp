@@ -48,6 +48,10 @@ void validate_params(const RenderParams& p, const SampleTable& table) {
     fail("threads: expected 0 (all) .. 1024, got " + std::to_string(p.threads));
   if (!(p.focus_w > 0)) fail("focus_w: expected > 0, got " + std::to_string(p.focus_w));
   if (!(p.near_w > 0)) fail("near_w: expected > 0, got " + std::to_string(p.near_w));
+  if (p.time_splits < 1 || p.time_splits > 16 || p.time_strata < 1 || p.time_strata > 64 ||
+      p.time_strata % p.time_splits != 0)  // issue 5: each time stratum lies in one sub-interval
+    fail("time_splits/time_strata: expected 1..16 / 1..64 with time_strata a multiple of time_splits, got " +
+         std::to_string(p.time_splits) + " / " + std::to_string(p.time_strata));
   if (p.shading_mode < 0 || p.shading_mode > 4)
     fail("shading_mode: expected 0..4, got " + std::to_string(p.shading_mode));
   if (p.shading_cache_entries < 1 || p.shading_cache_entries > (1 << 24))

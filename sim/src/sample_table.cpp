@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <numeric>
 #include <stdexcept>
+#include <string>
 
 namespace rast5d {
 
@@ -58,6 +59,30 @@ SampleTable::SampleTable(int period, int spp, const float* samples, int grid,
       std::iota(order, order + spp, 0);
       std::stable_sort(order, order + spp, [&](int a, int b) { return li[a] < li[b]; });
     }
+  }
+}
+
+void SampleTable::set_time_strata(int S) {
+  if (S < 1 || S > 64) throw std::invalid_argument("time_splits: expected 1..64, got " + std::to_string(S));
+  if (S == strata_) return;
+  strata_ = S;
+  const std::size_t npix = static_cast<std::size_t>(period_) * period_;
+  const int buckets = grid_ * grid_ * S;
+  ct_order_.resize(npix * spp_);
+  ct_offsets_.assign(npix * (buckets + 1), 0);
+  std::vector<int> key(spp_);
+  for (std::size_t p = 0; p < npix; ++p) {
+    const std::size_t base = p * spp_;
+    std::int32_t* order = &ct_order_[base];
+    std::int32_t* off = &ct_offsets_[p * (buckets + 1)];
+    for (int s = 0; s < spp_; ++s) {
+      const int c = cell_of(u_[base + s], v_[base + s], grid_);
+      key[s] = c * S + stratum_of(t_[base + s], S);
+      ++off[key[s] + 1];
+    }
+    for (int b = 0; b < buckets; ++b) off[b + 1] += off[b];
+    std::iota(order, order + spp_, 0);
+    std::stable_sort(order, order + spp_, [&](int a, int b) { return key[a] < key[b]; });
   }
 }
 

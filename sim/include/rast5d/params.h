@@ -53,6 +53,19 @@ struct RenderParams {
   int tex_cache_line_bytes = 64;
   int tex_cache_ways = 4;           // 0 = fully associative
   int tex_cache_count = 1;
+  // Issue 5, the 5D pipeline (sim/pipeline.py: time_splits, motion_test, clip, zhat, hiz):
+  int time_splits = 1;            // S time sub-intervals per shutter for moving triangles (tile)
+  int time_strata = 8;            // time strata per lens cell in the sample table index (multiple of S)
+  bool motion_intervals = true;   // tile: t̂ / per-sub-interval lens sets (false: whole-shutter h_i)
+  double clip_u_lo = -1.0, clip_u_hi = 1.0;  // user clip box (002 §2); samples outside are rejected
+  double clip_v_lo = -1.0, clip_v_hi = 1.0;
+  double clip_t_lo = 0.0, clip_t_hi = 1.0;
+  bool zhat_planes = true;        // ẑ: moving box + moving planes (002 App. A); false: vertex min/max
+  bool zhat_stats = false;        // tile: compute ẑ for every accepted pair (tightness counters)
+  bool hiz_enabled = false;       // tile: zmax/zmin culling against per-tile HiZ
+  int hiz_tile = 8;               // HiZ tile edge in pixels (>= tile_size, <= 8)
+  int query_first = -1;           // occlusion query: triangles from this index are the query (no writes)
+  int query_mode = 0;             // 0 none, 1 sample-based, 2 interval-based (ẑ vs HiZ, abort)
 };
 
 }  // namespace rast5d

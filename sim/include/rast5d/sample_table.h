@@ -31,6 +31,11 @@ struct PixelSamples {
   const std::int32_t* lens_index;    // spp entries (interleaved tables only)
   const std::int32_t* lens_order;    // spp entries (interleaved tables only)
   const std::int32_t* lens_offsets;  // n_lens + 1 entries (interleaved tables only)
+  // Time strata within lens-grid cells (set_time_strata(S)): `ct_order` lists canonical indices
+  // sorted by (cell, stratum), stratum k = clamp(floor(t S), 0, S - 1); bucket (c, k) is
+  // ct_order[ct_offsets[c * S + k] .. ct_offsets[c * S + k + 1]).
+  const std::int32_t* ct_order;      // spp entries
+  const std::int32_t* ct_offsets;    // G*G*S + 1 entries
 };
 
 class SampleTable {
@@ -61,12 +66,25 @@ class SampleTable {
     ps.cell = &cell_idx_[base];
     ps.cell_order = &cell_order_[base];
     ps.cell_offsets = &cell_offsets_[pi * (grid_ * grid_ + 1)];
+    ps.ct_order = ct_order_.empty() ? nullptr : &ct_order_[base];
+    ps.ct_offsets = ct_offsets_.empty() ? nullptr : &ct_offsets_[pi * (grid_ * grid_ * strata_ + 1)];
     if (n_lens_ > 0) {
       ps.lens_index = &lens_index_[base];
       ps.lens_order = &lens_order_[base];
       ps.lens_offsets = &lens_offsets_[pi * (n_lens_ + 1)];
     }
     return ps;
+  }
+
+  // Index every pixel's samples by (lens-grid cell, time stratum) with S strata of equal length in
+  // t (1 <= S <= 64), so that a traversal can skip the samples outside a time interval without
+  // touching them (issue 5: samples culled by the intervals before the sample test).
+  void set_time_strata(int S);
+  int time_strata() const { return strata_; }
+  // Sub-interval k of S on [0, 1]: [k / S, (k + 1) / S].
+  static int stratum_of(float t, int S) {
+    const int k = static_cast<int>(static_cast<double>(t) * S);
+    return !(t > 0.0f) ? 0 : (k >= S ? S - 1 : k);
   }
 
   static int cell_of(float u, float v, int grid) {
@@ -84,6 +102,8 @@ class SampleTable {
 
  private:
   int period_, spp_, grid_, n_lens_;
+  int strata_ = 0;
+  std::vector<std::int32_t> ct_order_, ct_offsets_;
   std::vector<float> x_, y_, u_, v_, t_;
   std::vector<std::int32_t> cell_order_, cell_offsets_;
   std::vector<std::uint8_t> cell_idx_;

@@ -30,6 +30,7 @@
 
 #include "rast5d/arith.h"
 #include "rast5d/backend.h"
+#include "rast5d/clip.h"
 #include "rast5d/costs.h"
 #include "rast5d/counters.h"
 #include "rast5d/inside.h"
@@ -155,6 +156,15 @@ class SamplePipeline {
       }
     }
     for (int i = 0; i < n_sel; ++i) push(px, py, ps, idx[i]);
+  }
+
+  // Issue 5 backend switches. Flush before changing them: they apply to the samples evaluated by
+  // the next flush. skip_depth_reads: the pair is entirely in front of HiZ zmin (counting only:
+  // the depth test's result is the same). query: occlusion-query triangle, depth test only.
+  void set_depth_mode(bool skip_depth_reads, bool query) {
+    flush();
+    skip_depth_reads_ = skip_depth_reads;
+    query_ = query;
   }
 
   inline void flush() {
@@ -338,6 +348,10 @@ class SamplePipeline {
   // A covered sample: depth, near plane, depth test, colour. Cost: ops.interp.
   template <class G>
   inline void shade(const TriSetup& tri, const G e[3], G det, int px, int py, int s) {
+    if (clip_active_ && !clip_pass(px, py, s)) {  // user clip box (issue 5): never a hit
+      ++c_[Counter::interval_samples_clipped];
+      return;
+    }
     ++c_[Counter::raster_samples_covered];
     std::uint64_t& iops = c_[Counter::ops_interp];
     G sum, z;
@@ -349,12 +363,19 @@ class SamplePipeline {
     }
     ++c_[Counter::raster_samples_hit];
     ++c_[Counter::depth_tests];
+    if (skip_depth_reads_) ++c_[Counter::depth_reads_skipped];
+    else c_[Counter::depth_bytes_read] += 4;
     const std::size_t slot = buf_.slot(px, py, s);
     float& zbuf = buf_.depth(slot);
     const bool pass = z < G(zbuf);
     charge<A>(iops, cost::kDepthTest);
     if (!pass) return;
+    if (query_) {  // occlusion query: count, write nothing
+      ++c_[Counter::occlusion_samples_passed];
+      return;
+    }
     ++c_[Counter::depth_passes];
+    c_[Counter::depth_bytes_written] += 4;
     G c0[3], c1[3], c2[3], out[3];
     for (int ch = 0; ch < 3; ++ch)
       c0[ch] = G(tri.color[0][ch]), c1[ch] = G(tri.color[1][ch]), c2[ch] = G(tri.color[2][ch]);
@@ -397,10 +418,18 @@ class SamplePipeline {
     if (sh_.counting()) sh_.record(tri.index, r);
   }
 
+  bool clip_pass(int px, int py, int s) const {
+    const PixelSamples ps = f_.table.pixel(px, py);
+    return iv::in_clip(clip_, ps.u[s], ps.v[s], ps.t[s]);
+  }
+
   const Frame& f_;
   Counters& c_;
   BinBuffers& buf_;
   ShadeState& sh_;
+  const iv::ClipBox clip_ = iv::clip_box(f_.p);
+  const bool clip_active_ = clip_.active();
+  bool skip_depth_reads_ = false, query_ = false;
   // Pending batch (fast path).
   const TriSetup* tri_ = nullptr;
   bool sheared_ = false;

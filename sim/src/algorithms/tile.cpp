@@ -7,12 +7,17 @@
 //
 // Triangle classes: 2D (static, in focus) uses the standard tile vs triangle test (edge functions
 // at the tile corners and the bounding box); 4D (static, defocused) the full h_i + H_j test;
-// moving triangles (3D/5D) a conservative path: h_i lines over the 6 shutter-end vertices, no H_j
-// (counted in trav.motion_fallback), or no tile test at all if a vertex may cross the near plane.
+// moving triangles (3D/5D), issue 5 (002_95ea0844b256f75b.txt §2): per time sub-interval a
+// conservative t̂ and, for 5D, lens sets from the h_i lines over the sub-interval's end vertices
+// (intervals.h); samples are selected through the (lens cell, time stratum) index of the table.
+// With motion_test: bounds, the older conservative path: h_i lines over the 6 shutter-end
+// vertices, no H_j, no t̂ (counted in trav.motion_fallback). Every pair may be depth-culled against
+// HiZ with ẑ (002 App. A), and occlusion queries use the same ẑ (002 §3).
 #include <algorithm>
 #include <vector>
 
 #include "rast5d/footprint.h"
+#include "rast5d/intervals.h"
 
 namespace rast5d {
 namespace {
@@ -24,7 +29,9 @@ class Tile final : public Traversal {
 
  public:
   Tile(const Frame& f, ThreadState& ts)
-      : f_(f), c_(ts.counters), pipe_(f, ts), lens_mask_(lens_cells(f.p.lens_shape, f.p.lens_grid)) {
+      : f_(f), c_(ts.counters), pipe_(f, ts), lens_mask_(lens_cells(f.p.lens_shape, f.p.lens_grid)),
+        buf_(ts.buffers) {
+    if (f.p.hiz_enabled || f.p.query_mode == 2) buf_.set_hiz_tile(f.p.hiz_tile);
     for (int c = 0; c < 64; ++c) {
       low64_.set(c);
       if (lens_mask_.test(c)) lens_mask64_ |= std::uint64_t(1) << c;
@@ -32,12 +39,89 @@ class Tile final : public Traversal {
   }
 
   void rasterize(const TriSetup& tri, const BinRect& bin, bool charge_setup) override {
+    begin_triangle(tri, charge_setup);
+    if (query_ && query_visible_) return;  // interval-based query already answered: abort
+    rasterize_tri(tri, bin, charge_setup);
+    end_triangle();
+  }
+
+ private:
+  // ---- issue 5: depth intervals, HiZ, occlusion queries -----------------------------------------
+  void begin_triangle(const TriSetup& tri, bool charge_setup) {
+    const RenderParams& p = f_.p;
+    query_ = p.query_first >= 0 && tri.index >= static_cast<std::uint32_t>(p.query_first) && p.query_mode > 0;
+    set_mode(false);
+    need_z_ = p.hiz_enabled || p.zhat_stats || (query_ && p.query_mode == 2);
+    if (need_z_ && p.zhat_planes) {
+      std::uint64_t ops = 0;
+      iv::moving_planes<A>(tri, planes_, ops);
+      if (charge_setup) c_[Counter::ops_zhat] += ops;
+    }
+  }
+  void end_triangle() {
+    pipe_.flush();
+    if (f_.p.hiz_enabled && !query_) c_[Counter::hiz_bytes_written] += 8 * static_cast<std::uint64_t>(buf_.hiz_update());
+  }
+  void set_mode(bool skip_reads) {
+    const bool q = query_ && f_.p.query_mode == 1;
+    if (skip_reads != skip_reads_ || q != mode_query_) pipe_.set_depth_mode(skip_reads, q);
+    skip_reads_ = skip_reads, mode_query_ = q;
+  }
+  // One (triangle, tile) pair that passed its tile test: ẑ against HiZ. Returns false when the pair
+  // is culled (zmax-culling, or an interval-based query pair: no samples either way); sets the
+  // depth-read mode of the pair's samples (zmin-culling).
+  bool zcheck(const TriSetup& tri, int tx, int ty, double x0, double x1, double y0, double y1, bool lens, double u0,
+              double u1, double v0, double v1, double ta, double tb, int n_samples) {
+    const RenderParams& p = f_.p;
+    if (!need_z_) return true;
+    const bool query_iv = query_ && p.query_mode == 2;
+    const iv::ZHat z = iv::zhat<A>(tri, p.zhat_planes ? &planes_ : nullptr, f_.fc, lens, x0, x1, y0, y1, u0, u1,
+                                   v0, v1, ta, tb, c_[Counter::ops_zhat]);
+    ++c_[Counter::zcull_pairs];
+    const double nr = f_.fc.near_d;
+    auto width = [nr](double lo, double hi) {
+      const double w = (hi - std::max(lo, nr)) / nr * 1e6;
+      return w > 0 ? static_cast<std::uint64_t>(std::llround(std::min(w, 1e15))) : std::uint64_t(0);
+    };
+    c_[Counter::zcull_width_zhat] += width(z.wlo, z.whi);
+    c_[Counter::zcull_width_vertex] += width(z.vwlo, z.vwhi);
+    if (!(p.hiz_enabled || query_iv)) return true;
+    double zlo, zhi;
+    iv::zhat_widen(z, nr, zlo, zhi);
+    const double zmax = buf_.hiz_max(tx, ty), zmin = buf_.hiz_min(tx, ty);
+    c_[Counter::hiz_bytes_read] += 8;
+    const bool behind = D(zlo) >= D(zmax);
+    const bool front = D(zhi) < D(zmin);
+    charge<A>(c_[Counter::ops_zhat], 2);
+    if (query_iv) {
+      ++c_[Counter::occlusion_pairs_tested];
+      if (!behind) ++c_[Counter::occlusion_visible_pairs], query_visible_ = true;
+      return false;
+    }
+    if (behind) {
+      ++c_[Counter::zcull_pairs_culled];
+      c_[Counter::zcull_samples_culled] += static_cast<std::uint64_t>(n_samples);
+      return false;
+    }
+    if (front) ++c_[Counter::zcull_pairs_zmin];
+    set_mode(front);
+    if (p.hiz_enabled) buf_.hiz_mark(tx, ty);
+    return true;
+  }
+
+  void rasterize_tri(const TriSetup& tri, const BinRect& bin, bool charge_setup) {
     std::uint64_t setup_ops = 0;
     if (tri.cls == DimClass::k2D) {
       const tiletest::Edges2D e = tiletest::edges_2d<D>(tri.X, tri.Y, tri.W);
       charge<A>(setup_ops, cost::kEdges2DSetup);
       if (charge_setup) c_[Counter::ops_setup] += setup_ops;
       raster_2d(tri, e, bin);
+      return;
+    }
+    if (tri.moving && f_.p.motion_intervals && !kInterleaved) {
+      iv::motion_setup<A>(tri, f_.fc, f_.p.time_splits, ms_, setup_ops);
+      if (charge_setup) c_[Counter::ops_setup] += setup_ops;
+      raster_motion(tri, bin);
       return;
     }
     const Footprint fp = build_footprint<A>(tri, f_, f_.p.halfspace_H, setup_ops);
@@ -52,7 +136,6 @@ class Tile final : public Traversal {
     raster_lens(tri, fp, bin);
   }
 
- private:
   // Pre-shear the static triangle to every discrete lens coordinate (OUR (i) setup cost).
   void shear_lens_positions(const TriSetup& tri, std::uint64_t& ops) {
     const int n = f_.table.n_lens();
@@ -77,7 +160,10 @@ class Tile final : public Traversal {
     const int y0 = std::max(tri.by0, bin.y0), y1 = std::min(tri.by1, bin.y1);
     for (int ty = (y0 / T) * T; ty < y1; ty += T)
       for (int tx = (x0 / T) * T; tx < x1; tx += T)
-        fn(tx, ty, std::max(tx, x0), std::max(ty, y0), std::min(tx + T, x1), std::min(ty + T, y1)), pipe_.end_visit();  // a shading visit = one tile
+        if (!(query_ && query_visible_)) {  // interval-based query: abort at the first visible tile
+          fn(tx, ty, std::max(tx, x0), std::max(ty, y0), std::min(tx + T, x1), std::min(ty + T, y1));
+          pipe_.end_visit();  // a shading visit = one tile
+        }
   }
 
   // ---- 2D: standard tile test, every sample of accepted tiles --------------------------------
@@ -101,6 +187,7 @@ class Tile final : public Traversal {
         return;
       }
       ++c_[Counter::tile_accepted];
+      if (!zcheck(tri, tx, ty, x0, x1, y0, y1, false, 0, 0, 0, 0, 0, 0, (tx1 - px0) * (ty1 - py0) * spp)) return;
       bool optimal_tile = false;
       if (f_.p.count_optimal)
         optimal_tile = tiletest::footprint_overlaps_tile(tri.poly, tri.poly_n, 0, 0, f_.fc.focus_d, 0, 0, tx,
@@ -134,8 +221,17 @@ class Tile final : public Traversal {
       sx.n_intervals = sy.n_intervals = 1;
       sx.iv_lo[0] = sy.iv_lo[0] = -1.0, sx.iv_hi[0] = sy.iv_hi[0] = 1.0;
       if (use_h) {
+        if (!tri.moving) ++c_[Counter::interval_lens_tests_4d];
         if (!tile_h_sets<A>(fp, x0, x1, y0, y1, sx, sy, c_[Counter::ops_tile])) {
           ++c_[Counter::tile_culled_h];
+          return;
+        }
+      }
+      if (clip_.active_u || clip_.active_v) {  // user clip planes on the lens intervals
+        if (clip_.active_u) iv::clip_axis<A>(sx, clip_.u_lo, clip_.u_hi, c_[Counter::ops_tile]);
+        if (clip_.active_v) iv::clip_axis<A>(sy, clip_.v_lo, clip_.v_hi, c_[Counter::ops_tile]);
+        if (sx.n_intervals == 0 || sy.n_intervals == 0) {
+          ++c_[Counter::interval_culled_clip];
           return;
         }
       }
@@ -243,6 +339,12 @@ class Tile final : public Traversal {
         }
       }
       ++c_[Counter::tile_accepted];
+      if (need_z_) {
+        const bool mv = tri.moving;
+        if (!zcheck(tri, tx, ty, x0, x1, y0, y1, true, sx.iv_lo[0], sx.iv_hi[sx.n_intervals - 1], sy.iv_lo[0],
+                    sy.iv_hi[sy.n_intervals - 1], 0.0, mv ? 1.0 : 0.0, (tx1 - px0) * (ty1 - py0) * f_.table.spp()))
+          return;
+      }
       // Samples of surviving cells, each checked against the h_i lines, then inside-tested.
       int n_cells = 0;
       if (small) {
@@ -290,6 +392,108 @@ class Tile final : public Traversal {
     pipe_.flush();
   }
 
+  // ---- moving triangles (3D, 5D): time sub-intervals with t̂ and lens sets (intervals.h) -------
+  void raster_motion(const TriSetup& tri, const BinRect& bin) {
+    const RenderParams& p = f_.p;
+    const int T = p.tile_size, G = p.lens_grid, S = ms_.S;
+    const bool lens = ms_.lens;
+    const int spp = f_.table.spp();
+    const int NT = f_.table.time_strata(), per_sub = NT / S;  // NT is a multiple of S (validated)
+    pipe_.begin(tri);
+    iv::TileIntervals& ti = ti_;
+    for_tiles(tri, bin, [&](int tx, int ty, int px0, int py0, int tx1, int ty1) {
+      ++c_[Counter::tile_visited];
+      const double x0 = tiletest::expand_lo(tx), x1 = tiletest::expand_hi(tx + T);
+      const double y0 = tiletest::expand_lo(ty), y1 = tiletest::expand_hi(ty + T);
+      if (!iv::motion_tile_intervals<A>(ms_, clip_, tri.cls, x0, x1, y0, y1, ti, c_[Counter::ops_tile], c_)) {
+        ++c_[Counter::interval_culled_t];
+        return;
+      }
+      // Lens cells per active sub-interval (5D: inside its lens sets; 3D: every cell on the lens).
+      int n_cells[iv::kMaxSplits];
+      int total_cells = 0;
+      for (int k = 0; k < S; ++k) {
+        n_cells[k] = 0;
+        if (!ti.active[k]) continue;
+        int* list = &cell_lists_[static_cast<std::size_t>(k) * 256];
+        std::uint32_t bx = ~0u, by = ~0u;
+        if (lens) {
+          bx = tiletest::axis_cells<D>(ti.sx[k], G);
+          by = tiletest::axis_cells<D>(ti.sy[k], G);
+          charge<A>(c_[Counter::ops_tile], ti.sx[k].n_cmp + ti.sy[k].n_cmp);
+        }
+        for (int j = 0; j < G; ++j) {
+          if (!(by >> j & 1u)) continue;
+          for (int i = 0; i < G; ++i)
+            if ((bx >> i & 1u) && lens_mask_.test(j * G + i)) list[n_cells[k]++] = j * G + i;
+        }
+        total_cells += n_cells[k];
+        // Time strata of the table index that overlap t̂_k (2 MUL): samples outside are never touched.
+        const D slo = D(ti.tlo[k]) * D(NT), shi = D(ti.thi[k]) * D(NT);
+        charge<A>(c_[Counter::ops_tile], 2);
+        strata_lo_[k] = std::max(k * per_sub, static_cast<int>(std::floor(raw(slo))));
+        strata_hi_[k] = std::min((k + 1) * per_sub - 1, static_cast<int>(std::floor(raw(shi))));
+      }
+      if (total_cells == 0) {
+        ++c_[Counter::tile_culled_lens];
+        return;
+      }
+      ++c_[Counter::tile_accepted];
+      if (!zcheck(tri, tx, ty, x0, x1, y0, y1, lens, ti.u0, ti.u1, ti.v0, ti.v1, ti.t0, ti.t1,
+                  (tx1 - px0) * (ty1 - py0) * spp))
+        return;
+      const bool cu = clip_.active_u, cv = clip_.active_v;
+      const F cul(cu ? clip_.u_lo : 0.0), cuh(cu ? clip_.u_hi : 0.0), cvl(cv ? clip_.v_lo : 0.0),
+          cvh(cv ? clip_.v_hi : 0.0);
+      for (int py = py0; py < ty1; ++py)
+        for (int px = px0; px < tx1; ++px) {
+          const PixelSamples ps = f_.table.pixel(px, py);
+          std::uint64_t region_ops = 0;
+          int n = 0;
+          for (int k = 0; k < S; ++k) {
+            if (!ti.active[k]) continue;
+            const iv::Interval1<F> tk{F(ti.tlo[k]), F(ti.thi[k])};
+            const tiletest::AxisSet& sx = ti.sx[k];
+            const tiletest::AxisSet& sy = ti.sy[k];
+            // per sample: 2 CMP for t̂, the lens cuts (5D), 2 CMP per clipped lens axis
+            const std::uint64_t per = 2 + (lens ? sx.n_cmp + sy.n_cmp : 0) + (cu ? 2 : 0) + (cv ? 2 : 0);
+            const int* list = &cell_lists_[static_cast<std::size_t>(k) * 256];
+            int checked = 0;
+            const int j0 = strata_lo_[k], j1 = strata_hi_[k];
+            for (int q = 0; q < n_cells[k]; ++q)
+              for (int j = j0; j <= j1; ++j) {
+              const int b = list[q] * NT + j;
+              for (int idx = ps.ct_offsets[b]; idx < ps.ct_offsets[b + 1]; ++idx) {
+                const int smp = ps.ct_order[idx];
+                ++checked;
+                const F t(ps.t[smp]);
+                bool pass = (t >= tk.lo) & (t <= tk.hi);
+                if (lens) pass &= tiletest::axis_pass(sx, F(ps.u[smp])) & tiletest::axis_pass(sy, F(ps.v[smp]));
+                if (cu) {
+                  const F u(ps.u[smp]);
+                  pass &= (u >= cul) & (u <= cuh);
+                }
+                if (cv) {
+                  const F v(ps.v[smp]);
+                  pass &= (v >= cvl) & (v <= cvh);
+                }
+                cand_[n] = smp;
+                n += pass;
+              }
+            }
+            region_ops += per * static_cast<std::uint64_t>(checked);
+          }
+          // Charge the selection before the sample tests (the counting path tallies in order).
+          charge<A>(c_[Counter::ops_sample_region], region_ops);
+          if (p.count_optimal)
+            for (int i = 0; i < n; ++i)
+              c_[Counter::tile_samples_optimal] += in_exact_region(tri, fp_dummy_, f_.fc, ps, cand_[i], tx, ty, T);
+          for (int i = 0; i < n; ++i) pipe_.push(px, py, ps, cand_[i]);
+        }
+    });
+    pipe_.flush();
+  }
+
   const Frame& f_;
   Counters& c_;
   SamplePipeline<A> pipe_;
@@ -300,6 +504,16 @@ class Tile final : public Traversal {
   std::uint64_t lens_mask64_ = 0;
   std::vector<std::uint8_t> sel_ = std::vector<std::uint8_t>(4096 + 8, 0);
   std::vector<float> sx_, sy_;
+  // issue 5
+  BinBuffers& buf_;
+  const iv::ClipBox clip_ = iv::clip_box(f_.p);
+  iv::MotionSetup ms_;
+  iv::TileIntervals ti_;
+  int strata_lo_[iv::kMaxSplits], strata_hi_[iv::kMaxSplits];
+  std::vector<int> cell_lists_ = std::vector<int>(256 * iv::kMaxSplits);
+  const Footprint fp_dummy_{};  // in_exact_region reads no footprint for moving triangles
+  iv::MovingPlanes planes_;
+  bool query_ = false, query_visible_ = false, need_z_ = false, skip_reads_ = false, mode_query_ = false;
 };
 
 template <class A>
