@@ -9,6 +9,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+import models
 import sim
 from sim import HardwareConfig, UnitConfig
 from sim.timing import UNITS
@@ -258,12 +259,32 @@ def test_render_records_add_up_to_the_counters():
     assert recs["tile_tests"].sum() == st_["tile.visited"] > 0
     assert recs["sample_tests"].sum() == st_["raster.samples_tested"] > 0
     assert recs["depth_tests"].sum() == st_["depth.tests"]
-    assert recs["memory_bytes"].sum() == 4 * st_["depth.tests"] + 4 * st_["depth.passes"]  # placeholder
+    assert recs["memory_bytes"].sum() == st_["depth.bytes_read"] + st_["depth.bytes_written"] > 0  # no HiZ, untextured
+    assert recs["quads"].sum() == 0 and recs["texel_fetches"].sum() == 0 and recs["tex_misses"].sum() == 0
     assert recs["bin"].max() < st_["frame.bins"]
     assert st_["timing.cores"] == 2 and st_["timing.records"] == len(recs)
     # Re-timing the stored records gives the render's figures.
     again = sim.timing.estimate(recs, HardwareConfig(cores=2))
     assert all(st_[k] == v for k, v in again.items())
+
+
+def test_render_records_carry_shading_texture_and_hiz_work():
+    """With shading, texturing and HiZ on, the records carry the quads, texel fetches, the texture
+    misses of the cache replay (each record its own) and all memory traffic."""
+    cam = sim.Camera(width=64, height=64, coc_px=4)
+    table = sim.SampleTable.stratified(spp=4, seed=1)
+    cfg = sim.PipelineConfig(algorithm="tile", threads=2, shading="msaa", texture_count=1,
+                             hiz={"enabled": True, "tile_size": 8})
+    res = sim.render(models.named("spot_wall"), cam, table, cfg)
+    recs, st_ = res.timing_records, res.flat_stats
+    assert recs["quads"].sum() == st_["shade.quad_requests"] > 0
+    assert recs["texel_fetches"].sum() == st_["tex.fetches"] > 0
+    assert recs["tex_misses"].sum() == st_["tex.cache.misses"] > 0
+    assert (recs["tex_misses"] > 0).sum() > 1  # spread over the records, not lumped
+    assert recs["memory_bytes"].sum() == (st_["depth.bytes_read"] + st_["depth.bytes_written"] + st_["hiz.bytes_read"]
+                                          + st_["hiz.bytes_written"] + st_["tex.cache.bytes_fetched"])
+    one = sim.render(models.named("spot_wall"), cam, table, cfg.replace(threads=1))
+    assert one.timing_records.tobytes() == recs.tobytes()
 
 
 def test_render_without_timing():

@@ -180,6 +180,9 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
   // Timing records per bin: each bin is rasterized by exactly one worker, so its stream is
   // written without locks and its content does not depend on the thread count.
   std::vector<std::vector<TileWork>> bin_records(p.record_timing ? n_bins : 0);
+  // The texture-cache line stream length after each record, so the cache replay can hand every
+  // record its own misses (the cache is simulated after the render, in bin order).
+  std::vector<std::vector<std::uint32_t>> bin_stream_ends(p.record_timing ? n_bins : 0);
   std::vector<ThreadState> states(n_threads);
   for (auto& s : states) s.shade.attach(&shade_frame, &s.counters);
   std::atomic<int> next_bin{0};
@@ -214,6 +217,8 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
           w.bin = b;
           w.triangles = home ? 1u : 0u;  // setup is done once, charged in the triangle's first bin
           bin_records[b].push_back(w);
+          if (!shade_frame.streams.empty())
+            bin_stream_ends[b].push_back(static_cast<std::uint32_t>(shade_frame.streams[b].size()));
         }
         ts.shade.close_visit();  // algorithms end their visits; this only guards the contract
         ts.buffers.resolve(result.image.data(), p.width);
@@ -256,6 +261,29 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
   result.counters[Counter::frame_samples] =
       static_cast<std::uint64_t>(p.width) * p.height * table.spp();
   result.counters[Counter::frame_bins] = static_cast<std::uint64_t>(n_bins);
+  if (shade_frame.textured() && shade_frame.mode != ShadingMode::kNone && !result.interrupted) {
+    const std::uint64_t lines = static_cast<std::uint64_t>(p.tex_cache_bytes / p.tex_cache_line_bytes);
+    const bool per_record = p.record_timing && !shade_frame.streams.empty();
+    std::vector<std::vector<std::uint32_t>> seg_misses;
+    const CacheStats cs = simulate_texture_caches(shade_frame.streams, p.tex_cache_count, lines,
+                                                  static_cast<std::uint64_t>(p.tex_cache_ways),
+                                                  per_record ? &bin_stream_ends : nullptr,
+                                                  per_record ? &seg_misses : nullptr);
+    if (per_record)  // each record's texture misses and the line bytes they fetch (docs/timing.md)
+      for (std::size_t b = 0; b < bin_records.size(); ++b)
+        for (std::size_t k = 0; k < bin_records[b].size() && k < seg_misses[b].size(); ++k) {
+          bin_records[b][k].tex_misses += seg_misses[b][k];
+          bin_records[b][k].memory_bytes += static_cast<std::uint64_t>(seg_misses[b][k]) * p.tex_cache_line_bytes;
+        }
+    Counters& c = result.counters;
+    c[Counter::tex_cache_accesses] = cs.accesses;
+    c[Counter::tex_cache_hits] = cs.hits;
+    c[Counter::tex_cache_misses] = cs.misses;
+    c[Counter::tex_cache_misses_cold] = cs.cold;
+    c[Counter::tex_cache_misses_capacity] = cs.capacity;
+    c[Counter::tex_cache_misses_conflict] = cs.conflict;
+    c[Counter::tex_cache_bytes_fetched] = cs.misses * static_cast<std::uint64_t>(p.tex_cache_line_bytes);
+  }
   if (p.record_timing && !result.interrupted) {
     std::size_t total = static_cast<std::size_t>(scene.n) - live.size();
     for (const auto& v : bin_records) total += v.size();
@@ -266,19 +294,6 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
     culled.triangles = 1;
     result.timing_records.insert(result.timing_records.end(), static_cast<std::size_t>(scene.n) - live.size(), culled);
     for (const auto& v : bin_records) result.timing_records.insert(result.timing_records.end(), v.begin(), v.end());
-  }
-  if (shade_frame.textured() && shade_frame.mode != ShadingMode::kNone && !result.interrupted) {
-    const std::uint64_t lines = static_cast<std::uint64_t>(p.tex_cache_bytes / p.tex_cache_line_bytes);
-    const CacheStats cs = simulate_texture_caches(shade_frame.streams, p.tex_cache_count, lines,
-                                                  static_cast<std::uint64_t>(p.tex_cache_ways));
-    Counters& c = result.counters;
-    c[Counter::tex_cache_accesses] = cs.accesses;
-    c[Counter::tex_cache_hits] = cs.hits;
-    c[Counter::tex_cache_misses] = cs.misses;
-    c[Counter::tex_cache_misses_cold] = cs.cold;
-    c[Counter::tex_cache_misses_capacity] = cs.capacity;
-    c[Counter::tex_cache_misses_conflict] = cs.conflict;
-    c[Counter::tex_cache_bytes_fetched] = cs.misses * static_cast<std::uint64_t>(p.tex_cache_line_bytes);
   }
   return result;
 }

@@ -41,10 +41,13 @@ TileWork work_from_counters(const Counters& before, const Counters& after) {
   w.tile_tests = d(Counter::tile_visited);
   w.sample_tests = d(Counter::raster_samples_tested);
   w.depth_tests = d(Counter::depth_tests);
-  // Not counted yet (issue 6 part A, issue 5): quads <- shade.quad_requests, texel_fetches <-
-  // tex.fetches, tex_misses <- tex.cache.misses, memory bytes <- tex.cache.bytes_fetched +
-  // depth.bytes_read + depth.bytes_written (replacing the placeholder below).
-  w.memory_bytes = kDepthBytesPerTest * w.depth_tests + kDepthBytesPerPass * d(Counter::depth_passes);
+  w.quads = d(Counter::shade_quad_requests);
+  w.texel_fetches = d(Counter::tex_fetches);
+  // Memory: per-sample depth traffic and HiZ traffic (issue 5 counters). Texture-cache misses and
+  // the line bytes they fetch are added per record by the cache replay after the render
+  // (render.cpp), since the cache is simulated in bin order once all bins are done.
+  w.memory_bytes = d(Counter::depth_bytes_read) + d(Counter::depth_bytes_written) + d(Counter::hiz_bytes_read) +
+                   d(Counter::hiz_bytes_written);
   return w;
 }
 

@@ -249,14 +249,28 @@ class ShadeState {
 };
 
 // Run the per-bin texture-cache line streams through `count` caches in bin raster order (bin b to
-// cache b mod count); returns the summed statistics.
+// cache b mod count); returns the summed statistics. With `segment_ends` (per bin, the stream length
+// after each of the bin's timing records), `segment_misses` receives the misses of each segment, so
+// the timing model can charge every record its own texture misses.
 inline CacheStats simulate_texture_caches(const std::vector<std::vector<std::uint32_t>>& streams, int count,
-                                          std::uint64_t lines, std::uint64_t ways) {
+                                          std::uint64_t lines, std::uint64_t ways,
+                                          const std::vector<std::vector<std::uint32_t>>* segment_ends = nullptr,
+                                          std::vector<std::vector<std::uint32_t>>* segment_misses = nullptr) {
   std::vector<SetAssocCache> caches;
   for (int i = 0; i < count; ++i) caches.emplace_back(lines, ways);
+  if (segment_misses) segment_misses->assign(streams.size(), {});
   for (std::size_t b = 0; b < streams.size(); ++b) {
     SetAssocCache& cache = caches[b % count];
-    for (std::uint32_t line : streams[b]) cache.access(line);
+    const std::vector<std::uint32_t>* ends = segment_ends && b < segment_ends->size() ? &(*segment_ends)[b] : nullptr;
+    std::size_t seg = 0;
+    std::uint32_t misses = 0;
+    for (std::size_t i = 0; i < streams[b].size(); ++i) {
+      if (ends)
+        while (seg < ends->size() && i >= (*ends)[seg]) (*segment_misses)[b].push_back(misses), misses = 0, ++seg;
+      if (!cache.access(streams[b][i])) ++misses;
+    }
+    if (ends)
+      while (seg < ends->size()) (*segment_misses)[b].push_back(misses), misses = 0, ++seg;
   }
   CacheStats s;
   for (const auto& cache : caches) {

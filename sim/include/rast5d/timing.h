@@ -64,11 +64,6 @@ struct TileWork {
   std::uint64_t amount(Unit u) const;
 };
 
-// Placeholder depth traffic until the depth-traffic counters exist (issue 5): 4 bytes read per
-// depth test, 4 bytes written per pass (a 32-bit depth buffer, no compression, no HiZ).
-inline constexpr std::uint64_t kDepthBytesPerTest = 4;
-inline constexpr std::uint64_t kDepthBytesPerPass = 4;
-
 // THE mapping from the engine's counters to a work record: the delta of one worker thread's
 // counters around one call of Traversal::rasterize. Extend it here when new counters exist.
 TileWork work_from_counters(const Counters& before, const Counters& after);
