@@ -15,6 +15,7 @@ counter and derived figure of ``Result.flat_stats``, ``time.wall_s``, ``engine.v
 """
 from __future__ import annotations
 
+import inspect
 import json
 import math
 import os
@@ -90,7 +91,9 @@ def render_point(config: RenderConfig, image_path: str | Path | None = None, thr
     scene, camera, table, pipeline = build(config)
     if threads is not None and config.pipeline.threads == 0:
         pipeline = pipeline.replace(threads=threads)
-    result = sim.render(scene, camera, table, pipeline)
+    # The hardware section feeds sim.render's timing model where the engine has one (issue 6).
+    extra = {"hardware": config.hardware_config()} if "hardware" in inspect.signature(sim.render).parameters else {}
+    result = sim.render(scene, camera, table, pipeline, **extra)
     row = config_columns(config, camera)
     row["resolved.lens_grid"] = result.config.get("lens_grid")
     row["scene.triangles"] = scene.n_triangles
