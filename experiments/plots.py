@@ -440,7 +440,8 @@ def render_plot(spec, df, out_base: Path | None) -> dict:
             ax.set_xlabel(spec.xlabel or spec.x)
             ax.set_ylabel(spec.ylabel or (spec.ys[0] if len(spec.ys) == 1 else "value"))
             if f is not None:
-                ax.set_title(f"{spec.facet.split('.')[-1]} = {_label(f)}")
+                name = spec.facet.removesuffix(".name").split(".")[-1]
+                ax.set_title(f"{name} = {_label(f)}")
         # One legend for the figure (every panel uses the same colours), outside the panels when long.
         if spec.kind == "scatter":
             handles = _scatter_legend(spec, hues, styles)
