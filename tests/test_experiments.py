@@ -357,3 +357,17 @@ def test_full_quick_report(tmp_path):
     for p in report.paper_configs():
         page = xc.load_config(p).outputs.page
         assert f"[{page}](paper/{page}.md)" in index
+
+
+def test_the_documented_spec_example_is_valid():
+    """docs/reports.md's format example passes the schema (the other engineers copy it)."""
+    import re
+
+    import yaml
+
+    text = (xc.REPO / "docs" / "reports.md").read_text()
+    block = re.search(r"```yaml\n(.*?)```", text, flags=re.S).group(1)
+    data = yaml.safe_load(block.replace("<name>", "example").replace("<page name>", "example"))
+    config = xc.validate(data, "docs/reports.md")
+    assert [p.kind for p in config.outputs.plots] == ["line"] and config.outputs.plots[0].paper["tile"][50] == 0.09
+    assert len(xc.sweep_points(config.sweep)) == 10
