@@ -371,3 +371,19 @@ def test_the_documented_spec_example_is_valid():
     config = xc.validate(data, "docs/reports.md")
     assert [p.kind for p in config.outputs.plots] == ["line"] and config.outputs.plots[0].paper["tile"][50] == 0.09
     assert len(xc.sweep_points(config.sweep)) == 10
+
+
+def test_a_point_that_kills_its_worker_fails_alone(tmp_path, store, monkeypatch):
+    """A crash in native code takes the worker process down; only that point is an error."""
+    real = runner.render_point
+
+    def crashing(config, *args, **kwargs):
+        if config.samples.spp == 8:
+            os._exit(3)  # as a segfault would: no exception, the process is gone
+        return real(config, *args, **kwargs)
+
+    monkeypatch.setattr(runner, "render_point", crashing)  # inherited by the forked workers
+    c = xc.load_config(write(tmp_path, "k.yaml", BASE + "sweep:\n  samples.spp: [4, 8, 16, 2]\n"))
+    df = runner.run_sweep(c, workers=2, progress=False)
+    assert df["status"].tolist() == ["ok", "error", "ok", "ok"]
+    assert "worker process died" in df["error"].iloc[1]
