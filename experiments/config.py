@@ -151,10 +151,13 @@ class PlotSpec(_Strict):
     fit: Optional[Literal["powerlaw"]] = Field(None, description=(
         "table only: 'powerlaw' fits y = c * x^-alpha per hue (and facet) by least squares in log-log and "
         "tabulates alpha"))
-    paper: dict[str, dict[Any, Any]] = Field(default_factory=dict, description=(
+    paper: dict[Any, dict[Any, Any]] = Field(default_factory=dict, description=(
         "Published numbers {hue value (or y column without hue): {x value: number or text}}, drawn/tabulated "
         "beside ours"))
     format: Optional[str] = Field(None, description="Python format of the numbers in tables, e.g. '{:.2f}'")
+    labels: dict[str, dict[Any, str]] = Field(default_factory=dict, description=(
+        "Display names for values of a column {column: {value: name}}, e.g. {mode: {0: none, 1: h_i}}; also "
+        "the keys of paper: and where: for that column"))
     columns: list[str] = Field(default_factory=list, description=(
         "scatter and x-less tables: extra columns shown in the data table (e.g. samples.spp)"))
     optional: bool = Field(False, description=(

@@ -391,6 +391,10 @@ def render_plot(spec, df, out_base: Path | None) -> dict:
     ``df`` already carries the derived columns; failed rows (status != ok) are left out."""
     if "status" in df.columns:
         df = df[df["status"] == "ok"]
+    for col, names in spec.labels.items():  # display names replace the values (before where: and paper:)
+        if col not in df.columns:
+            raise PlotError(f"plot {spec.title or spec.kind!r}: labels: unknown column {col!r}")
+        df = df.assign(**{col: [next((n for k, n in names.items() if _same(v, k)), v) for v in df[col]]})
     if isinstance(spec.hue, list):  # several hue columns: one combined label column
         for col in spec.hue:
             if col not in df.columns:
@@ -436,7 +440,8 @@ def render_plot(spec, df, out_base: Path | None) -> dict:
             ax.set_xlabel(spec.xlabel or spec.x)
             ax.set_ylabel(spec.ylabel or (spec.ys[0] if len(spec.ys) == 1 else "value"))
             if f is not None:
-                ax.set_title(f"{spec.facet.split('.')[-1]} = {_label(f)}")
+                name = spec.facet.removesuffix(".name").split(".")[-1]
+                ax.set_title(f"{name} = {_label(f)}")
         # One legend for the figure (every panel uses the same colours), outside the panels when long.
         if spec.kind == "scatter":
             handles = _scatter_legend(spec, hues, styles)

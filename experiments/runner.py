@@ -189,34 +189,48 @@ def load(name: str):
 # ---- executors ---------------------------------------------------------------------------------
 
 def _local(todo, workers: int, finished):
-    """Run todo [(key, args)] on a process pool; call finished(key, row) as points finish."""
-    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-    from concurrent.futures.process import BrokenProcessPool
+    """Run todo [(key, args)] on a process pool; call finished(key, row) as points finish.
 
+    A point that kills its worker (a crash in native code) breaks the whole pool, and every point
+    still pending in it fails with it; those points are then re-run one per fresh process, so only
+    the point that crashes is recorded as an error."""
     if workers <= 0:  # in-process, serial (debugging)
         for key, args in todo:
             finished(key, run_point(*args))
         return
+    broken = _pool_run(todo, workers, finished)
+    for key, args in broken:  # isolate: one process per point
+        if _pool_run([(key, args)], 1, finished):
+            finished(key, _error_row(args[0], "worker process died (crash in the engine?); the point was "
+                                              "re-run alone and died again"))
+
+
+def _pool_run(todo, workers: int, finished) -> list:
+    """One process pool over todo; returns the (key, args) that did not finish because the pool broke."""
+    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+    from concurrent.futures.process import BrokenProcessPool
+
     pool = ProcessPoolExecutor(max_workers=workers, initializer=_worker_init)
-    futures = {}
+    broken = []
     try:
         futures = {pool.submit(run_point, *args): (key, args) for key, args in todo}
         pending = set(futures)
         while pending:
             done, pending = wait(pending, return_when=FIRST_COMPLETED)
             for fut in done:
-                key, args = futures[fut]
                 try:
                     row = fut.result()
-                except BrokenProcessPool as e:  # a worker died (e.g. a crash in native code)
-                    row = _error_row(args[0], f"worker process died: {e}")
-                finished(key, row)
+                except BrokenProcessPool:
+                    broken.append(futures[fut])
+                    continue
+                finished(futures[fut][0], row)
     except KeyboardInterrupt:
-        for p in list(getattr(pool, "_processes", {}).values()):  # our own workers, by object
-            p.terminate()
+        for proc in list(getattr(pool, "_processes", {}).values()):  # our own workers, by object
+            proc.terminate()
         pool.shutdown(wait=False, cancel_futures=True)
         raise
     pool.shutdown(wait=True)
+    return sorted(broken, key=lambda t: t[0])
 
 
 def _dask(todo, address, finished):

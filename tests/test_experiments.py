@@ -193,10 +193,14 @@ def test_dask_local_cluster_gives_the_same_rows_as_the_local_pool(tmp_path, stor
     local = runner.run_sweep(c, workers=2, progress=False, force=True)
     with distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1, dashboard_address=None) as cl:
         remote = runner.run_sweep(c, scheduler=cl.scheduler_address, progress=False, force=True)
-    assert remote.attrs["summary"]["rendered"] == 4
+        # The same through the config's executor section.
+        via_config = xc.load_config(tmp_path / "d.yaml", ["executor.kind=dask", f"executor.address={cl.scheduler_address}"])
+        again = runner.run_sweep(via_config, progress=False, force=True)
+    assert remote.attrs["summary"]["rendered"] == 4 and again.attrs["summary"]["rendered"] == 4
     counters = [k for k in local.columns if k.split(".")[0] in ("raster", "ops", "tile", "setup", "bin")]
     assert len(counters) > 10
     pd.testing.assert_frame_equal(local[counters + ["config_hash"]], remote[counters + ["config_hash"]])
+    pd.testing.assert_frame_equal(local[counters + ["config_hash"]], again[counters + ["config_hash"]])
 
 
 def test_ctrl_c_stops_and_keeps_the_finished_points(tmp_path):
@@ -338,3 +342,48 @@ def test_every_paper_config_is_valid():
         assert c.outputs.page and c.outputs.plots, f"{p.name}: no report spec"
         data, _ = xc.load_dict(p, report.quick_overrides(xc.load_dict(p)[0]))
         xc.expand_sweep(xc.validate(data, str(p)))
+
+
+@pytest.mark.slow
+def test_full_quick_report(tmp_path):
+    """`rast5d report --quick` over every configs/paper config (about 9 minutes on 2 busy cores)."""
+    env = {**os.environ, "RAST5D_RESULTS": str(tmp_path / "results")}
+    r = subprocess.run([sys.executable, "-m", "experiments.cli", "report", "--quick"], capture_output=True, text=True,
+                       env=env)
+    assert r.returncode == 0, r.stderr[-2000:]
+    from experiments.report import REPORTS
+
+    index = (REPORTS / "quick" / "README.md").read_text()
+    for p in report.paper_configs():
+        page = xc.load_config(p).outputs.page
+        assert f"[{page}](paper/{page}.md)" in index
+
+
+def test_the_documented_spec_example_is_valid():
+    """docs/reports.md's format example passes the schema (the other engineers copy it)."""
+    import re
+
+    import yaml
+
+    text = (xc.REPO / "docs" / "reports.md").read_text()
+    block = re.search(r"```yaml\n(.*?)```", text, flags=re.S).group(1)
+    data = yaml.safe_load(block.replace("<name>", "example").replace("<page name>", "example"))
+    config = xc.validate(data, "docs/reports.md")
+    assert [p.kind for p in config.outputs.plots] == ["line"] and config.outputs.plots[0].paper["tile"][50] == 0.09
+    assert len(xc.sweep_points(config.sweep)) == 10
+
+
+def test_a_point_that_kills_its_worker_fails_alone(tmp_path, store, monkeypatch):
+    """A crash in native code takes the worker process down; only that point is an error."""
+    real = runner.render_point
+
+    def crashing(config, *args, **kwargs):
+        if config.samples.spp == 8:
+            os._exit(3)  # as a segfault would: no exception, the process is gone
+        return real(config, *args, **kwargs)
+
+    monkeypatch.setattr(runner, "render_point", crashing)  # inherited by the forked workers
+    c = xc.load_config(write(tmp_path, "k.yaml", BASE + "sweep:\n  samples.spp: [4, 8, 16, 2]\n"))
+    df = runner.run_sweep(c, workers=2, progress=False)
+    assert df["status"].tolist() == ["ok", "error", "ok", "ok"]
+    assert "worker process died" in df["error"].iloc[1]
