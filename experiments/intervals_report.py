@@ -1,7 +1,7 @@
 """Issue 5 report (docs/intervals.md): STE and operations vs motion for bruteforce / the time-interval
 test / the 5D test, z-culling vs depth complexity, ẑ tightness vs vertex min/max, occlusion-query work.
 
-`python -m experiments.intervals_report` writes reports/paper/intervals.md (+ PNG). The sweeps are the
+`python -m experiments.intervals_report` writes reports/paper/intervals_study.md (+ PNG). The sweeps are the
 ones declared in configs/paper/intervals_*.yaml (the declarative format of the experiments runner);
 this script runs them directly through sim so that the numbers exist before that runner is merged.
 """
@@ -163,7 +163,7 @@ def main(argv=None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     ste_rows, data = ste_vs_motion()
-    plot_ste(data, out / "intervals_ste.png")
+    plot_ste(data, out / "intervals_study_ste.png")
     z_rows = zcull_vs_depth_complexity()
     t_rows = zhat_tightness()
     o_rows = occlusion_work()
@@ -177,7 +177,7 @@ def main(argv=None) -> int:
         "pre-issue-5 path (h_i lines over the six shutter-end vertices, no t̂); `t̂ (S=1)` the time-interval "
         "test; `S=4/16` splits the shutter into sub-intervals with t̂ and (5D) lens sets each, samples indexed "
         "by (lens cell, time stratum). ops in millions (ops.total = setup + tile + sample).", "",
-        "![STE vs motion](intervals_ste.png)", "",
+        "![STE vs motion](intervals_study_ste.png)", "",
         *_md(["CoC", "motion px", "method", "samples tested", "STE", "ops.total M", "ops.tile M", "ops.sample M"],
              ste_rows), "",
         "## z-culling vs depth complexity (HiZ 8x8, zmax and zmin culling)", "",
@@ -198,7 +198,7 @@ def main(argv=None) -> int:
               "pairs vs HiZ", "ops"], o_rows), "",
         f"Total time of this report: {time.perf_counter() - t0:.0f} s.",
     ]
-    (out / "intervals.md").write_text("\n".join(lines) + "\n")
+    (out / "intervals_study.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
     return 0
 
