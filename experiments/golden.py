@@ -41,7 +41,15 @@ VARIANTS = {
     "clip": {"clip": {"u": [-0.5, 0.75], "v": [-1.0, 0.5], "t": [0.125, 0.75]}},
     "hiz": {"hiz": {"enabled": True, "tile_size": 8}, "zhat_stats": True},
     "hiz_vertex": {"hiz": {"enabled": True, "tile_size": 4}, "zhat": "vertex", "zhat_stats": True},
+    # Issue 6: shading modes, texturing and the texture cache (spot has its own texture)
+    "msaa_tex": {"shading": "msaa", "texture_count": 1},
+    "per_sample": {"shading": "per_sample"},
+    "per_lens_cell": {"shading": "per_lens_cell"},
+    "cache_tex": {"shading": "cache", "texture_count": 2, "texture_layout": "morton"},
 }
+# Timing-model figures kept in the golden file (rounded to whole clocks), so a change to the timing
+# model or to the work it is fed shows up in review like an operation count.
+TIMING_FIGURES = ("timing.cycles",)
 
 
 @dataclass(frozen=True)
@@ -77,6 +85,11 @@ def cases() -> list[Case]:
     out.append(Case("moving_quads+clip", "bruteforce", 10.0))
     for variant in ("hiz", "hiz_vertex"):
         out.append(Case(f"spot+{variant}", "tile", 10.0))
+    for algorithm in ARBITRARY + ("interleave",):  # issue 6: quads, texture fetches, cache misses
+        out.append(Case("spot+msaa_tex", algorithm, 10.0))
+    for variant in ("per_sample", "per_lens_cell", "cache_tex"):
+        out.append(Case(f"spot+{variant}", "tile", 10.0))
+    out.append(Case("spot+per_lens_cell", "interval", 10.0))
     return out
 
 
@@ -105,7 +118,9 @@ def compute(case: Case) -> dict[str, int]:
                                 **VARIANTS.get(variant, {}))
     result = sim.render(scene, camera, table, config)
     raw = set(sim._core.counter_docs())
-    return {k: int(v) for k, v in result.flat_stats.items() if k in raw}
+    out = {k: int(v) for k, v in result.flat_stats.items() if k in raw}
+    out.update({k: int(round(result.flat_stats[k])) for k in TIMING_FIGURES})
+    return out
 
 
 def compute_all(progress: bool = True) -> dict[tuple, int]:
