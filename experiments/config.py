@@ -73,7 +73,7 @@ SAMPLE_KINDS = ("random", "stratified", "stratified_permuted", "sobol", "interle
 class SamplesSpec(_Strict):
     """The programmable sample table (sim.SampleTable)."""
 
-    kind: Literal["random", "stratified", "stratified_permuted", "sobol", "interleaved"] = Field(
+    kind: Literal["random", "stratified", "stratified_permuted", "sobol", "interleaved", "multiview"] = Field(
         "stratified", description="Sample-table kind (sim.SampleTable generator)")
     spp: int = Field(16, description="Samples per pixel (1..4096)")
     seed: int = Field(0, description="Random seed")
@@ -81,6 +81,8 @@ class SamplesSpec(_Strict):
     lens: bool = Field(True, description="Include the lens (u, v) dimensions")
     time: bool = Field(True, description="Include the time dimension")
     n_lens: Optional[int] = Field(None, description="Interleaved only: number of discrete lens positions (64, 256)")
+    views: Optional[int] = Field(None, description=(
+        "Multiview only: number of views splitting the lens in u (002 §8); spp is the total over all views"))
 
 
 def _pipeline_model() -> type[BaseModel]:
@@ -556,6 +558,10 @@ def build(config: RenderConfig):
             params["n_lens"] = t.n_lens
     elif t.n_lens is not None:
         raise ConfigError(f"samples.n_lens: only for the interleaved kind, got kind={t.kind!r}")
+    if t.views is not None:
+        if t.kind != "multiview":
+            raise ConfigError(f"samples.views: only for the multiview kind, got kind={t.kind!r}")
+        params["views"] = t.views
     table = sim.SampleTable.create(t.kind, **params)
     pipeline = sim.PipelineConfig(**config.pipeline.model_dump())
     return scene, camera, table, pipeline

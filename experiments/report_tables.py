@@ -103,3 +103,28 @@ def pareto_members(df, config) -> list[str]:
             rows.append([s, c, str(len(front)), text])
     return (["Pareto-front members (sample-table kind / algorithm, with the spp of each front point):", ""]
             + md_table(["scene", "cost", "front points", "members"], rows))
+
+
+# 002 §8: shader-invocation increase with a 1024-entry shading cache, against one view.
+PAPER_MULTIVIEW = {2: "+10%", 7: "+15%"}
+
+
+@derived_table("multiview_increase")
+def multiview_increase(df, config) -> list[str]:
+    """Shader invocations (shading-cache misses) for V views relative to one view, per CoC."""
+    df = _ok(df)
+    rows = []
+    for coc in sorted(df["camera.coc_px"].unique()):
+        sub = df[df["camera.coc_px"] == coc]
+        base = sub[sub["samples.views"] == 1]
+        if not len(base):
+            continue
+        b = float(base["shade.lanes_live"].iloc[0])
+        for views in sorted(sub["samples.views"].unique()):
+            r = sub[sub["samples.views"] == views]
+            inv = float(r["shade.lanes_live"].iloc[0])
+            hit = float(r["shade.cache_hit_rate"].iloc[0]) if "shade.cache_hit_rate" in r else math.nan
+            rows.append([f"{coc:g}", str(int(views)), str(int(r["samples.spp"].iloc[0])), f"{inv:.0f}",
+                         f"{100 * (inv / b - 1):+.1f}%", f"{hit:.3f}", PAPER_MULTIVIEW.get(int(views), "")])
+    return md_table(["CoC [px] (whole lens)", "views", "spp (all views)", "shader invocations", "vs 1 view",
+                     "cache hit rate", "paper"], rows)

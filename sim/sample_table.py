@@ -532,6 +532,28 @@ def _interleaved(spec: _Spec, rng: np.random.Generator, n_lens) -> _Draw:
     return _Draw(unit, lens_unit=lens_unit, lens_index=lens_index, params={"n_lens": N, "block_px": B})
 
 
+@_generator("multiview", views=2)
+def _multiview(spec: _Spec, rng: np.random.Generator, views) -> _Draw:
+    """Stereo and multi-view rendering (002_95ea0844b256f75b.txt §8, Fig. 16): the lens is split into
+    `views` equal intervals of u, and view k owns samples k*m .. (k+1)*m - 1 of every pixel
+    (m = spp / views), stratified as the `stratified` generator within its interval (so u of view k
+    lies in [k/V, (k+1)/V) of the unit square). Use a square lens: the views are strips of one
+    oblong lens region. views=1 is an ordinary stratified table."""
+    if isinstance(views, bool) or not isinstance(views, (int, np.integer)) or not 1 <= views <= 64:
+        raise ValueError(f"views: expected an integer in 1..64, got {views!r}")
+    V, S = int(views), spec.spp
+    if S % V:
+        raise ValueError(f"spp: the multiview generator needs spp divisible by views, got spp={S}, views={V}")
+    m = S // V
+    unit = np.empty((spec.period, spec.period, S, 5))
+    for k in range(V):
+        sub = _stratified(_Spec(name=spec.name, spp=m, period=spec.period, lens=spec.lens, time=spec.time), rng)
+        part = sub.unit
+        part[..., 2] = _round_down_f32((k + part[..., 2]) / V)
+        unit[..., k * m:(k + 1) * m, :] = part
+    return _Draw(unit, params={"views": V, "spp_per_view": m})
+
+
 # ==================================================================== helpers
 
 

@@ -12,8 +12,8 @@ from sim.sample_table import SampleTable
 pytestmark = pytest.mark.invariants
 
 P_MIN = 1e-4  # a correct sampler fails a chi-square test at this level once in 10^4 runs
-GENERATORS = ["random", "stratified", "stratified_permuted", "sobol", "interleaved"]
-EXTRA = {"interleaved": {"n_lens": 64}}
+GENERATORS = ["random", "stratified", "stratified_permuted", "sobol", "interleaved", "multiview"]
+EXTRA = {"interleaved": {"n_lens": 64}, "multiview": {"views": 2}}
 
 
 @pytest.fixture
@@ -499,3 +499,24 @@ def test_stratum_values_stay_in_their_stratum_after_float32_rounding():
             assert np.array_equal(value, value.astype(np.float32).astype(np.float64))
             assert np.array_equal(np.floor(value * n), index)
             assert (value < 1).all()
+
+
+@pytest.mark.parametrize("views, spp", [(2, 16), (7, 56), (4, 4)])
+def test_multiview_splits_the_lens_into_views(views, spp):
+    """002 §8 Fig. 16: view k owns samples k*m..(k+1)*m-1 and the k-th u-interval; within it the
+    lens positions are uniform (chi-square on the rescaled u) and v and t stratified per view."""
+    table = make("multiview", spp=spp, views=views, period=8, seed=5)
+    m = spp // views
+    a, b = table.unit[..., 2], table.unit[..., 3]
+    for k in range(views):
+        ak = f64(a[..., k * m:(k + 1) * m])
+        assert ak.min() >= k / views and ak.max() < (k + 1) / views
+        local = ak * views - k
+        p = chi2_uniform_p(local, 8)
+        assert p > P_MIN, f"view {k}: u within the view rejected, p = {p:.3g}"
+        p = chi2_uniform_p(f64(b[..., k * m:(k + 1) * m]), 8)
+        assert p > P_MIN, f"view {k}: v rejected, p = {p:.3g}"
+    with pytest.raises(ValueError, match="divisible by views"):
+        make("multiview", spp=10, views=3)
+    with pytest.raises(ValueError, match="views: expected"):
+        make("multiview", spp=8, views=0)
