@@ -9,6 +9,7 @@ triangle at time t by Moller-Trumbore in float64 and counts when the hit's view 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from types import SimpleNamespace
 
 import numpy as np
@@ -639,3 +640,21 @@ def check_resolved(request, label, cam, positions, positions_t1, table, result) 
         f"engine {[int(result.sample_triangle[i]) for i in bad]}, reference {[int(r['ref_triangle'][i]) for i in bad]}")
     assert r["depth_bad"] == 0, f"{label}: depth differs on {r['depth_bad']} samples (max |dz| {r['max_z_err']:.3g})"
     return r
+
+
+@dataclass
+class Tris:
+    """The duck-typed scene sim.render accepts: world-space (N, 3, 3) arrays."""
+
+    positions: np.ndarray
+    positions_t1: np.ndarray
+    colors: np.ndarray
+
+
+def make_scene(p0, p1=None, colour_seed: int = 1234) -> Tris:
+    """Triangles p0 (static, or moving to p1) with distinct, deterministic vertex colours."""
+    p0 = np.asarray(p0, dtype=np.float64).reshape(-1, 3, 3)
+    p1 = p0.copy() if p1 is None else np.asarray(p1, dtype=np.float64).reshape(-1, 3, 3)
+    n = p0.shape[0]
+    rng = np.random.default_rng(colour_seed + n)
+    return Tris(p0, p1, rng.uniform(0.1, 1.0, size=(n, 3, 3)))

@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass
 
 import numpy as np
 import pytest
@@ -11,6 +10,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import sim
+from tests import reference
+from tests.reference import Tris
 
 pytestmark = pytest.mark.invariants
 
@@ -22,18 +23,9 @@ HYPO = dict(deadline=None, derandomize=True, database=None,
             suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much, HealthCheck.data_too_large])
 
 
-@dataclass
-class Tris:
-    positions: np.ndarray
-    positions_t1: np.ndarray
-    colors: np.ndarray
-
 
 def make_scene(p0, p1=None) -> Tris:
-    p0 = np.asarray(p0, dtype=np.float64).reshape(-1, 3, 3)
-    p1 = p0.copy() if p1 is None else np.asarray(p1, dtype=np.float64).reshape(-1, 3, 3)
-    rng = np.random.default_rng(99 + p0.shape[0])
-    return Tris(p0, p1, rng.uniform(0.1, 1.0, size=(p0.shape[0], 3, 3)))
+    return reference.make_scene(p0, p1, colour_seed=99)
 
 
 def world(px, py, depth, width=WIDTH, height=HEIGHT, fov_y_deg=45.0):

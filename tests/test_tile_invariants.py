@@ -11,6 +11,7 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 import sim
+from tests.reference import make_scene
 
 pytestmark = pytest.mark.invariants
 
@@ -37,21 +38,6 @@ HYPO = dict(deadline=None, derandomize=True, database=None,
 # ---------------------------------------------------------------------------------- scenes
 
 
-@dataclass
-class Tris:
-    """The duck-typed scene sim.render accepts: world-space (N, 3, 3) arrays."""
-
-    positions: np.ndarray
-    positions_t1: np.ndarray
-    colors: np.ndarray
-
-
-def make_scene(p0, p1=None) -> Tris:
-    p0 = np.asarray(p0, dtype=np.float64).reshape(-1, 3, 3)
-    p1 = p0.copy() if p1 is None else np.asarray(p1, dtype=np.float64).reshape(-1, 3, 3)
-    n = p0.shape[0]
-    rng = np.random.default_rng(1234 + n)  # distinct, deterministic vertex colours
-    return Tris(p0, p1, rng.uniform(0.1, 1.0, size=(n, 3, 3)))
 
 
 def proj_scales(width, height, fov_y_deg):
