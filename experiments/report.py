@@ -151,7 +151,13 @@ def main(only=None, workers=None, scheduler=None, force=False, quick=False, conf
         if unknown:
             print(f"report: unknown {unknown} (configs and pages: {', '.join(sorted(known))})", file=sys.stderr)
             return 2
-        loaded = [x for x in loaded if x[1].name in only or x[1].outputs.page in only]
+        chosen = {c.name for _, c, _, _ in loaded if c.name in only or c.outputs.page in only}
+        # A page is written whole: the other configs on a chosen config's page come along (from the
+        # result store; --force re-renders only the chosen ones).
+        pages = {c.outputs.page or c.name for _, c, _, _ in loaded if c.name in chosen}
+        loaded = [x for x in loaded if (x[1].outputs.page or x[1].name) in pages]
+    else:
+        chosen = {c.name for _, c, _, _ in loaded}
     page_dir.mkdir(parents=True, exist_ok=True)
     sections: dict[str, list] = defaultdict(list)
     failures = 0
@@ -160,7 +166,7 @@ def main(only=None, workers=None, scheduler=None, force=False, quick=False, conf
     for p, config, overrides, lines in loaded:
         t0 = time.perf_counter()
         df = run_sweep(config, source=str(p.relative_to(REPO) if p.is_relative_to(REPO) else p), workers=workers,
-                       scheduler=scheduler, force=force, lines=lines)
+                       scheduler=scheduler, force=force and config.name in chosen, lines=lines)
         failures += int((df["status"] != "ok").sum()) if "status" in df.columns else 0
         for k in counts:
             counts[k] += df.attrs.get("summary", {}).get(k, 0)

@@ -316,6 +316,11 @@ def test_report_quick_writes_pages_figures_and_index(tmp_path, store):
     assert (store / "quick" / "tiny.parquet").exists() and not (store / "tiny.parquet").exists()
     df = pd.read_parquet(store / "quick" / "tiny.parquet")
     assert df["camera.width"].tolist() == [64] * 4
+    # --only one config of a shared page rewrites the whole page (the other section from the store)
+    (tmp_path / "reports" / "quick" / "paper" / "tiny.md").unlink()
+    assert report.main(only=["tiny2"], configs_dir=cdir, reports_dir=tmp_path / "reports", quick=True, workers=0) == 0
+    again = (tmp_path / "reports" / "quick" / "paper" / "tiny.md").read_text()
+    assert "## Second" in again and "## Tiny: samples tested against CoC" in again
 
 
 def test_rast5d_run_writes_the_config_page(tmp_path, store):
