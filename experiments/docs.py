@@ -29,8 +29,8 @@ def counters_markdown() -> str:
 
     for name, (unit, desc) in sim._core.timing_docs().items():
         lines.append(f"| `{name}` | {unit} | timing | {desc} |")
-    for name, unit, desc, _formula in TIMING_DERIVED:
-        lines.append(f"| `{name}` | {unit} | timing, derived | {desc} |")
+    for d in TIMING_DERIVED:
+        lines.append(f"| `{d.name}` | {d.unit} | timing, derived | {d.description} |")
     return "\n".join(lines) + "\n"
 
 

@@ -40,8 +40,7 @@ def motion_field(
     offset[:, 0] = motion_px * np.cos(ang) / px_per_unit
     offset[:, 1] = motion_px * np.sin(ang) / px_per_unit
     return Scene.from_arrays(p0, colors=np.asarray(base.colors)[:, 0], positions_t1=p0 + offset[:, None, :],
-                             name="motion_field",
-                             camera_hint=_hint(resolution, resolution, fov_y_deg, float(focus_distance)))
+                             name="motion_field", camera_hint=base.camera_hint)
 
 
 @register_scene("depth_layers")

@@ -38,3 +38,20 @@ def check_float(owner: str, field: str, value, *, lo=None, hi=None, lo_open=Fals
     if hi is not None and (v > hi or (hi_open and v == hi)):
         raise ConfigError(f"{owner}.{field}: expected {'<' if hi_open else '<='} {hi}, got {v:g}")
     return v
+
+
+def field_docs(cls) -> dict[str, dict]:
+    """{field: {"default", "unit", "doc"[, "fields"]}} of a dataclass whose fields carry their
+    documentation in metadata (the single declaration of every parameter); nested dataclass
+    sections carry their own "fields" and a dict default."""
+    import dataclasses
+
+    out = {}
+    for f in dataclasses.fields(cls):
+        default = f.default if f.default is not dataclasses.MISSING else f.default_factory()
+        entry = {"default": default, "unit": f.metadata.get("unit", ""), "doc": f.metadata["doc"]}
+        if dataclasses.is_dataclass(default):
+            entry["fields"] = field_docs(type(default))
+            entry["default"] = dataclasses.asdict(default)
+        out[f.name] = entry
+    return out

@@ -10,7 +10,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 
-from .errors import ConfigError, check_float, check_int
+from .errors import ConfigError, check_float, check_int, field_docs
 
 
 @dataclass(frozen=True)
@@ -103,67 +103,45 @@ class HardwareConfig:
                                     "memory bandwidth is split evenly (docs/timing.md)"})
 
     def __post_init__(self):
+        # Nested sections: a dict completes the section's own defaults; each section validates itself.
         for f in dataclasses.fields(self):
-            v = getattr(self, f.name)
-            if isinstance(v, dict):  # nested sections given as dicts
-                object.__setattr__(self, f.name, _nested(f.name, v))
+            if not f.metadata.get("section"):
+                continue
+            default, value, owner = f.default_factory(), getattr(self, f.name), f"HardwareConfig.{f.name}"
+            if isinstance(value, dict):
+                _check_keys(type(default), owner, value)
+                value = dataclasses.replace(default, **value)
+                object.__setattr__(self, f.name, value)
+            if not isinstance(value, type(default)):
+                raise ConfigError(f"{owner}: expected a {f.name} section, got {value!r}")
+            value.validate(owner)
         check_float("HardwareConfig", "clock_ghz", self.clock_ghz, lo=0.0, lo_open=True, hi=1e3)
         check_float("HardwareConfig", "memory_bytes_per_clock", self.memory_bytes_per_clock, lo=0.0,
                     lo_open=True, hi=1e9)
         check_int("HardwareConfig", "memory_latency_cycles", self.memory_latency_cycles, 0, 1_000_000)
         check_int("HardwareConfig", "memory_fifo_entries", self.memory_fifo_entries, 1, 1_000_000)
         check_int("HardwareConfig", "cores", self.cores, 1, 4096)
-        for name in _UNIT_DEFAULTS:
-            unit = getattr(self, name)
-            if not isinstance(unit, UnitConfig):
-                raise ConfigError(f"HardwareConfig.{name}: expected a unit section, got {unit!r}")
-            unit.validate(f"HardwareConfig.{name}")
-        if not isinstance(self.tex_cache, TextureCacheConfig):
-            raise ConfigError(f"HardwareConfig.tex_cache: expected a cache section, got {self.tex_cache!r}")
-        self.tex_cache.validate("HardwareConfig.tex_cache")
 
     @classmethod
     def from_dict(cls, d: dict | None) -> "HardwareConfig":
-        return _nested_of(cls, "HardwareConfig", d or {})
+        d = d or {}
+        _check_keys(cls, "HardwareConfig", d)
+        return cls(**d)
 
     @classmethod
     def field_docs(cls) -> dict[str, dict]:
         """{field: {"default", "unit", "doc", "fields"?}}; nested sections carry their own fields."""
-        return _docs(cls)
+        return field_docs(cls)
 
     def describe(self) -> dict:
         return dataclasses.asdict(self)
 
 
-def _docs(cls) -> dict[str, dict]:
-    out = {}
-    for f in dataclasses.fields(cls):
-        default = f.default if f.default is not dataclasses.MISSING else f.default_factory()
-        entry = {"default": default, "unit": f.metadata.get("unit", ""), "doc": f.metadata["doc"]}
-        if dataclasses.is_dataclass(default):
-            entry["fields"] = _docs(type(default))
-            entry["default"] = dataclasses.asdict(default)
-        out[f.name] = entry
-    return out
-
-
-def _nested_of(cls, owner: str, d: dict):
+def _check_keys(cls, owner: str, d) -> None:
+    """ConfigError unless d is a mapping of cls's field names (naming the first unknown key)."""
     if not isinstance(d, dict):
         raise ConfigError(f"{owner}: expected a mapping, got {d!r}")
     known = {f.name for f in dataclasses.fields(cls)}
     unknown = sorted(set(d) - known)
     if unknown:
         raise ConfigError(f"{owner}: unknown key {unknown[0]!r} (known: {', '.join(sorted(known))})")
-    return cls(**d)
-
-
-def _nested(name: str, d: dict):
-    """A partial section dict, completed from that section's own defaults."""
-    if name == "tex_cache":
-        cls, base = TextureCacheConfig, {}
-    else:
-        tp, lat, fifo, _ = _UNIT_DEFAULTS[name]
-        cls, base = UnitConfig, {"throughput": tp, "latency_cycles": lat, "fifo_entries": fifo}
-    owner = f"HardwareConfig.{name}"
-    _nested_of(cls, owner, d)  # names the unknown key
-    return cls(**{**base, **d})

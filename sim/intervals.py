@@ -15,7 +15,7 @@ from . import _core
 from .camera import Camera
 from .errors import ConfigError
 from .pipeline import PipelineConfig
-from .render import _LENS_ENUM, _issue5_params, _scene_arrays, render
+from .render import _camera_params, _interval_params, _scene_arrays, render
 from .stats import flat_stats
 
 RECORD_DTYPE = np.dtype([
@@ -44,8 +44,7 @@ def conservative_raster(scene, camera: Camera, pipeline: PipelineConfig | None =
     Raises ConfigError when more than ``max_records`` records would be produced (the message
     suggests reduce="tz_box", whose memory is 20 bytes per pixel)."""
     pipeline = pipeline or PipelineConfig()
-    if not isinstance(camera, Camera):
-        raise ConfigError(f"camera: expected sim.Camera, got {type(camera).__name__}")
+    params = _camera_params(camera)
     if reduce not in (None, "tz_box"):
         raise ConfigError(f"reduce: expected None or 'tz_box', got {reduce!r}")
     if isinstance(max_records, bool) or not isinstance(max_records, int) or max_records < 0:
@@ -55,14 +54,10 @@ def conservative_raster(scene, camera: Camera, pipeline: PipelineConfig | None =
                           f"more than PipelineConfig.memory_limit_bytes={pipeline.memory_limit_bytes}")
     p0, p1, _ = _scene_arrays(scene)
     v0, v1 = camera.engine_vertices(p0, p1)
-    params = _core.RenderParams()
-    for k, v in camera.engine_params().items():
-        setattr(params, k, v)
-    params.lens_shape = _LENS_ENUM[camera.lens]
     params.lens_grid = 4
     params.table_has_lens = True
     params.table_has_time = True
-    _issue5_params(params, pipeline)
+    _interval_params(params, pipeline)
     try:
         out = _core.conservative_raster(params, np.ascontiguousarray(v0, np.float32),
                                         np.ascontiguousarray(v1, np.float32), reduce == "tz_box", int(max_records))
@@ -72,7 +67,7 @@ def conservative_raster(scene, camera: Camera, pipeline: PipelineConfig | None =
     if reduce == "tz_box":
         return ConservativeResult(stats, tz_box=out["tz_box"], count=out["count"])
     assert out["record_bytes"] == RECORD_DTYPE.itemsize
-    return ConservativeResult(stats, records=np.frombuffer(out["records"].tobytes(), dtype=RECORD_DTYPE))
+    return ConservativeResult(stats, records=out["records"].view(RECORD_DTYPE))  # no copy
 
 
 @dataclass

@@ -5,10 +5,13 @@ import dataclasses
 from dataclasses import dataclass, field
 
 from . import _core
-from .errors import ConfigError, check_float, check_int
+from .errors import ConfigError, check_float, check_int, field_docs
 
 _OWNER = "PipelineConfig"
+# Choices whose order is the engine's enum order (params.h): render.py passes their indices.
 SHADING_MODES = ("per_sample", "msaa", "per_lens_cell", "cache", "none")
+TEXTURE_FILTERS = ("bilinear", "trilinear")
+TEXTURE_LAYOUTS = ("linear", "blocked", "morton")
 
 
 def algorithm_names() -> list[str]:
@@ -24,7 +27,6 @@ def algorithm_docs() -> dict[str, str]:
 class PipelineConfig:
     """What the rasterizer does. Every field is validated; bad values raise ConfigError.
     Field documentation: ``PipelineConfig.field_docs()`` and docs/config.md."""
-
 
     algorithm: str = field(default="bruteforce", metadata={
         "doc": "Traversal algorithm: one of sim.algorithm_names()"})
@@ -118,7 +120,7 @@ class PipelineConfig:
             if not isinstance(v, bool):
                 raise ConfigError(f"{_OWNER}.halfspace.{k}: expected a bool, got {v!r}")
         object.__setattr__(self, "halfspace", hs)
-        for name in ("selective_H", "backface_cull", "count_optimal"):
+        for name in ("selective_H", "backface_cull", "count_optimal", "texture_sample_distribution", "zhat_stats"):
             if not isinstance(getattr(self, name), bool):
                 raise ConfigError(f"{_OWNER}.{name}: expected a bool, got {getattr(self, name)!r}")
         if self.oracle not in ("simplified", "full"):
@@ -134,8 +136,8 @@ class PipelineConfig:
         if self.bin_size % 8 or self.bin_size % self.hinterleave_tile:
             raise ConfigError(f"{_OWNER}.bin_size: expected a multiple of 8 and of hinterleave_tile, got {self.bin_size}")
         check_int(_OWNER, "memory_limit_bytes", self.memory_limit_bytes, 1 << 20, 1 << 50)
-        for name, allowed in (("shading", SHADING_MODES), ("texture_filter", ("bilinear", "trilinear")),
-                              ("texture_layout", ("linear", "blocked", "morton")),
+        for name, allowed in (("shading", SHADING_MODES), ("texture_filter", TEXTURE_FILTERS),
+                              ("texture_layout", TEXTURE_LAYOUTS),
                               ("texture_source", ("auto", "scene", "procedural"))):
             if getattr(self, name) not in allowed:
                 raise ConfigError(f"{_OWNER}.{name}: expected one of {', '.join(allowed)}, got {getattr(self, name)!r}")
@@ -144,11 +146,10 @@ class PipelineConfig:
         check_int(_OWNER, "texture_count", self.texture_count, 0, 4)
         check_int(_OWNER, "texture_procedural_size", self.texture_procedural_size, 1, 8192)
         check_float(_OWNER, "texture_uv_scale", self.texture_uv_scale, lo=0.0, lo_open=True, hi=1e6)
-        if not isinstance(self.texture_sample_distribution, bool):
-            raise ConfigError(f"{_OWNER}.texture_sample_distribution: expected a bool, got {self.texture_sample_distribution!r}")
-        self._validate_issue5()
+        self._validate_intervals()
 
-    def _validate_issue5(self):
+    def _validate_intervals(self):
+        """Time/lens intervals, clip box, depth intervals and HiZ (docs/intervals.md)."""
         if self.motion_test not in ("intervals", "bounds"):
             raise ConfigError(f"{_OWNER}.motion_test: expected 'intervals' or 'bounds', got {self.motion_test!r}")
         if isinstance(self.time_splits, bool) or self.time_splits not in (1, 2, 4, 8, 16):
@@ -171,8 +172,6 @@ class PipelineConfig:
         object.__setattr__(self, "clip", clip)
         if self.zhat not in ("planes", "vertex"):
             raise ConfigError(f"{_OWNER}.zhat: expected 'planes' or 'vertex', got {self.zhat!r}")
-        if not isinstance(self.zhat_stats, bool):
-            raise ConfigError(f"{_OWNER}.zhat_stats: expected a bool, got {self.zhat_stats!r}")
         if not isinstance(self.hiz, dict) or set(self.hiz) - {"enabled", "tile_size"}:
             raise ConfigError(f"{_OWNER}.hiz: expected {{enabled: bool, tile_size: int}}, got {self.hiz!r}")
         hiz = {"enabled": False, "tile_size": 8, **self.hiz}
@@ -187,11 +186,7 @@ class PipelineConfig:
     @classmethod
     def field_docs(cls) -> dict[str, dict]:
         """{field: {"default", "unit", "doc"}} for every field (the single declaration)."""
-        out = {}
-        for f in dataclasses.fields(cls):
-            default = f.default if f.default is not dataclasses.MISSING else f.default_factory()
-            out[f.name] = {"default": default, "unit": f.metadata.get("unit", ""), "doc": f.metadata["doc"]}
-        return out
+        return field_docs(cls)
 
     def resolved_lens_grid(self, spp: int) -> int:
         if self.lens_grid == "auto":
@@ -202,8 +197,4 @@ class PipelineConfig:
         return dataclasses.replace(self, **changes)
 
     def describe(self) -> dict:
-        d = dataclasses.asdict(self)
-        d["halfspace"] = dict(self.halfspace)
-        d["clip"] = {k: list(v) for k, v in self.clip.items()}
-        d["hiz"] = dict(self.hiz)
-        return d
+        return dataclasses.asdict(self)  # deep-copies the dict and list fields

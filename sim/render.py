@@ -11,8 +11,9 @@ from . import _core
 from .camera import Camera
 from .errors import ConfigError, SceneInputError
 from .hardware import HardwareConfig
-from .pipeline import SHADING_MODES, PipelineConfig
+from .pipeline import SHADING_MODES, TEXTURE_FILTERS, TEXTURE_LAYOUTS, PipelineConfig
 from .texturing import texture_inputs
+from .timing import estimate as timing_estimate
 from .stats import flat_stats, nest
 
 _LENS_ENUM = {"square": _core.LensShape.square, "disk": _core.LensShape.disk, "hexagon": _core.LensShape.hexagon}
@@ -86,9 +87,9 @@ def _scene_arrays(scene) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def memory_estimate(camera: Camera, spp: int, n_triangles: int, config: PipelineConfig, threads: int,
-                    export_samples: bool = False, timing: bool = True) -> int:
+                    export_samples: bool = False, timing: bool = True, period: int = 0) -> int:
     """Bytes the engine will allocate (image, per-thread bin buffers, setup, bin lists, exports,
-    timing records)."""
+    timing records, and with the table's period the (lens cell, time stratum) sample index)."""
     b = config.bin_size
     image = camera.width * camera.height * 3 * 4 * 2  # engine buffer + the numpy copy
     bins = threads * b * b * spp * (4 + 12 + 4)
@@ -100,10 +101,23 @@ def memory_estimate(camera: Camera, spp: int, n_triangles: int, config: Pipeline
     # One 64-byte record per (triangle, bin) visit (about 4 bins per triangle, as for the bin
     # lists), held per bin, concatenated and copied to numpy: three copies.
     timing_records = n_triangles * 4 * 64 * 3 if timing else 0
-    return int(image + bins + setup + bin_lists + export + timing_records)
+    grid = config.resolved_lens_grid(spp)
+    sample_index = period * period * (grid * grid * config.time_strata + 1 + spp) * 4
+    return int(image + bins + setup + bin_lists + export + timing_records + sample_index)
 
 
-def _issue5_params(params, config: PipelineConfig) -> None:
+def _camera_params(camera: Camera):
+    """RenderParams with the camera's engine parameters and lens shape set."""
+    if not isinstance(camera, Camera):
+        raise ConfigError(f"camera: expected sim.Camera, got {type(camera).__name__}")
+    params = _core.RenderParams()
+    for k, v in camera.engine_params().items():
+        setattr(params, k, v)
+    params.lens_shape = _LENS_ENUM[camera.lens]
+    return params
+
+
+def _interval_params(params, config: PipelineConfig) -> None:
     """Time/lens intervals, clip box, depth intervals and HiZ (docs/intervals.md)."""
     params.motion_intervals = config.motion_test == "intervals"
     params.time_splits = config.time_splits
@@ -139,8 +153,8 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     spp = int(samples.shape[2])
     grid = config.resolved_lens_grid(spp)
     threads = config.threads or (os.cpu_count() or 1)
-    need = memory_estimate(camera, spp, p0.shape[0], config, threads, export_samples, timing)
-    need += samples.shape[0] ** 2 * (grid * grid * config.time_strata + 1 + spp) * 4  # (cell, time stratum) index
+    need = memory_estimate(camera, spp, p0.shape[0], config, threads, export_samples, timing,
+                           period=samples.shape[0])
     if need > config.memory_limit_bytes:
         raise ConfigError(
             f"memory: estimated {need / 2**30:.2f} GiB exceeds PipelineConfig.memory_limit_bytes="
@@ -151,10 +165,7 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     if not (np.all(np.isfinite(v0)) and np.all(np.isfinite(v1))):
         t = int(np.argwhere(~np.isfinite(v0) | ~np.isfinite(v1))[0][0])
         raise SceneInputError(f"scene.positions: triangle {t} overflows float32 after projection: {p0[t].tolist()}")
-    params = _core.RenderParams()
-    for k, v in camera.engine_params().items():
-        setattr(params, k, v)
-    params.lens_shape = _LENS_ENUM[camera.lens]
+    params = _camera_params(camera)
     params.algorithm = config.algorithm
     params.tile_size = config.tile_size
     params.lens_grid = grid
@@ -170,7 +181,7 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     params.backface_cull = config.backface_cull
     params.exact_ops = config.op_count == "exact"
     params.count_optimal = config.count_optimal
-    _issue5_params(params, config)
+    _interval_params(params, config)
     if query is not None:  # (first query triangle, mode): set by sim.occlusion_query only
         params.query_first, params.query_mode = int(query[0]), int(query[1])
     # The engine skips a dimension only where skipping is exact: every sample has u = v = 0 (no
@@ -189,8 +200,8 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     params.shading_cache_entries = config.shading_cache_entries
     params.shading_grid = config.shading_grid
     params.tex_count = config.texture_count
-    params.tex_filter = ("bilinear", "trilinear").index(config.texture_filter)
-    params.tex_layout = ("linear", "blocked", "morton").index(config.texture_layout)
+    params.tex_filter = TEXTURE_FILTERS.index(config.texture_filter)
+    params.tex_layout = TEXTURE_LAYOUTS.index(config.texture_layout)
     tc = hardware.tex_cache
     params.tex_cache_bytes, params.tex_cache_line_bytes = tc.size_bytes, tc.line_bytes
     params.tex_cache_ways, params.tex_cache_count = tc.ways, tc.count
@@ -207,9 +218,7 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     flat = flat_stats(out["counters"], {"time.wall_s": wall})
     records = out.get("timing_records")
     if records is not None:
-        from .timing import estimate
-
-        flat = dict(sorted({**flat, **estimate(records, hardware)}.items()))
+        flat = dict(sorted({**flat, **timing_estimate(records, hardware)}.items()))
     desc = {"camera": camera.describe(), "pipeline": config.describe(),
             "table": table.describe() if hasattr(table, "describe") else {}, "lens_grid": grid,
             "hardware": hardware.describe()}

@@ -11,13 +11,13 @@ hardware sweep can re-run ``estimate`` on one render's records without rendering
 """
 from __future__ import annotations
 
-import math
 
 import numpy as np
 
 from . import _core
 from .errors import ConfigError
 from .hardware import HardwareConfig
+from .stats import Derived, _ratio
 
 #: The units in pipeline order.
 UNITS: tuple[str, ...] = tuple(name for name, _currency, _desc in _core.timing_units())
@@ -79,10 +79,6 @@ def estimate(recs, hardware: HardwareConfig | None = None) -> dict:
     return derive(raw)
 
 
-def _ratio(a: float, b: float) -> float:
-    return a / b if b else math.nan
-
-
 def _bottleneck(s: dict) -> str:
     """The unit with the most busy clocks (first in pipeline order on ties); 'none' without work."""
     best, best_busy = "none", 0.0
@@ -96,21 +92,21 @@ def _bound(s: dict) -> float:
     return max(s[f"timing.{u}.busy_cycles"] for u in UNITS) / s["timing.cores"]
 
 
-# Derived timing figures: (name, unit, description, formula over the flat timing dict).
-DERIVED: tuple[tuple[str, str, str, object], ...] = (
-    ("timing.bottleneck", "unit name",
+# Derived timing figures, declared like sim.stats.DERIVED (formulas over the flat timing dict).
+DERIVED: tuple[Derived, ...] = (
+    Derived("timing.bottleneck", "unit name",
      "The unit with the most busy clocks (first in pipeline order on ties; 'none' without work)", _bottleneck),
-    ("timing.throughput_bound", "clocks",
+    Derived("timing.throughput_bound", "clocks",
      "max over units of timing.<unit>.busy_cycles / timing.cores: no pipeline can be faster", _bound),
-    ("timing.bound_ratio", "ratio",
+    Derived("timing.bound_ratio", "ratio",
      "timing.cycles / timing.throughput_bound (1 = throughput-bound; more = latency, FIFO and imbalance losses)",
      lambda s: _ratio(s["timing.cycles"], _bound(s))),
 ) + tuple(
     item for u in UNITS for item in (
-        (f"timing.{u}.stall_cycles", "clocks",
+        Derived(f"timing.{u}.stall_cycles", "clocks",
          f"timing.{u}.blocked_cycles + timing.{u}.starved_cycles: clocks the {u} unit does no work",
          lambda s, u=u: s[f"timing.{u}.blocked_cycles"] + s[f"timing.{u}.starved_cycles"]),
-        (f"timing.{u}.utilization", "ratio",
+        Derived(f"timing.{u}.utilization", "ratio",
          f"timing.{u}.busy_cycles / (timing.cycles x timing.cores)",
          lambda s, u=u: _ratio(s[f"timing.{u}.busy_cycles"], s["timing.cycles"] * s["timing.cores"])),
     )
@@ -120,14 +116,14 @@ DERIVED: tuple[tuple[str, str, str, object], ...] = (
 def derive(raw: dict) -> dict:
     """Raw timing figures + derived ones."""
     flat = dict(raw)
-    for name, _unit, _desc, formula in DERIVED:
-        flat[name] = formula(flat)
+    for d in DERIVED:
+        flat[d.name] = d.formula(flat)
     return flat
 
 
 def docs() -> dict[str, tuple[str, str]]:
     """{name: (unit, description)} of every timing figure, raw and derived."""
     d = dict(_core.timing_docs())
-    for name, unit, desc, _f in DERIVED:
-        d[name] = (unit, desc)
+    for fig in DERIVED:
+        d[fig.name] = (fig.unit, fig.description)
     return d
