@@ -24,7 +24,6 @@ import numpy as np
 import sim
 
 REPO = Path(__file__).resolve().parent.parent
-VIEW_NAMES = ("xy", "xz", "yz")
 
 
 @dataclass

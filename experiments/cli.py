@@ -49,13 +49,12 @@ def cmd_render(args) -> int:
 
 
 def cmd_run(args) -> int:
-    from .config import load_dict, validate, expand_sweep
+    from .config import load_dict, validate
     from .report import write_config_page
     from .runner import run_sweep
 
     data, lines = load_dict(args.config, args.set or [])
     config = validate(data, str(args.config), lines)
-    expand_sweep(config, str(args.config), lines)
     df = run_sweep(config, source=str(args.config), workers=args.workers, scheduler=args.scheduler,
                    force=args.force, lines=lines)
     if config.outputs.plots and not args.no_report:

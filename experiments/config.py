@@ -21,6 +21,7 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, create_model, field_validator, model_validator
 
 import sim
+from models.loader import UniqueKeyLoader
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -65,9 +66,6 @@ class CameraSpec(_Strict):
     up: Optional[list[float]] = Field(None, description="Up direction; default +y")
     near: Optional[float] = Field(None, description="Near plane distance [world units]")
     shutter: Optional[list[float]] = Field(None, description="Shutter interval [open, close] within [0, 1]")
-
-
-SAMPLE_KINDS = ("random", "stratified", "stratified_permuted", "sobol", "interleaved")
 
 
 class SamplesSpec(_Strict):
@@ -284,23 +282,6 @@ def _drop_none(d):
 
 # ---- loading: YAML with line numbers, extends, overrides ----------------------------------------
 
-class _UniqueKeyLoader(yaml.SafeLoader):
-    pass
-
-
-def _construct_mapping(loader, node, deep=False):
-    seen = set()
-    for key_node, _ in node.value:
-        key = loader.construct_object(key_node, deep=deep)
-        if key in seen:
-            raise ConfigError(f"duplicate key {key!r} at line {key_node.start_mark.line + 1}")
-        seen.add(key)
-    return yaml.SafeLoader.construct_mapping(loader, node, deep)
-
-
-_UniqueKeyLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
-
-
 def _node_lines(node, source: str, path: tuple = (), out: dict | None = None) -> dict:
     """{key path: 'file:line'} for every mapping key and sequence item of a composed YAML tree."""
     out = {} if out is None else out
@@ -322,10 +303,12 @@ def _read_yaml(path: Path) -> tuple[dict, dict]:
         raise ConfigError(f"config: file not found: {path}")
     text = path.read_text()
     try:
-        data = yaml.load(text, Loader=_UniqueKeyLoader)
+        data = yaml.load(text, Loader=UniqueKeyLoader)  # noqa: S506 (a SafeLoader subclass)
         lines = _node_lines(yaml.compose(text, Loader=yaml.SafeLoader), str(path))
-    except ConfigError as e:
-        raise ConfigError(f"{path}: {e}") from None
+    except yaml.constructor.ConstructorError as e:
+        if not (e.problem or "").startswith("duplicate key"):
+            raise ConfigError(f"{path}: not valid YAML: {e}") from None
+        raise ConfigError(f"{path}: {e.problem} at line {e.problem_mark.line + 1}") from None
     except yaml.YAMLError as e:
         raise ConfigError(f"{path}: not valid YAML: {e}") from None
     if not isinstance(data, dict):
@@ -382,13 +365,6 @@ def _set_dotted(d: dict, dotted: str, value, source: str):
             raise ConfigError(f"{source}: cannot set {dotted!r}: {p!r} is not a section")
         node = child
     node[parts[-1]] = value
-
-
-def get_dotted(d: dict, dotted: str):
-    node = d
-    for p in dotted.split("."):
-        node = node[p]
-    return node
 
 
 def parse_override(text: str) -> tuple[str, Any]:

@@ -1,20 +1,21 @@
 """Issue 5 report (docs/intervals.md): STE and operations vs motion for bruteforce / the time-interval
 test / the 5D test, z-culling vs depth complexity, ẑ tightness vs vertex min/max, occlusion-query work.
 
-`python -m experiments.intervals_report` writes reports/paper/intervals_study.md (+ PNG). The sweeps are the
-ones declared in configs/paper/intervals_*.yaml (the declarative format of the experiments runner);
-this script runs them directly through sim so that the numbers exist before that runner is merged.
+`python -m experiments.intervals_report` writes reports/paper/intervals_study.md (+ PNG). It covers more
+than configs/paper/intervals_*.yaml can declare (the no-time-index variant, moving layers, ẑ tightness
+per scene, occlusion queries through sim.occlusion_query), so it renders through sim directly.
 """
 from __future__ import annotations
 
 import argparse
+import functools
 import time
 from pathlib import Path
 
-import numpy as np
-
 import models
 import sim
+
+from .plots import md_table
 
 REPO = Path(__file__).resolve().parent.parent
 OUT = REPO / "reports" / "paper"
@@ -38,13 +39,9 @@ def _camera(scene, coc):
                       focus_distance=h["focus_distance"], coc_px=coc)
 
 
+@functools.cache
 def _table():
     return sim.SampleTable.stratified(spp=SPP, seed=1)
-
-
-def _md(header, rows):
-    return ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)] + ["| " + " | ".join(map(str, r)) + " |"
-                                                                              for r in rows]
 
 
 def ste_vs_motion():
@@ -62,38 +59,31 @@ def ste_vs_motion():
     return rows, data
 
 
+def _zcull_row(label, layers, scene, coc):
+    """One row: HiZ off against on (8x8) for `scene` seen with CoC `coc`."""
+    cam = _camera(scene, coc)
+    off = sim.render(scene, cam, _table(), sim.PipelineConfig(algorithm="tile")).flat_stats
+    on = sim.render(scene, cam, _table(), sim.PipelineConfig(
+        algorithm="tile", hiz={"enabled": True, "tile_size": 8})).flat_stats
+    bytes_off = off["depth.bytes_read"] + off["depth.bytes_written"]
+    bytes_on = on["depth.bytes_read"] + on["depth.bytes_written"]
+    hiz = on["hiz.bytes_read"] + on["hiz.bytes_written"]
+    return [label, layers, f"{on['zcull.pairs']:,}", f"{100 * on['zcull.pairs_culled'] / on['zcull.pairs']:.1f}",
+            f"{100 * on['zcull.pairs_zmin'] / on['zcull.pairs']:.1f}", f"{bytes_off:,}", f"{bytes_on:,}",
+            f"{100 * (1 - bytes_on / bytes_off):.1f}", f"{hiz:,}",
+            f"{100 * (1 - (bytes_on + hiz) / bytes_off):.1f}",
+            f"{100 * (1 - on['raster.samples_tested'] / off['raster.samples_tested']):.1f}"]
+
+
 def zcull_vs_depth_complexity():
     rows = []
     for order in ("front_to_back", "back_to_front"):
         for layers in (1, 2, 4, 8):
-            scene = models.named("depth_layers", layers=layers, order=order)
-            cam = _camera(scene, 0.0)
-            off = sim.render(scene, cam, _table(), sim.PipelineConfig(algorithm="tile")).flat_stats
-            on = sim.render(scene, cam, _table(), sim.PipelineConfig(
-                algorithm="tile", hiz={"enabled": True, "tile_size": 8})).flat_stats
-            bytes_off = off["depth.bytes_read"] + off["depth.bytes_written"]
-            bytes_on = on["depth.bytes_read"] + on["depth.bytes_written"]
-            hiz = on["hiz.bytes_read"] + on["hiz.bytes_written"]
-            rows.append([order, layers, f"{on['zcull.pairs']:,}", f"{100 * on['zcull.pairs_culled'] / on['zcull.pairs']:.1f}",
-                         f"{100 * on['zcull.pairs_zmin'] / on['zcull.pairs']:.1f}", f"{bytes_off:,}", f"{bytes_on:,}",
-                         f"{100 * (1 - bytes_on / bytes_off):.1f}", f"{hiz:,}",
-                         f"{100 * (1 - (bytes_on + hiz) / bytes_off):.1f}",
-                         f"{100 * (1 - on['raster.samples_tested'] / off['raster.samples_tested']):.1f}"])
+            rows.append(_zcull_row(order, layers, models.named("depth_layers", layers=layers, order=order), 0.0))
     # moving and defocused layers
     for coc, motion in ((10.0, 0.0), (0.0, 20.0), (10.0, 20.0)):
-        scene = models.named("depth_layers", layers=4, motion_px=motion)
-        cam = _camera(scene, coc)
-        off = sim.render(scene, cam, _table(), sim.PipelineConfig(algorithm="tile")).flat_stats
-        on = sim.render(scene, cam, _table(), sim.PipelineConfig(algorithm="tile", hiz={"enabled": True, "tile_size": 8})).flat_stats
-        bytes_off = off["depth.bytes_read"] + off["depth.bytes_written"]
-        bytes_on = on["depth.bytes_read"] + on["depth.bytes_written"]
-        hiz = on["hiz.bytes_read"] + on["hiz.bytes_written"]
-        rows.append([f"front_to_back, CoC {coc:g}, motion {motion:g} px", 4, f"{on['zcull.pairs']:,}",
-                     f"{100 * on['zcull.pairs_culled'] / on['zcull.pairs']:.1f}",
-                     f"{100 * on['zcull.pairs_zmin'] / on['zcull.pairs']:.1f}", f"{bytes_off:,}", f"{bytes_on:,}",
-                     f"{100 * (1 - bytes_on / bytes_off):.1f}", f"{hiz:,}",
-                     f"{100 * (1 - (bytes_on + hiz) / bytes_off):.1f}",
-                     f"{100 * (1 - on['raster.samples_tested'] / off['raster.samples_tested']):.1f}"])
+        rows.append(_zcull_row(f"front_to_back, CoC {coc:g}, motion {motion:g} px", 4,
+                               models.named("depth_layers", layers=4, motion_px=motion), coc))
     return rows
 
 
@@ -178,23 +168,23 @@ def main(argv=None) -> int:
         "test; `S=4/16` splits the shutter into sub-intervals with t̂ and (5D) lens sets each, samples indexed "
         "by (lens cell, time stratum). ops in millions (ops.total = setup + tile + sample).", "",
         "![STE vs motion](intervals_study_ste.png)", "",
-        *_md(["CoC", "motion px", "method", "samples tested", "STE", "ops.total M", "ops.tile M", "ops.sample M"],
+        *md_table(["CoC", "motion px", "method", "samples tested", "STE", "ops.total M", "ops.tile M", "ops.sample M"],
              ste_rows), "",
         "## z-culling vs depth complexity (HiZ 8x8, zmax and zmin culling)", "",
         "Scene `depth_layers`: screen-covering slightly tilted quads 0.75 apart, 128², tile algorithm. "
         "Depth bytes = per-sample reads + writes (4 bytes each); HiZ traffic = 8 bytes per pair read + 8 per "
         "tile update. Images are identical with HiZ on and off (tests/test_intervals.py).", "",
-        *_md(["order", "layers", "pairs", "zmax-culled %", "zmin (no reads) %", "depth bytes off", "depth bytes on",
+        *md_table(["order", "layers", "pairs", "zmax-culled %", "zmin (no reads) %", "depth bytes off", "depth bytes on",
               "depth bytes saved %", "HiZ bytes", "saved incl. HiZ %", "sample tests saved %"], z_rows), "",
         "## ẑ tightness: moving box + moving planes vs vertex min/max", "",
         "Mean width of ẑ (in view depth, per accepted pair) relative to the vertex min/max interval over the "
         "tile's t̂; 1.0 = no gain. `ops/pair` is the cost of the planes variant (vertex only: 23 ops).", "",
-        *_md(["scene", "params", "CoC", "pairs", "width ẑ / width vertex", "ops/pair"], t_rows), "",
+        *md_table(["scene", "params", "CoC", "pairs", "width ẑ / width vertex", "ops/pair"], t_rows), "",
         "## Occlusion queries: interval-based vs sample-based", "",
         "Occluder: one screen-covering quad at depth 2. Query: 100 `motion_field` triangles behind it (depth "
         "4-8, hidden) or in front (1-1.8, visible). Work is the query's alone (render with the query minus "
         "the occluder alone). ops = ops.total + ops.zhat + ops.interp.", "",
-        *_md(["CoC", "motion", "query", "mode", "visible", "samples tested", "depth bytes read", "HiZ bytes read",
+        *md_table(["CoC", "motion", "query", "mode", "visible", "samples tested", "depth bytes read", "HiZ bytes read",
               "pairs vs HiZ", "ops"], o_rows), "",
         f"Total time of this report: {time.perf_counter() - t0:.0f} s.",
     ]

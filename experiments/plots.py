@@ -155,9 +155,10 @@ def _paper_number(v):
         return None
 
 
-def md_table(header: list[str], rows: list[list[str]]) -> list[str]:
-    return (["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-            + ["| " + " | ".join(r) + " |" for r in rows])
+def md_table(header: list, rows: list[list]) -> list[str]:
+    """A Markdown table; cells are formatted with str()."""
+    return (["| " + " | ".join(map(str, header)) + " |", "|" + "---|" * len(header)]
+            + ["| " + " | ".join(map(str, r)) + " |" for r in rows])
 
 
 # ---- figures -------------------------------------------------------------------------------------

@@ -122,8 +122,9 @@ def write_config_page(config: RenderConfig, config_path, df, overrides=()) -> Pa
     return page
 
 
-def paper_configs() -> list[Path]:
-    return sorted(p for p in CONFIGS.glob("*.yaml") if not p.name.startswith("_"))
+def paper_configs(configs_dir: Path = CONFIGS) -> list[Path]:
+    """The report configs of a directory (files starting with _ are bases for `extends:`)."""
+    return sorted(p for p in Path(configs_dir).glob("*.yaml") if not p.name.startswith("_"))
 
 
 def main(only=None, workers=None, scheduler=None, force=False, quick=False, configs_dir: Path | None = None,
@@ -136,7 +137,7 @@ def main(only=None, workers=None, scheduler=None, force=False, quick=False, conf
     page_dir = out_root / "paper"
     if quick:
         os.environ["RAST5D_RESULTS"] = str(results_dir() / "quick")
-    paths = sorted(p for p in Path(configs_dir).glob("*.yaml") if not p.name.startswith("_"))
+    paths = paper_configs(configs_dir)
     loaded = []
     for p in paths:
         data, lines = load_dict(p)

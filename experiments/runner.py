@@ -298,7 +298,7 @@ def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "c
     if config.outputs.metrics is not None and todo:
         from .metrics import prepare_references
 
-        prepare_references([RenderConfig.model_validate_json(a[0]) for _, a in todo], progress=progress)
+        prepare_references([points[i][1] for i, _ in todo], progress=progress)
     bar = None
     if progress and todo:
         from tqdm import tqdm

@@ -18,6 +18,8 @@ import numpy as np
 import models
 import sim
 
+from .plots import md_table
+
 REPO = Path(__file__).resolve().parents[1]
 OUT = REPO / "reports" / "paper"
 
@@ -40,12 +42,6 @@ def camera(name, width, height, coc, **kw):
 def run(scene_obj, cam, table, hardware=None, **pipeline):
     r = sim.render(scene_obj, cam, table, sim.PipelineConfig(**pipeline), hardware=hardware)
     return r.flat_stats
-
-
-def md_table(header, rows):
-    out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    out += ["| " + " | ".join(str(c) for c in r) + " |" for r in rows]
-    return out
 
 
 # ---- 001 Table 3 ---------------------------------------------------------------------------------
@@ -95,8 +91,7 @@ def textured_square(edge_px, cam, depth):
     512-texel procedural texture maps about one texel per pixel (lambda ~ 0)."""
     s_y = 1.0 / math.tan(math.radians(cam.fov_y_deg) / 2)
     half = edge_px / (s_y * cam.height / depth)
-    q = np.array([[[-half, -half, -depth], [half, -half, -depth], [half, half, -depth]],
-                  [[-half, -half, -depth], [half, half, -depth], [-half, half, -depth]]])
+    q = models.procedural.quad_triangles((0.0, 0.0, -depth), 2 * half, 2 * half)
     k = edge_px / 512
     uvs = np.array([[[0, 0], [k, 0], [k, k]], [[0, 0], [k, k], [0, k]]], np.float32)
     return models.Scene.from_arrays(q, uvs=uvs, texture=sim.texturing.procedural_texture(512, 7))

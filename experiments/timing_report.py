@@ -15,7 +15,9 @@ import sys
 import time
 from pathlib import Path
 
-from .config import REPO, build, expand_sweep, load_config, load_dict
+from sim.timing import UNITS
+
+from .config import REPO, build, deep_merge, expand_sweep, load_config, load_dict
 
 OUT = REPO / "reports" / "timing"
 # Re-timed on the same records: what changes when one resource is scaled.
@@ -26,9 +28,9 @@ VARIANTS = {
 }
 
 
-def _points(config_path: Path, overrides=()) -> list[tuple[dict, object]]:
+def _points(config_path: Path) -> list[tuple[dict, object]]:
     """[(point, RenderConfig)] for every sweep point of the config (experiments.config)."""
-    return expand_sweep(load_config(config_path, list(overrides)), str(config_path))
+    return expand_sweep(load_config(config_path), str(config_path))
 
 
 def run(config_path: Path) -> "pd.DataFrame":  # noqa: F821
@@ -45,7 +47,7 @@ def run(config_path: Path) -> "pd.DataFrame":  # noqa: F821
         hw_dict = hw.describe()
         res = sim.render(scene, camera, table, pipeline, hardware=hw)
         for variant, change in VARIANTS.items():
-            vhw = sim.HardwareConfig.from_dict(_merge(hw_dict, change))
+            vhw = sim.HardwareConfig.from_dict(deep_merge(hw_dict, change))
             timing = res.flat_stats if not change else sim.timing.estimate(res.timing_records, vhw)
             row = {"variant": variant, **point, "spp": table.spp, "coc_px": camera.coc_px,
                    "algorithm": pipeline.algorithm}
@@ -57,13 +59,6 @@ def run(config_path: Path) -> "pd.DataFrame":  # noqa: F821
               flush=True)
     print(f"{len(points)} renders in {time.perf_counter() - t0:.0f} s")
     return pd.DataFrame(rows)
-
-
-def _merge(base: dict, change: dict) -> dict:
-    out = {k: (dict(v) if isinstance(v, dict) else v) for k, v in base.items()}
-    for k, v in change.items():
-        out[k] = {**out[k], **v} if isinstance(v, dict) else v
-    return out
 
 
 def sensitivity(config_path: Path) -> list[str]:
@@ -78,9 +73,10 @@ def sensitivity(config_path: Path) -> list[str]:
              "lumpy the work is (the engine's counters do not change with it).", "",
              "| bin size [px] | records | Mcycles | bottleneck | cycles / bound |", "|---|---|---|---|---|"]
     base = None
+    scene, camera, table, pipeline = build(cfg)
+    hardware = cfg.hardware_config()
     for bin_size in (8, 16, 32, 64, 128):
-        scene, camera, table, pipeline = build(cfg)
-        res = sim.render(scene, camera, table, pipeline.replace(bin_size=bin_size), hardware=cfg.hardware_config())
+        res = sim.render(scene, camera, table, pipeline.replace(bin_size=bin_size), hardware=hardware)
         st = res.flat_stats
         lines.append(f"| {bin_size} | {st['timing.records']:,} | {st['timing.cycles'] / 1e6:.3f} | "
                      f"{st['timing.bottleneck']} | {st['timing.bound_ratio']:.3f} |")
@@ -93,9 +89,8 @@ def sensitivity(config_path: Path) -> list[str]:
     for depth in (1, 2, 4, 8, 16, 64, 256):
         cells = []
         for extra in ({}, {"memory_bytes_per_clock": 128.0}):
-            hw = _merge(hw_dict, {**extra, "memory_fifo_entries": depth})
-            for u in ("setup", "tile_test", "sample_test", "depth", "shader", "texture"):
-                hw[u] = {**hw_dict[u], "fifo_entries": depth}
+            fifos = {u: {"fifo_entries": depth} for u in UNITS if u != "memory"}
+            hw = deep_merge(hw_dict, {**extra, "memory_fifo_entries": depth, **fifos})
             t = sim.timing.estimate(base.timing_records, sim.HardwareConfig.from_dict(hw))
             cells += [f"{t['timing.cycles'] / 1e6:.3f}", t["timing.bottleneck"], f"{t['timing.bound_ratio']:.3f}"]
         lines.append(f"| {depth} | " + " | ".join(cells) + " |")
@@ -128,8 +123,7 @@ def write(df, config_path: Path, out: Path = OUT, extra: list[str] = ()) -> None
     d0 = df[df["variant"] == "default"]
     plotted = list(VARIANTS)[:2]  # default, and memory x4 where the compute units limit
     fig, axes = plt.subplots(len(plotted), len(spps), figsize=(5.5 * len(spps), 3.8 * len(plotted)), squeeze=False)
-    markers = {u: m for u, m in zip(("setup", "tile_test", "sample_test", "depth", "shader", "texture", "memory"),
-                                    "v^os*Dx")}
+    markers = dict(zip(UNITS, "v^os*Dx"))
     for row, variant in zip(axes, plotted):
         dv = df[df["variant"] == variant]
         for ax, spp in zip(row, spps):
