@@ -350,13 +350,9 @@ PYBIND11_MODULE(_core, m) {
         d["timing.cycles"] = r.cycles;
         d["timing.records"] = r.records;
         d["timing.cores"] = r.cores;
-        for (int k = 0; k < kNumUnits; ++k) {
-          const std::string p = "timing." + std::string(kUnitInfo[k].name) + ".";
-          d[py::str(p + "work")] = r.units[k].work;
-          d[py::str(p + "busy_cycles")] = r.units[k].busy;
-          d[py::str(p + "blocked_cycles")] = r.units[k].blocked;
-          d[py::str(p + "starved_cycles")] = r.units[k].starved;
-        }
+        for (int k = 0; k < kNumUnits; ++k)
+          for (const auto& f : kUnitFigures)
+            d[py::str("timing." + std::string(kUnitInfo[k].name) + "." + f.suffix)] = r.units[k].*f.field;
         return d;
       },
       py::arg("records"), py::arg("throughput"), py::arg("latency"), py::arg("fifo"),

@@ -182,7 +182,8 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
   std::vector<std::vector<TileWork>> bin_records(p.record_timing ? n_bins : 0);
   // The texture-cache line stream length after each record, so the cache replay can hand every
   // record its own misses (the cache is simulated after the render, in bin order).
-  std::vector<std::vector<std::uint32_t>> bin_stream_ends(p.record_timing ? n_bins : 0);
+  const bool track_stream_ends = p.record_timing && !shade_frame.streams.empty();
+  std::vector<std::vector<std::uint32_t>> bin_stream_ends(track_stream_ends ? n_bins : 0);
   std::vector<ThreadState> states(n_threads);
   for (auto& s : states) s.shade.attach(&shade_frame, &s.counters);
   std::atomic<int> next_bin{0};
@@ -207,17 +208,14 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
           if (cancel.load(std::memory_order_relaxed)) break;  // Ctrl-C: stop within one triangle
           const TriSetup& tri = setups[i];
           const bool home = (tri.by0 / B) * bins_x + (tri.bx0 / B) == b;
-          if (!p.record_timing) {
-            algo->rasterize(tri, r, home);
-            continue;
-          }
-          const Counters before = ts.counters;
+          const TileWork before = p.record_timing ? work_from_counters(ts.counters) : TileWork{};
           algo->rasterize(tri, r, home);
-          TileWork w = work_from_counters(before, ts.counters);
+          if (!p.record_timing) continue;
+          TileWork w = work_from_counters(ts.counters).since(before);
           w.bin = b;
           w.triangles = home ? 1u : 0u;  // setup is done once, charged in the triangle's first bin
           bin_records[b].push_back(w);
-          if (!shade_frame.streams.empty())
+          if (track_stream_ends)
             bin_stream_ends[b].push_back(static_cast<std::uint32_t>(shade_frame.streams[b].size()));
         }
         ts.shade.close_visit();  // algorithms end their visits; this only guards the contract
@@ -263,15 +261,14 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
   result.counters[Counter::frame_bins] = static_cast<std::uint64_t>(n_bins);
   if (shade_frame.textured() && shade_frame.mode != ShadingMode::kNone && !result.interrupted) {
     const std::uint64_t lines = static_cast<std::uint64_t>(p.tex_cache_bytes / p.tex_cache_line_bytes);
-    const bool per_record = p.record_timing && !shade_frame.streams.empty();
     std::vector<std::vector<std::uint32_t>> seg_misses;
     const CacheStats cs = simulate_texture_caches(shade_frame.streams, p.tex_cache_count, lines,
                                                   static_cast<std::uint64_t>(p.tex_cache_ways),
-                                                  per_record ? &bin_stream_ends : nullptr,
-                                                  per_record ? &seg_misses : nullptr);
-    if (per_record)  // each record's texture misses and the line bytes they fetch (docs/timing.md)
+                                                  track_stream_ends ? &bin_stream_ends : nullptr,
+                                                  track_stream_ends ? &seg_misses : nullptr);
+    if (track_stream_ends)  // each record's texture misses and the line bytes they fetch (docs/timing.md)
       for (std::size_t b = 0; b < bin_records.size(); ++b)
-        for (std::size_t k = 0; k < bin_records[b].size() && k < seg_misses[b].size(); ++k) {
+        for (std::size_t k = 0; k < bin_records[b].size(); ++k) {
           bin_records[b][k].tex_misses += seg_misses[b][k];
           bin_records[b][k].memory_bytes += static_cast<std::uint64_t>(seg_misses[b][k]) * p.tex_cache_line_bytes;
         }

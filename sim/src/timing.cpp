@@ -35,8 +35,20 @@ std::uint64_t TileWork::amount(Unit u) const {
   return 0;
 }
 
-TileWork work_from_counters(const Counters& before, const Counters& after) {
-  auto d = [&](Counter c) { return after[c] - before[c]; };
+TileWork TileWork::since(const TileWork& b) const {
+  TileWork w;
+  w.tile_tests = tile_tests - b.tile_tests;
+  w.sample_tests = sample_tests - b.sample_tests;
+  w.depth_tests = depth_tests - b.depth_tests;
+  w.quads = quads - b.quads;
+  w.texel_fetches = texel_fetches - b.texel_fetches;
+  w.tex_misses = tex_misses - b.tex_misses;
+  w.memory_bytes = memory_bytes - b.memory_bytes;
+  return w;
+}
+
+TileWork work_from_counters(const Counters& c) {
+  auto d = [&](Counter k) { return c[k]; };
   TileWork w;
   w.tile_tests = d(Counter::tile_visited);
   w.sample_tests = d(Counter::raster_samples_tested);
@@ -148,16 +160,10 @@ std::vector<TimingFigure> timing_figures() {
       {"timing.records", "records", "Work records fed to the timing model (one per triangle and screen bin visited, one per culled triangle)"},
       {"timing.cores", "pipelines", "Parallel pipelines modelled (hardware.cores); per-unit clocks are summed over them"},
   };
-  for (const auto& u : kUnitInfo) {
-    const std::string p = "timing." + std::string(u.name) + ".";
-    const std::string what = std::string(u.description);
-    out.push_back({p + "work", std::string(u.currency), what + ": work given to the unit"});
-    out.push_back({p + "busy_cycles", "clocks", what + ": clocks processing (work / throughput)"});
-    out.push_back({p + "blocked_cycles", "clocks",
-                   what + ": clocks holding a finished record because the next unit's FIFO is full"});
-    out.push_back({p + "starved_cycles", "clocks",
-                   what + ": clocks idle with an empty input FIFO (pipeline fill, bubbles, drain)"});
-  }
+  for (const auto& u : kUnitInfo)
+    for (const auto& f : kUnitFigures)
+      out.push_back({"timing." + std::string(u.name) + "." + f.suffix, f.unit ? f.unit : std::string(u.currency),
+                     std::string(u.description) + ": " + f.what});
   return out;
 }
 

@@ -261,16 +261,16 @@ inline CacheStats simulate_texture_caches(const std::vector<std::vector<std::uin
   if (segment_misses) segment_misses->assign(streams.size(), {});
   for (std::size_t b = 0; b < streams.size(); ++b) {
     SetAssocCache& cache = caches[b % count];
-    const std::vector<std::uint32_t>* ends = segment_ends && b < segment_ends->size() ? &(*segment_ends)[b] : nullptr;
-    std::size_t seg = 0;
-    std::uint32_t misses = 0;
-    for (std::size_t i = 0; i < streams[b].size(); ++i) {
-      if (ends)
-        while (seg < ends->size() && i >= (*ends)[seg]) (*segment_misses)[b].push_back(misses), misses = 0, ++seg;
-      if (!cache.access(streams[b][i])) ++misses;
-    }
-    if (ends)
-      while (seg < ends->size()) (*segment_misses)[b].push_back(misses), misses = 0, ++seg;
+    const std::vector<std::uint32_t>& stream = streams[b];
+    std::size_t i = 0;
+    auto run_to = [&](std::size_t end) {  // accesses [i, end): their misses
+      std::uint32_t misses = 0;
+      for (; i < end; ++i) misses += !cache.access(stream[i]);
+      return misses;
+    };
+    if (segment_ends)
+      for (std::uint32_t end : (*segment_ends)[b]) (*segment_misses)[b].push_back(run_to(end));
+    run_to(stream.size());
   }
   CacheStats s;
   for (const auto& cache : caches) {

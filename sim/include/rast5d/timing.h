@@ -62,11 +62,14 @@ struct TileWork {
   std::uint64_t memory_bytes = 0;    // memory
 
   std::uint64_t amount(Unit u) const;
+  // Field-wise this - before (bin and triangles are not counter-derived and stay 0).
+  TileWork since(const TileWork& before) const;
 };
 
-// THE mapping from the engine's counters to a work record: the delta of one worker thread's
-// counters around one call of Traversal::rasterize. Extend it here when new counters exist.
-TileWork work_from_counters(const Counters& before, const Counters& after);
+// THE mapping from the engine's counters to work: the work a worker thread's counters add up to.
+// A record is work_from_counters(after).since(work_from_counters(before)) around one call of
+// Traversal::rasterize. Extend it here when new counters exist.
+TileWork work_from_counters(const Counters& c);
 
 struct UnitTiming {
   double throughput = 1.0;  // items per clock, > 0
@@ -86,6 +89,22 @@ struct UnitStats {
   double busy = 0;     // clocks spent processing (work / throughput)
   double blocked = 0;  // clocks holding a finished record because the next FIFO is full
   double starved = 0;  // clocks idle: input FIFO empty (fill, bubbles, drain, cores done early)
+};
+
+// The per-unit figures, declared once: timing.<unit>.<suffix> (unit nullptr: the unit's currency).
+struct UnitFigure {
+  const char* suffix;
+  const char* unit;
+  const char* what;
+  double UnitStats::*field;
+};
+inline constexpr UnitFigure kUnitFigures[] = {
+    {"work", nullptr, "work given to the unit", &UnitStats::work},
+    {"busy_cycles", "clocks", "clocks processing (work / throughput)", &UnitStats::busy},
+    {"blocked_cycles", "clocks", "clocks holding a finished record because the next unit's FIFO is full",
+     &UnitStats::blocked},
+    {"starved_cycles", "clocks", "clocks idle with an empty input FIFO (pipeline fill, bubbles, drain)",
+     &UnitStats::starved},
 };
 
 struct TimingResult {

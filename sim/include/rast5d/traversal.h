@@ -395,7 +395,6 @@ class SamplePipeline {
     ShadeState::Rec r{px, py, s, 0, 0.0f, 0.0f, 0.0f, 0.0f};
     const float inv = 1.0f / sum;
     const float b0 = e0 * inv, b1 = e1 * inv, b2 = e2 * inv;
-    if (!sh_.counting() && sf.tex_count == 0) return;
     if (sf.mode == ShadingMode::kPerLensCell) r.cell = f_.table.pixel(px, py).cell[s];
     if (sf.mode == ShadingMode::kCache) {  // the hit point seen through the lens centre at shutter open
       const float X = b0 * tri.X[0] + b1 * tri.X[1] + b2 * tri.X[2];
