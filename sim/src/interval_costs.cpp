@@ -24,7 +24,7 @@ FrameConst frame(std::mt19937_64& g, bool lens) {
 }
 
 // A moving triangle; some vertices may cross W = 0 during the shutter.
-TriSetup moving_tri(std::mt19937_64& g, const FrameConst& fc, bool lens) {
+TriSetup moving_tri(std::mt19937_64& g, bool lens) {
   TriSetup t;
   t.moving = true;
   t.defocused = lens;
@@ -38,7 +38,6 @@ TriSetup moving_tri(std::mt19937_64& g, const FrameConst& fc, bool lens) {
     t.dY[j] = static_cast<float>(rnd(g, -600, 600));
     t.cx[j] = t.cy[j] = 0.0f;
   }
-  (void)fc;
   return t;
 }
 
@@ -65,7 +64,7 @@ const bool kRegistered = [] {
     const std::string sfx = lens ? "_5d" : "_3d";
     R.emplace("interval.motion_setup" + sfx, [lens](std::mt19937_64& g) -> Pair {
       const FrameConst fc = frame(g, lens);
-      const TriSetup t = moving_tri(g, fc, lens);
+      const TriSetup t = moving_tri(g, lens);
       const int S = 1 << (g() % 5);
       return both([&]<class A>(std::uint64_t& ops) {
         iv::MotionSetup ms;
@@ -74,7 +73,7 @@ const bool kRegistered = [] {
     });
     R.emplace("interval.tile_intervals" + sfx, [lens](std::mt19937_64& g) -> Pair {
       const FrameConst fc = frame(g, lens);
-      const TriSetup t = moving_tri(g, fc, lens);
+      const TriSetup t = moving_tri(g, lens);
       const int S = 1 << (g() % 5);
       iv::MotionSetup ms;
       std::uint64_t ignore = 0;
@@ -90,7 +89,7 @@ const bool kRegistered = [] {
     });
     R.emplace("zhat.planes" + sfx, [lens](std::mt19937_64& g) -> Pair {
       const FrameConst fc = frame(g, lens);
-      const TriSetup t = moving_tri(g, fc, lens);
+      const TriSetup t = moving_tri(g, lens);
       const double x0 = rnd(g, 0, 256), y0 = rnd(g, 0, 256), u0 = rnd(g, -1, 0.5), v0 = rnd(g, -1, 0.5);
       const double ta = rnd(g, 0, 1), tb = std::min(1.0, ta + rnd(g, 0, 1));
       const bool planes_on = g() % 4 != 0;

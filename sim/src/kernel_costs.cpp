@@ -178,12 +178,6 @@ tiletest::LensVertex random_lens_vertex(std::mt19937_64& g, double k) {
                                CD(-k));
 }
 
-std::uint64_t gaps_cost(const tiletest::LensVertex* vs, int n, bool y) {
-  std::uint64_t c = 0;
-  for (int j = 0; j < n; ++j) c += ((y ? vs[j].ky : vs[j].kx) != 0) ? cost::kGapVertex : cost::kGapVertexInFocus;
-  return c;
-}
-
 tiletest::AxisSet random_axis_set(std::mt19937_64& g, tiletest::Gaps* out = nullptr) {
   tiletest::LensVertex vs[6];
   const int n = 3 + static_cast<int>(g() % 4);
@@ -220,7 +214,7 @@ const bool kRegisteredTile = [] {
     const double x0 = rndd(g, 0, 500);
     OpTally::take();
     tiletest::axis_gaps(vs, n, y, CD(x0), CD(x0 + 2.0));
-    return {OpTally::take(), gaps_cost(vs, n, y)};
+    return {OpTally::take(), tiletest::axis_gaps_cost(vs, n, y)};
   });
   R.emplace("tile.axis_set", [](std::mt19937_64& g) -> Pair {
     tiletest::Gaps gx;
@@ -279,7 +273,7 @@ const bool kRegisteredTile = [] {
     OpTally::take();
     tiletest::line_cells<CD>(l, G, i0, i1, j0, j1);
     const std::uint64_t rows = j1 - j0 + 1, cols = i1 - i0 + 1;
-    return {OpTally::take(), cost::kLineCellsBase + rows + 2 * rows * cols};
+    return {OpTally::take(), tiletest::line_cells_cost(rows, cols)};
   });
   R.emplace("tile.edges_2d", [](std::mt19937_64& g) -> Pair {
     float X[3], Y[3], W[3];

@@ -27,8 +27,8 @@ class BinBuffers {
     tri_.assign(n, -1);
     if (hiz_tile_ > 0) {
       hx_ = (w_ + hiz_tile_ - 1) / hiz_tile_;
-      hy_ = (r.y1 - r.y0 + hiz_tile_ - 1) / hiz_tile_;
-      const std::size_t nh = static_cast<std::size_t>(hx_) * hy_;
+      const int hy = (r.y1 - r.y0 + hiz_tile_ - 1) / hiz_tile_;
+      const std::size_t nh = static_cast<std::size_t>(hx_) * hy;
       hiz_min_.assign(nh, std::numeric_limits<float>::infinity());
       hiz_max_.assign(nh, std::numeric_limits<float>::infinity());
       hiz_dirty_.assign(nh, 0);
@@ -42,7 +42,6 @@ class BinBuffers {
   // after each triangle, which recomputes the marked tiles from the depth buffer (as hardware does
   // on tile write-back). Contract: hiz_max(px, py) >= every depth of the tile, hiz_min <= every.
   void set_hiz_tile(int h) { hiz_tile_ = h; }
-  int hiz_tile() const { return hiz_tile_; }
   std::size_t hiz_index(int px, int py) const {
     return static_cast<std::size_t>((py - rect_.y0) / hiz_tile_) * hx_ + (px - rect_.x0) / hiz_tile_;
   }
@@ -112,7 +111,7 @@ class BinBuffers {
   int spp_ = 1, w_ = 0;
   std::vector<float> depth_, color_;
   std::vector<std::int32_t> tri_;
-  int hiz_tile_ = 0, hx_ = 0, hy_ = 0;
+  int hiz_tile_ = 0, hx_ = 0;
   std::vector<float> hiz_min_, hiz_max_;
   std::vector<std::uint8_t> hiz_dirty_;
   std::vector<std::size_t> dirty_list_;

@@ -41,7 +41,6 @@ class LruSet {
     map_.clear();
     order_.clear();
   }
-  std::size_t capacity() const { return cap_; }
 
  private:
   std::size_t cap_;

@@ -106,7 +106,7 @@ inline Footprint build_footprint(const TriSetup& tri, const Frame& f, bool with_
     const std::uint64_t cells = static_cast<std::uint64_t>(Gc) * Gc;
     fp.orient_pos = tiletest::line_cells<D>(tiletest::Line{-orient.A, -orient.B, thr - orient.C}, Gc, 0, Gc - 1, 0, Gc - 1);
     fp.orient_neg = tiletest::line_cells<D>(tiletest::Line{orient.A, orient.B, orient.C + thr}, Gc, 0, Gc - 1, 0, Gc - 1);
-    charge<A>(ops, 2 * (cost::kLineCellsBase + Gc + 2 * cells));
+    charge<A>(ops, 2 * tiletest::line_cells_cost(Gc, Gc));
     fp.orient_split = true;
   }
   // Selective H_j oracle (001 Appendix A): N_samples * C_sample < N_tiles * C_tile disables.
@@ -116,8 +116,7 @@ inline Footprint build_footprint(const TriSetup& tri, const Frame& f, bool with_
   const double c_sample = p.c_sample >= 0 ? p.c_sample : static_cast<double>(cost::kInside4D);
   const double c_tile = p.c_tile >= 0 ? p.c_tile
                                       : static_cast<double>(cost::kTangentCorners +
-                                                            2 * (cost::kLineAtCorner + cost::kLineCellsBase + G +
-                                                                 2 * G * G));
+                                                            2 * (cost::kLineAtCorner + tiletest::line_cells_cost(G, G)));
   D tile_budget(0.0);
   if (p.selective_H) {
     tile_budget = D(n_tiles) * D(c_tile);
@@ -160,24 +159,26 @@ inline Footprint build_footprint(const TriSetup& tri, const Frame& f, bool with_
   return fp;
 }
 
-// h_i lines of one tile: the active u and v sets. Returns false if either is empty.
-// Charges the tile-stage operations to `ops`.
+// h_i lines of one tile from n lens vertices: the active u and v sets. Returns false if either is
+// empty. Charges the tile-stage operations to `ops`.
 template <class A>
-inline bool tile_h_sets(const Footprint& fp, double x0, double x1, double y0, double y1,
+inline bool tile_h_sets(const tiletest::LensVertex* lv, int n, double x0, double x1, double y0, double y1,
                         tiletest::AxisSet& sx, tiletest::AxisSet& sy, std::uint64_t& ops) {
   using D = typename A::f64;
-  std::uint64_t doc = 0;
-  for (int j = 0; j < fp.n; ++j) {
-    doc += fp.lv[j].kx ? cost::kGapVertex : cost::kGapVertexInFocus;
-    doc += fp.lv[j].ky ? cost::kGapVertex : cost::kGapVertexInFocus;
-  }
-  const tiletest::Gaps gx = tiletest::axis_gaps(fp.lv, fp.n, false, D(x0), D(x1));
-  const tiletest::Gaps gy = tiletest::axis_gaps(fp.lv, fp.n, true, D(y0), D(y1));
+  std::uint64_t doc = tiletest::axis_gaps_cost(lv, n, false) + tiletest::axis_gaps_cost(lv, n, true);
+  const tiletest::Gaps gx = tiletest::axis_gaps(lv, n, false, D(x0), D(x1));
+  const tiletest::Gaps gy = tiletest::axis_gaps(lv, n, true, D(y0), D(y1));
   sx = tiletest::axis_set<D>(gx);
   sy = tiletest::axis_set<D>(gy);
   for (int k = 0; k < 2; ++k) doc += (gx.blocked[k] ? 0 : cost::kAxisSetGap) + (gy.blocked[k] ? 0 : cost::kAxisSetGap);
   charge<A>(ops, doc);
   return !sx.empty && !sy.empty;
+}
+
+template <class A>
+inline bool tile_h_sets(const Footprint& fp, double x0, double x1, double y0, double y1,
+                        tiletest::AxisSet& sx, tiletest::AxisSet& sy, std::uint64_t& ops) {
+  return tile_h_sets<A>(fp.lv, fp.n, x0, x1, y0, y1, sx, sy, ops);
 }
 
 // Is the sample's (u, v, t) inside the exact active region of the (unexpanded) tile

@@ -377,11 +377,6 @@ inline void zhat_widen(const ZHat& z, double near, double& zlo, double& zhi) {
   zhi = std::isinf(wh) ? 1.0 : 1.0 - near / wh;
 }
 
-template <class F>
-struct Interval1 {
-  F lo, hi;
-};
-
 // ---- all intervals of one tile for a moving triangle ------------------------------------------
 
 struct TileIntervals {
@@ -419,20 +414,7 @@ inline bool motion_tile_intervals(const MotionSetup& ms, const ClipBox& clip, Di
     sx = full_axis(), sy = full_axis();
     if (ms.lens) {
       ++c[is5 ? Counter::interval_lens_tests_5d : Counter::interval_lens_tests_3d];
-      if (si.lens_ok) {
-        std::uint64_t doc = 0;
-        for (int j = 0; j < si.n_lv; ++j) {
-          doc += si.lv[j].kx ? cost::kGapVertex : cost::kGapVertexInFocus;
-          doc += si.lv[j].ky ? cost::kGapVertex : cost::kGapVertexInFocus;
-        }
-        const tiletest::Gaps gx = tiletest::axis_gaps(si.lv, si.n_lv, false, D(x0), D(x1));
-        const tiletest::Gaps gy = tiletest::axis_gaps(si.lv, si.n_lv, true, D(y0), D(y1));
-        sx = tiletest::axis_set<D>(gx);
-        sy = tiletest::axis_set<D>(gy);
-        for (int q = 0; q < 2; ++q)
-          doc += (gx.blocked[q] ? 0 : cost::kAxisSetGap) + (gy.blocked[q] ? 0 : cost::kAxisSetGap);
-        charge<A>(ops, doc);
-      }
+      if (si.lens_ok) tile_h_sets<A>(si.lv, si.n_lv, x0, x1, y0, y1, sx, sy, ops);  // empty sets: caught below
       if (clip.active_u) clip_axis<A>(sx, clip.u_lo, clip.u_hi, ops);
       if (clip.active_v) clip_axis<A>(sy, clip.v_lo, clip.v_hi, ops);
       if (sx.empty || sy.empty || sx.n_intervals == 0 || sy.n_intervals == 0) continue;

@@ -33,8 +33,7 @@ struct MipLevel {
   int w = 1, h = 1;
   std::vector<float> rgb;  // h x w x 3, linear
   std::uint64_t base = 0;  // byte address of texel (0, 0)
-  std::uint64_t bytes = 0;
-  int blocks_x = 1, blocks_pow2 = 1;  // blocked: blocks per row; morton: padded pow2 blocks per side
+  int blocks_x = 1;  // blocked: blocks per row
 };
 
 struct Texture {
@@ -94,16 +93,16 @@ class TextureSet {
         const int blocks_y = (l.h + kTexBlock - 1) / kTexBlock;
         int p = 1;
         while (p < std::max(l.blocks_x, blocks_y)) p *= 2;
-        l.blocks_pow2 = p;
         const std::uint64_t block_bytes = kTexBlock * kTexBlock * kTexelBytes;
+        std::uint64_t bytes;
         if (lay == TexLayout::kLinear)
-          l.bytes = static_cast<std::uint64_t>(l.w) * l.h * kTexelBytes;
+          bytes = static_cast<std::uint64_t>(l.w) * l.h * kTexelBytes;
         else if (lay == TexLayout::kBlocked)
-          l.bytes = static_cast<std::uint64_t>(l.blocks_x) * blocks_y * block_bytes;
-        else
-          l.bytes = (morton2(p - 1, p - 1) + 1) * block_bytes;
+          bytes = static_cast<std::uint64_t>(l.blocks_x) * blocks_y * block_bytes;
+        else  // Morton: padded to p x p blocks, p the power of two covering both sides
+          bytes = (morton2(p - 1, p - 1) + 1) * block_bytes;
         l.base = addr;
-        addr += (l.bytes + 4095) / 4096 * 4096;
+        addr += (bytes + 4095) / 4096 * 4096;
       }
   }
 

@@ -45,6 +45,7 @@
 #include <limits>
 
 #include "rast5d/arith.h"
+#include "rast5d/costs.h"
 #include "rast5d/params.h"
 
 namespace rast5d::tiletest {
@@ -109,7 +110,19 @@ inline LensVertex lens_vertex(D X, D Y, D W, D neg_focus, D coc_x, D coc_y) {
 }
 
 inline std::uint64_t lens_vertex_cost(const LensVertex& v) {
-  return 6 + (v.kx != 0 ? 2 : 0) + (v.ky != 0 ? 2 : 0);  // = cost::kLensVertexBase + kLensVertexAxis per axis
+  return cost::kLensVertexBase + (v.kx != 0 ? cost::kLensVertexAxis : 0) + (v.ky != 0 ? cost::kLensVertexAxis : 0);
+}
+
+// Documented cost of the gap bounds of one axis (y: the v axis) over n lens vertices (axis_gaps).
+inline std::uint64_t axis_gaps_cost(const LensVertex* lv, int n, bool y) {
+  std::uint64_t c = 0;
+  for (int j = 0; j < n; ++j) c += ((y ? lv[j].ky : lv[j].kx) != 0) ? cost::kGapVertex : cost::kGapVertexInFocus;
+  return c;
+}
+
+// Documented cost of line_cells over rows x cols lens cells.
+inline std::uint64_t line_cells_cost(std::uint64_t rows, std::uint64_t cols) {
+  return cost::kLineCellsBase + rows + 2 * rows * cols;
 }
 
 // ---- h_i lines: the active lens interval set of one axis -------------------------------------

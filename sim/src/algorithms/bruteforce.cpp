@@ -2,7 +2,6 @@
 // conservative screen bounds over the whole lens and shutter. No tile test. Shading visit
 // (shading.h): the whole triangle in the bin, since each pixel is walked once per triangle.
 #include <algorithm>
-#include <vector>
 
 #include "rast5d/traversal.h"
 

@@ -74,15 +74,14 @@ class Interleave final : public Traversal {
               continue;
             }
             ++c_[Counter::tile_accepted];
-            pass(tri, i, xs, ys, std::max(tx, x0), std::min(tx + HT, x1), std::max(ty, y0), std::min(ty + HT, y1));
+            pass(i, std::max(tx, x0), std::min(tx + HT, x1), std::max(ty, y0), std::min(ty + HT, y1));
           }
       } else {
-        pass(tri, i, xs, ys, x0, x1, y0, y1);
+        pass(i, x0, x1, y0, y1);
       }
       pipe_.end_visit();  // a visit = one lens-coordinate pass
       pipe_.flush();      // xs / ys are this iteration's
     }
-    pipe_.flush();
     if (charge_setup) {
       c_[Counter::ops_setup] += setup_ops;
       c_[Counter::trav_passes] += static_cast<std::uint64_t>(N);
@@ -91,9 +90,8 @@ class Interleave final : public Traversal {
   }
 
  private:
-  // Inside-test the samples of lens coordinate i in the pixel rectangle, in 2x2-block order.
-  void pass(const TriSetup& /*tri*/, int i, const float* /*xs*/, const float* /*ys*/, int x0, int x1, int y0,
-            int y1) {
+  // Inside-test the samples of lens coordinate i in the pixel rectangle, row by row.
+  void pass(int i, int x0, int x1, int y0, int y1) {
     for (int py = y0; py < y1; ++py)
       for (int px = x0; px < x1; ++px) {
         const PixelSamples ps = f_.table.pixel(px, py);

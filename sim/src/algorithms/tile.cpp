@@ -294,7 +294,7 @@ class Tile final : public Traversal {
           charge<A>(c_[Counter::ops_tile], e.parallel ? 0 : cost::kTangentCorners);
           if (!has) continue;  // region 5: the edge points at the tile
           const int rows = j1 - j0 + 1, cols = i1 - i0 + 1;
-          const std::uint64_t cells_cost = cost::kLineCellsBase + rows + 2 * static_cast<std::uint64_t>(rows * cols);
+          const std::uint64_t cells_cost = tiletest::line_cells_cost(rows, cols);
           tiletest::CellMask edge_culled;
           if (fp.sigma != 0) {  // one orientation over the lens: cull where sigma * H < 0 for both
             edge_culled.set();
@@ -452,7 +452,7 @@ class Tile final : public Traversal {
           int n = 0;
           for (int k = 0; k < S; ++k) {
             if (!ti.active[k]) continue;
-            const iv::Interval1<F> tk{F(ti.tlo[k]), F(ti.thi[k])};
+            const F tk_lo(ti.tlo[k]), tk_hi(ti.thi[k]);
             const tiletest::AxisSet& sx = ti.sx[k];
             const tiletest::AxisSet& sy = ti.sy[k];
             // per sample: 2 CMP for t̂, the lens cuts (5D), 2 CMP per clipped lens axis
@@ -467,7 +467,7 @@ class Tile final : public Traversal {
                 const int smp = ps.ct_order[idx];
                 ++checked;
                 const F t(ps.t[smp]);
-                bool pass = (t >= tk.lo) & (t <= tk.hi);
+                bool pass = (t >= tk_lo) & (t <= tk_hi);
                 if (lens) pass &= tiletest::axis_pass(sx, F(ps.u[smp])) & tiletest::axis_pass(sy, F(ps.v[smp]));
                 if (cu) {
                   const F u(ps.u[smp]);
