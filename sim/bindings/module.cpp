@@ -18,7 +18,6 @@
 #include "rast5d/shading.h"
 #include "rast5d/texture.h"
 #include "rast5d/conservative.h"
-#include "rast5d/intervals.h"
 #include <cstring>
 
 namespace py = pybind11;
@@ -429,10 +428,6 @@ PYBIND11_MODULE(_core, m) {
         require_shape(v0, {-1, 3, 3}, "v0");
         const py::ssize_t n = v0.shape(0);
         require_shape(v1, {n, 3, 3}, "v1");
-        if (p.width < 1 || p.height < 1 || p.width > 16384 || p.height > 16384)
-          throw std::invalid_argument("width/height: expected 1..16384");
-        if (p.time_splits < 1 || p.time_splits > iv::kMaxSplits)
-          throw std::invalid_argument("time_splits: expected 1..16, got " + std::to_string(p.time_splits));
         std::vector<float> colors(static_cast<std::size_t>(n) * 9, 0.0f);
         SceneArrays scene{static_cast<int>(n), v0.data(), v1.data(), colors.data()};
         ConservativeResult res;

@@ -14,6 +14,7 @@ ConservativeResult conservative_raster(const RenderParams& p, const SceneArrays&
                                        std::uint64_t max_records) {
   using A = FastArith;
   using D = double;
+  validate_frame_params(p);
   const FrameConst fc = make_frame_const(p);
   // build_footprint needs a Frame; without H_j lines it never reads the table.
   const float one_sample[5] = {0.5f, 0.5f, 0.0f, 0.0f, 0.0f};
@@ -70,9 +71,7 @@ ConservativeResult conservative_raster(const RenderParams& p, const SceneArrays&
         } else {
           tiletest::AxisSet sx = iv::full_axis(), sy = iv::full_axis();
           if (fp.h_valid && !tile_h_sets<A>(fp, x0, x1, y0, y1, sx, sy, c[Counter::ops_tile])) continue;
-          if (clip.active_u) iv::clip_axis<A>(sx, clip.u_lo, clip.u_hi, c[Counter::ops_tile]);
-          if (clip.active_v) iv::clip_axis<A>(sy, clip.v_lo, clip.v_hi, c[Counter::ops_tile]);
-          if (sx.n_intervals == 0 || sy.n_intervals == 0) continue;
+          if (!iv::clip_lens<A>(clip, sx, sy, c[Counter::ops_tile])) continue;
           u0 = sx.iv_lo[0], u1 = sx.iv_hi[sx.n_intervals - 1];
           w0 = sy.iv_lo[0], w1 = sy.iv_hi[sy.n_intervals - 1];
         }

@@ -21,29 +21,15 @@ std::vector<AlgorithmEntry> algorithms() {
   return out;
 }
 
-void validate_params(const RenderParams& p, const SampleTable& table) {
+void validate_frame_params(const RenderParams& p) {
   auto fail = [](const std::string& m) { throw std::invalid_argument(m); };
   if (p.width < 1 || p.width > 16384) fail("width: expected 1..16384, got " + std::to_string(p.width));
   if (p.height < 1 || p.height > 16384)
     fail("height: expected 1..16384, got " + std::to_string(p.height));
-  const auto& reg = TraversalRegistry::entries();
-  auto it = reg.find(p.algorithm);
-  if (it == reg.end()) {
-    std::string names;
-    for (const auto& kv : reg) names += (names.empty() ? "" : ", ") + kv.first;
-    fail("algorithm: unknown '" + p.algorithm + "' (known: " + names + ")");
-  }
-  if (it->second.needs_interleaved_table && table.n_lens() == 0)
-    fail("algorithm: '" + p.algorithm +
-         "' needs an interleaved sample table (SampleTable.interleaved), got a table without "
-         "discrete lens coordinates");
   if (p.tile_size != 1 && p.tile_size != 2 && p.tile_size != 4 && p.tile_size != 8)
     fail("tile_size: expected 1, 2, 4 or 8, got " + std::to_string(p.tile_size));
   if (p.bin_size < 8 || p.bin_size % 8 != 0 || p.bin_size > 4096)
     fail("bin_size: expected a multiple of 8 in 8..4096, got " + std::to_string(p.bin_size));
-  if (p.lens_grid != table.grid())
-    fail("lens_grid: the sample table was bucketed for G=" + std::to_string(table.grid()) +
-         ", got " + std::to_string(p.lens_grid));
   if (p.threads < 0 || p.threads > 1024)
     fail("threads: expected 0 (all) .. 1024, got " + std::to_string(p.threads));
   if (!(p.focus_w > 0)) fail("focus_w: expected > 0, got " + std::to_string(p.focus_w));
@@ -70,6 +56,25 @@ void validate_params(const RenderParams& p, const SampleTable& table) {
     fail("tex_cache_ways: expected 0 or a divisor of the number of lines, got " + std::to_string(p.tex_cache_ways));
   if (p.tex_cache_count < 1 || p.tex_cache_count > 1024)
     fail("tex_cache_count: expected 1..1024, got " + std::to_string(p.tex_cache_count));
+}
+
+void validate_params(const RenderParams& p, const SampleTable& table) {
+  auto fail = [](const std::string& m) { throw std::invalid_argument(m); };
+  validate_frame_params(p);
+  const auto& reg = TraversalRegistry::entries();
+  auto it = reg.find(p.algorithm);
+  if (it == reg.end()) {
+    std::string names;
+    for (const auto& kv : reg) names += (names.empty() ? "" : ", ") + kv.first;
+    fail("algorithm: unknown '" + p.algorithm + "' (known: " + names + ")");
+  }
+  if (it->second.needs_interleaved_table && table.n_lens() == 0)
+    fail("algorithm: '" + p.algorithm +
+         "' needs an interleaved sample table (SampleTable.interleaved), got a table without "
+         "discrete lens coordinates");
+  if (p.lens_grid != table.grid())
+    fail("lens_grid: the sample table was bucketed for G=" + std::to_string(table.grid()) +
+         ", got " + std::to_string(p.lens_grid));
 }
 
 // The per-render shading constants: textures with mip chains and addresses, per-triangle texture

@@ -7,6 +7,20 @@
 
 namespace rast5d {
 
+namespace {
+
+// One pixel's samples bucketed by key[s] in [0, buckets): order = sample indices sorted by key
+// (stable), off[b] .. off[b + 1] = the range of bucket b in order. off has buckets + 1 zeroed slots.
+template <class Key>
+void bucket_samples(const Key* key, int spp, int buckets, std::int32_t* order, std::int32_t* off) {
+  for (int s = 0; s < spp; ++s) ++off[key[s] + 1];
+  for (int b = 0; b < buckets; ++b) off[b + 1] += off[b];
+  std::iota(order, order + spp, 0);
+  std::stable_sort(order, order + spp, [&](int a, int b) { return key[a] < key[b]; });
+}
+
+}  // namespace
+
 SampleTable::SampleTable(int period, int spp, const float* samples, int grid,
                          const std::int32_t* lens_index, int n_lens, const float* lens_uv)
     : period_(period), spp_(spp), grid_(grid), n_lens_(lens_index ? n_lens : 0) {
@@ -34,10 +48,7 @@ SampleTable::SampleTable(int period, int spp, const float* samples, int grid,
       cell[s] = cell_of(u_[base + s], v_[base + s], grid);
       cell_idx_[base + s] = static_cast<std::uint8_t>(cell[s] < 256 ? cell[s] : 255);
     }
-    std::iota(order, order + spp, 0);
-    std::stable_sort(order, order + spp, [&](int a, int b) { return cell[a] < cell[b]; });
-    for (int s = 0; s < spp; ++s) ++off[cell[s] + 1];
-    for (int c = 0; c < cells; ++c) off[c + 1] += off[c];
+    bucket_samples(cell.data(), spp, cells, order, off);
   }
   if (n_lens_ > 0) {
     lens_u_.resize(n_lens_), lens_v_.resize(n_lens_);
@@ -50,14 +61,9 @@ SampleTable::SampleTable(int period, int spp, const float* samples, int grid,
       const std::int32_t* li = &lens_index_[base];
       std::int32_t* order = &lens_order_[base];
       std::int32_t* off = &lens_offsets_[p * (n_lens_ + 1)];
-      for (int s = 0; s < spp; ++s) {
-        if (li[s] < 0 || li[s] >= n_lens_)
-          throw std::invalid_argument("SampleTable: lens_index out of range");
-        ++off[li[s] + 1];
-      }
-      for (int c = 0; c < n_lens_; ++c) off[c + 1] += off[c];
-      std::iota(order, order + spp, 0);
-      std::stable_sort(order, order + spp, [&](int a, int b) { return li[a] < li[b]; });
+      for (int s = 0; s < spp; ++s)
+        if (li[s] < 0 || li[s] >= n_lens_) throw std::invalid_argument("SampleTable: lens_index out of range");
+      bucket_samples(li, spp, n_lens_, order, off);
     }
   }
 }
@@ -75,14 +81,9 @@ void SampleTable::set_time_strata(int S) {
     const std::size_t base = p * spp_;
     std::int32_t* order = &ct_order_[base];
     std::int32_t* off = &ct_offsets_[p * (buckets + 1)];
-    for (int s = 0; s < spp_; ++s) {
-      const int c = cell_of(u_[base + s], v_[base + s], grid_);
-      key[s] = c * S + stratum_of(t_[base + s], S);
-      ++off[key[s] + 1];
-    }
-    for (int b = 0; b < buckets; ++b) off[b + 1] += off[b];
-    std::iota(order, order + spp_, 0);
-    std::stable_sort(order, order + spp_, [&](int a, int b) { return key[a] < key[b]; });
+    for (int s = 0; s < spp_; ++s)
+      key[s] = cell_of(u_[base + s], v_[base + s], grid_) * S + stratum_of(t_[base + s], S);
+    bucket_samples(key.data(), spp_, buckets, order, off);
   }
 }
 

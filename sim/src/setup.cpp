@@ -211,17 +211,16 @@ bool setup_triangle(const float* v0, const float* v1, const float* col, std::uin
   // lens corner, its area is below what the float sample test resolves, whose rounding would then
   // decide coverage (spurious hits around the point). Such a triangle covers no sample in exact
   // arithmetic (up to a negligible probability), so it is culled. A triangle seen edge-on through
-  // the pinhole still projects to a segment and is kept. Not counted (robustness, like the near
-  // plane).
+  // the pinhole still projects to a segment and is kept. Its operations are not charged
+  // (robustness, like the near plane); the culls are counted in setup.culled_degenerate.
   if (!moving) {
     // Zero area in 3D (collinear vertices, up to the float rounding of the vertices): thinner than
     // a few ulps of its coordinates, so exact coverage is empty and the float sample test would only
     // see rounding noise along the projected segment.
+    const double V[3][3] = {{o.X[0], o.X[1], o.X[2]}, {o.Y[0], o.Y[1], o.Y[2]}, {o.W[0], o.W[1], o.W[2]}};
     double e1[3], e2[3], pmax = 0.0;
     for (int k = 0; k < 3; ++k) {
-      const double a = k == 0 ? o.X[0] : (k == 1 ? o.Y[0] : o.W[0]);
-      const double b1 = k == 0 ? o.X[1] : (k == 1 ? o.Y[1] : o.W[1]);
-      const double b2 = k == 0 ? o.X[2] : (k == 1 ? o.Y[2] : o.W[2]);
+      const double a = V[k][0], b1 = V[k][1], b2 = V[k][2];
       e1[k] = b1 - a, e2[k] = b2 - a;
       pmax = std::max({pmax, std::fabs(a), std::fabs(b1), std::fabs(b2)});
     }

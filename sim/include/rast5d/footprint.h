@@ -24,7 +24,6 @@ struct Footprint {
   int sigma = 0;         // orientation over the lens, 0 if it changes sign over the lens square
   // When sigma == 0: the lens cells where the orientation det(u, v) is surely positive / negative.
   tiletest::CellMask orient_pos, orient_neg;
-  bool orient_split = false;
   int n_edges = 0;
   tiletest::EdgeH edges[4];
   int edges_enabled = 0, edges_disabled = 0;
@@ -107,7 +106,6 @@ inline Footprint build_footprint(const TriSetup& tri, const Frame& f, bool with_
     fp.orient_pos = tiletest::line_cells<D>(tiletest::Line{-orient.A, -orient.B, thr - orient.C}, Gc, 0, Gc - 1, 0, Gc - 1);
     fp.orient_neg = tiletest::line_cells<D>(tiletest::Line{orient.A, orient.B, orient.C + thr}, Gc, 0, Gc - 1, 0, Gc - 1);
     charge<A>(ops, 2 * tiletest::line_cells_cost(Gc, Gc));
-    fp.orient_split = true;
   }
   // Selective H_j oracle (001 Appendix A): N_samples * C_sample < N_tiles * C_tile disables.
   const int T = p.tile_size, G = p.lens_grid;

@@ -227,6 +227,15 @@ inline void clip_axis(tiletest::AxisSet& s, double lo, double hi, std::uint64_t&
   s.empty = n == 0;
 }
 
+// The user clip box on a tile's lens sets (u and v axes, where active). False when either set is
+// left without an interval.
+template <class A>
+inline bool clip_lens(const ClipBox& clip, tiletest::AxisSet& sx, tiletest::AxisSet& sy, std::uint64_t& ops) {
+  if (clip.active_u) clip_axis<A>(sx, clip.u_lo, clip.u_hi, ops);
+  if (clip.active_v) clip_axis<A>(sy, clip.v_lo, clip.v_hi, ops);
+  return sx.n_intervals != 0 && sy.n_intervals != 0;
+}
+
 // ---- ẑ: conservative depth interval of a (triangle, tile) pair (002 Appendix A) ----------------
 
 // Documented costs of ẑ. Vertex test (the moving box in W over t̂; W is linear in t): per vertex
@@ -415,9 +424,7 @@ inline bool motion_tile_intervals(const MotionSetup& ms, const ClipBox& clip, Di
     if (ms.lens) {
       ++c[is5 ? Counter::interval_lens_tests_5d : Counter::interval_lens_tests_3d];
       if (si.lens_ok) tile_h_sets<A>(si.lv, si.n_lv, x0, x1, y0, y1, sx, sy, ops);  // empty sets: caught below
-      if (clip.active_u) clip_axis<A>(sx, clip.u_lo, clip.u_hi, ops);
-      if (clip.active_v) clip_axis<A>(sy, clip.v_lo, clip.v_hi, ops);
-      if (sx.empty || sy.empty || sx.n_intervals == 0 || sy.n_intervals == 0) continue;
+      if (!clip_lens<A>(clip, sx, sy, ops) || sx.empty || sy.empty) continue;
     }
     const double u0 = ms.lens ? sx.iv_lo[0] : 0.0, u1 = ms.lens ? sx.iv_hi[sx.n_intervals - 1] : 0.0;
     const double v0 = ms.lens ? sy.iv_lo[0] : 0.0, v1 = ms.lens ? sy.iv_hi[sy.n_intervals - 1] : 0.0;

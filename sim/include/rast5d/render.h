@@ -49,6 +49,8 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
                     const std::function<bool()>& interrupted, bool export_samples = false);
 
 void validate_params(const RenderParams& p, const SampleTable& table);
+// The checks that need no sample table (image size, tile and bin sizes, intervals, shading...).
+void validate_frame_params(const RenderParams& p);
 
 // (name, description, needs an interleaved table) of every registered traversal algorithm.
 struct AlgorithmEntry {

@@ -80,8 +80,8 @@ class Laine final : public Traversal {
   const Frame& f_;
   Counters& c_;
   SamplePipeline<A> pipe_;
-  std::vector<int> cand_ = std::vector<int>(4096);
-  std::vector<std::uint8_t> sel_ = std::vector<std::uint8_t>(4096 + 8, 0);
+  std::vector<int> cand_ = std::vector<int>(f_.table.spp());  // one pixel's candidates
+  std::vector<std::uint8_t> sel_ = std::vector<std::uint8_t>(f_.table.spp() + 8, 0);
 };
 
 }  // namespace

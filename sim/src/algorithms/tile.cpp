@@ -131,7 +131,7 @@ class Tile final : public Traversal {
       c_[Counter::setup_H_edges_enabled] += fp.edges_enabled;
       c_[Counter::setup_H_edges_disabled] += fp.edges_disabled;
       if (tri.moving) ++c_[Counter::trav_motion_fallback];
-      if (!tri.moving && f_.p.halfspace_H && fp.orient_split) ++c_[Counter::tile_H_split_orientation];
+      if (!tri.moving && f_.p.halfspace_H && fp.sigma == 0) ++c_[Counter::tile_H_split_orientation];
     }
     raster_lens(tri, fp, bin);
   }
@@ -207,7 +207,7 @@ class Tile final : public Traversal {
     const RenderParams& p = f_.p;
     const int T = p.tile_size, G = p.lens_grid;
     const bool use_h = p.halfspace_h && fp.h_valid;
-    const bool use_H = p.halfspace_H && !tri.moving && (fp.sigma != 0 || fp.orient_split);
+    const bool use_H = p.halfspace_H && !tri.moving;  // build_footprint set up H_j (sigma, or per-cell signs)
     const int cells = G * G;
     if (kInterleaved && !tri.moving)
       pipe_.begin_sheared(tri, sx_.data(), sy_.data(), 3);
@@ -217,9 +217,7 @@ class Tile final : public Traversal {
       ++c_[Counter::tile_visited];
       const double x0 = tiletest::expand_lo(tx), x1 = tiletest::expand_hi(tx + T);
       const double y0 = tiletest::expand_lo(ty), y1 = tiletest::expand_hi(ty + T);
-      tiletest::AxisSet sx, sy;
-      sx.n_intervals = sy.n_intervals = 1;
-      sx.iv_lo[0] = sy.iv_lo[0] = -1.0, sx.iv_hi[0] = sy.iv_hi[0] = 1.0;
+      tiletest::AxisSet sx = iv::full_axis(), sy = iv::full_axis();
       if (use_h) {
         if (!tri.moving) ++c_[Counter::interval_lens_tests_4d];
         if (!tile_h_sets<A>(fp, x0, x1, y0, y1, sx, sy, c_[Counter::ops_tile])) {
@@ -228,9 +226,7 @@ class Tile final : public Traversal {
         }
       }
       if (clip_.active_u || clip_.active_v) {  // user clip planes on the lens intervals
-        if (clip_.active_u) iv::clip_axis<A>(sx, clip_.u_lo, clip_.u_hi, c_[Counter::ops_tile]);
-        if (clip_.active_v) iv::clip_axis<A>(sy, clip_.v_lo, clip_.v_hi, c_[Counter::ops_tile]);
-        if (sx.n_intervals == 0 || sy.n_intervals == 0) {
+        if (!iv::clip_lens<A>(clip_, sx, sy, c_[Counter::ops_tile])) {
           ++c_[Counter::interval_culled_clip];
           return;
         }
@@ -365,15 +361,10 @@ class Tile final : public Traversal {
           // Candidates: samples of the surviving cells whose (u, v) passes the h_i lines.
           int n = 0, checked = 0;
           for (int q = 0; q < n_cells; ++q) checked += ps.cell_offsets[cl[q] + 1] - ps.cell_offsets[cl[q]];
-          if (fast_select && 4 * checked >= spp) {  // many: vectorised scan of the pixel's samples
+          const bool vectorised = fast_select && 4 * checked >= spp;
+          if (vectorised) {  // many: vectorised scan of the pixel's samples
             tiletest::select_candidates<true>(spp, ps.u, ps.v, ps.cell, active_bits, sx, sy, sel_.data());
             n = tiletest::compact_flags(sel_.data(), spp, cand_.data());
-            if (region_cost) charge<A>(c_[Counter::ops_sample_region], region_cost * checked);
-            if (count_opt)
-              for (int i = 0; i < n; ++i)
-                c_[Counter::tile_samples_optimal] += in_exact_region(tri, fp, f_.fc, ps, cand_[i], tx, ty, T);
-            pipe_.push_pixel_masked(px, py, ps, sel_.data(), cand_.data(), n);
-            continue;
           } else {  // few candidates (or the counting path): walk the active cells' buckets
             for (int q = 0; q < n_cells; ++q)
               for (int k = ps.cell_offsets[cl[q]]; k < ps.cell_offsets[cl[q] + 1]; ++k) {
@@ -386,7 +377,10 @@ class Tile final : public Traversal {
           if (count_opt)
             for (int i = 0; i < n; ++i)
               c_[Counter::tile_samples_optimal] += in_exact_region(tri, fp, f_.fc, ps, cand_[i], tx, ty, T);
-          for (int i = 0; i < n; ++i) pipe_.push(px, py, ps, cand_[i]);
+          if (vectorised)
+            pipe_.push_pixel_masked(px, py, ps, sel_.data(), cand_.data(), n);
+          else
+            for (int i = 0; i < n; ++i) pipe_.push(px, py, ps, cand_[i]);
         }
     });
     pipe_.flush();
@@ -499,10 +493,10 @@ class Tile final : public Traversal {
   SamplePipeline<A> pipe_;
   tiletest::CellMask lens_mask_;
   std::vector<int> cell_list_ = std::vector<int>(256);
-  std::vector<int> cand_ = std::vector<int>(4096);
+  std::vector<int> cand_ = std::vector<int>(f_.table.spp());  // one pixel's candidates
   tiletest::CellMask low64_;
   std::uint64_t lens_mask64_ = 0;
-  std::vector<std::uint8_t> sel_ = std::vector<std::uint8_t>(4096 + 8, 0);
+  std::vector<std::uint8_t> sel_ = std::vector<std::uint8_t>(f_.table.spp() + 8, 0);
   std::vector<float> sx_, sy_;
   // issue 5
   BinBuffers& buf_;
