@@ -385,7 +385,8 @@ class SamplePipeline {
     buf_.set_triangle(slot, static_cast<std::int32_t>(tri.index));
     float* dst = buf_.color(slot);
     for (int ch = 0; ch < 3; ++ch) dst[ch] = raw(out[ch]);
-    if (const ShadeFrame* sf = sh_.frame(); sf && (sh_.counting() || sf->tex_count > 0)) shade_record(*sf, tri, raw(e[0]), raw(e[1]), raw(e[2]), raw(sum), px, py, s, dst);
+    if (const ShadeFrame* sf = sh_.frame(); sf && (sh_.counting() || sf->tex_count > 0))
+      shade_record(*sf, tri, raw(e[0]), raw(e[1]), raw(e[2]), raw(sum), px, py, s, dst);
   }
 
   // Texture the sample's colour (a function of triangle and sample only: the image stays the same
