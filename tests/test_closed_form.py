@@ -1,6 +1,6 @@
 """Converged images of white fronto-parallel squares on black (so the image is coverage) against closed-form coverage: defocus (disk, square, hexagon apertures, in front of and behind the focus plane), motion (full and partial shutter), both at once, and sharp focus, within Monte Carlo error.
 
-Expected pixel value (tests/reference.py rect_coverage): the square's indicator convolved with the
+Expected pixel value (tests/reference/closed_form.py rect_coverage): the square's indicator convolved with the
 aperture scaled to the CoC radius K |1 - F / depth| px and/or with the motion box, averaged over
 the pixel's area (each sample has its own (x, y) in the pixel). Tolerance per pixel:
 |image - expected| <= 5 sigma + 1/spp with sigma = sqrt(p (1 - p) / spp), the binomial error of spp

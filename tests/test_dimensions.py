@@ -60,7 +60,7 @@ def tie_points(rng, cam, p0, p1, m):
         w = -tri[:, 2]
         if np.any(w <= 0):
             continue
-        s_x, s_y = ref._proj_scales(cam)
+        s_x, s_y = ref.proj_scales(cam)
         x = (s_x * tri[:, 0] / w + 1.0) * cam.width / 2.0
         y = (1.0 - s_y * tri[:, 1] / w) * cam.height / 2.0
         xy = np.concatenate([np.stack([x, y], 1), (np.stack([x, y], 1) + np.roll(np.stack([x, y], 1), 1, 0)) / 2.0])
