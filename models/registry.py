@@ -1,7 +1,11 @@
-"""Named scenes: a registry filled by the @register_scene decorator (no hand-kept list)."""
+"""Named scenes: a registry filled by the @register_scene decorator. The scene modules are found by
+walking the models package, so a new module with decorated builders needs no other edit."""
 from __future__ import annotations
 
+import functools
+import importlib
 import inspect
+import pkgutil
 from typing import Any, Callable
 
 from .scene import Scene, SceneError
@@ -34,9 +38,14 @@ def register_scene(name: str) -> Callable[[SceneBuilder], SceneBuilder]:
     return decorate
 
 
+@functools.cache
 def _ensure_loaded() -> None:
-    # Importing the modules runs their decorators.
-    from . import modern_hall, procedural, mesh_scenes, motion_scenes  # noqa: F401
+    """Import every module of the models package (once); importing runs their @register_scene
+    decorators. Lazy, so that a scene module may import the package while it is initialised."""
+    package = __name__.rpartition(".")[0]
+    for module in pkgutil.iter_modules(importlib.import_module(package).__path__):
+        if not module.name.startswith("_"):
+            importlib.import_module(f"{package}.{module.name}")
 
 
 def scene_names() -> list[str]:

@@ -2,69 +2,58 @@
 are declared here once, with unit and description, and evaluated at export, never stored."""
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass
-from typing import Callable
-
 from . import _core
+from .derived import Derived, evaluate, ratio
+from .derived import docs as derived_docs
+from .timing import docs as timing_docs
 
-
-def _ratio(a: float, b: float) -> float:
-    return a / b if b else math.nan
-
-
-@dataclass(frozen=True)
-class Derived:
-    name: str
-    unit: str
-    description: str
-    formula: Callable[[dict], float]
-
-
+# By pipeline stage; a formula may use the figures declared before it (sim.derived.evaluate).
 DERIVED: tuple[Derived, ...] = (
+    # operations (001 §6.2), summed over setup, tile and sample stages
     Derived("ops.sample", "ops", "Sample-stage operations: ops.sample_region + ops.sample_inside",
             lambda s: s["ops.sample_region"] + s["ops.sample_inside"]),
     Derived("ops.total", "ops", "Rasterization operations as in 001 §6.2: ops.setup + ops.tile + ops.sample",
-            lambda s: s["ops.setup"] + s["ops.tile"] + s["ops.sample_region"] + s["ops.sample_inside"]),
+            lambda s: s["ops.setup"] + s["ops.tile"] + s["ops.sample"]),
     Derived("ops.per_pixel", "ops/pixel", "ops.total / frame.pixels",
-            lambda s: _ratio(s["ops.total"], s["frame.pixels"])),
+            lambda s: ratio(s["ops.total"], s["frame.pixels"])),
     Derived("ops.per_sample_test", "ops/test", "ops.sample_inside / raster.samples_tested",
-            lambda s: _ratio(s["ops.sample_inside"], s["raster.samples_tested"])),
-    Derived("raster.ste", "ratio", "Sample-test efficiency: raster.samples_hit / raster.samples_tested",
-            lambda s: _ratio(s["raster.samples_hit"], s["raster.samples_tested"])),
-    Derived("depth.pass_rate", "ratio", "depth.passes / depth.tests",
-            lambda s: _ratio(s["depth.passes"], s["depth.tests"])),
+            lambda s: ratio(s["ops.sample_inside"], s["raster.samples_tested"])),
+    # tile tests
     Derived("tile.tested_over_optimal", "ratio",
             "raster.samples_tested / tile.samples_optimal (001 Table 1; tile algorithms only)",
-            lambda s: _ratio(s["raster.samples_tested"], s["tile.samples_optimal"])),
+            lambda s: ratio(s["raster.samples_tested"], s["tile.samples_optimal"])),
     Derived("tile.culled", "tiles", "Tiles culled by any tile test",
             lambda s: s["tile.culled_2d"] + s["tile.culled_h"] + s["tile.culled_lens"] + s["tile.culled_H"]),
     Derived("tile.cull_rate", "ratio", "tile.culled / tile.visited",
-            lambda s: _ratio(s["tile.culled_2d"] + s["tile.culled_h"] + s["tile.culled_lens"] + s["tile.culled_H"],
-                             s["tile.visited"])),
+            lambda s: ratio(s["tile.culled"], s["tile.visited"])),
     Derived("tile.cells_cull_rate", "ratio", "tile.cells_culled / tile.cells_tested",
-            lambda s: _ratio(s["tile.cells_culled"], s["tile.cells_tested"])),
-    # shading and texturing (docs/shading.md)
-    Derived("shade.quads_per_sample", "quads/sample",
-            "shade.quad_requests / depth.passes: quad shading requests relative to supersampling (001 Table 3)",
-            lambda s: _ratio(s["shade.quad_requests"], s["depth.passes"])),
-    Derived("shade.helper_share", "ratio", "shade.lanes_helper / shade.invocations (000 §9.5 quad waste)",
-            lambda s: _ratio(s["shade.lanes_helper"], s["shade.invocations"])),
-    Derived("shade.cache_hit_rate", "ratio", "shade.cache_hits / (shade.cache_hits + shade.cache_misses)",
-            lambda s: _ratio(s["shade.cache_hits"], s["shade.cache_hits"] + s["shade.cache_misses"])),
-    Derived("tex.cache.hit_rate", "ratio", "tex.cache.hits / tex.cache.accesses",
-            lambda s: _ratio(s["tex.cache.hits"], s["tex.cache.accesses"])),
-    Derived("tex.cache.bytes_per_pixel", "bytes/pixel", "tex.cache.bytes_fetched / frame.pixels",
-            lambda s: _ratio(s["tex.cache.bytes_fetched"], s["frame.pixels"])),
-    # issue 5
+            lambda s: ratio(s["tile.cells_culled"], s["tile.cells_tested"])),
+    # sample tests
+    Derived("raster.ste", "ratio", "Sample-test efficiency: raster.samples_hit / raster.samples_tested",
+            lambda s: ratio(s["raster.samples_hit"], s["raster.samples_tested"])),
+    # depth test, HiZ and z-culling
+    Derived("depth.pass_rate", "ratio", "depth.passes / depth.tests",
+            lambda s: ratio(s["depth.passes"], s["depth.tests"])),
     Derived("depth.bytes", "bytes", "Per-sample depth traffic: depth.bytes_read + depth.bytes_written",
             lambda s: s["depth.bytes_read"] + s["depth.bytes_written"]),
     Derived("hiz.bytes", "bytes", "HiZ traffic: hiz.bytes_read + hiz.bytes_written",
             lambda s: s["hiz.bytes_read"] + s["hiz.bytes_written"]),
     Derived("zcull.cull_rate", "ratio", "zcull.pairs_culled / zcull.pairs",
-            lambda s: _ratio(s["zcull.pairs_culled"], s["zcull.pairs"])),
+            lambda s: ratio(s["zcull.pairs_culled"], s["zcull.pairs"])),
     Derived("zcull.tightness", "ratio", "zcull.width_zhat / zcull.width_vertex (1 = no gain over vertex min/max)",
-            lambda s: _ratio(s["zcull.width_zhat"], s["zcull.width_vertex"])),
+            lambda s: ratio(s["zcull.width_zhat"], s["zcull.width_vertex"])),
+    # shading and texturing (docs/shading.md)
+    Derived("shade.quads_per_sample", "quads/sample",
+            "shade.quad_requests / depth.passes: quad shading requests relative to supersampling (001 Table 3)",
+            lambda s: ratio(s["shade.quad_requests"], s["depth.passes"])),
+    Derived("shade.helper_share", "ratio", "shade.lanes_helper / shade.invocations (000 §9.5 quad waste)",
+            lambda s: ratio(s["shade.lanes_helper"], s["shade.invocations"])),
+    Derived("shade.cache_hit_rate", "ratio", "shade.cache_hits / (shade.cache_hits + shade.cache_misses)",
+            lambda s: ratio(s["shade.cache_hits"], s["shade.cache_hits"] + s["shade.cache_misses"])),
+    Derived("tex.cache.hit_rate", "ratio", "tex.cache.hits / tex.cache.accesses",
+            lambda s: ratio(s["tex.cache.hits"], s["tex.cache.accesses"])),
+    Derived("tex.cache.bytes_per_pixel", "bytes/pixel", "tex.cache.bytes_fetched / frame.pixels",
+            lambda s: ratio(s["tex.cache.bytes_fetched"], s["frame.pixels"])),
 )
 
 MEASURED = {
@@ -75,20 +64,15 @@ MEASURED = {
 def counter_docs() -> dict[str, tuple[str, str]]:
     """{name: (unit, description)} for every raw counter, derived figure and measured figure."""
     docs = dict(_core.counter_docs())
-    for d in DERIVED:
-        docs[d.name] = (d.unit, d.description)
+    docs.update(derived_docs(DERIVED))
     docs.update(MEASURED)
-    from .timing import docs as timing_docs  # the timing model's figures (docs/timing.md)
-
-    docs.update(timing_docs())
+    docs.update(timing_docs())  # the timing model's figures (docs/timing.md)
     return docs
 
 
 def flat_stats(raw: dict, measured: dict | None = None) -> dict:
     """Raw counters + derived figures (+ measured figures), flat and sorted by name."""
-    flat = {k: int(v) for k, v in raw.items()}
-    for d in DERIVED:
-        flat[d.name] = d.formula(flat)
+    flat = evaluate(DERIVED, {k: int(v) for k, v in raw.items()})
     if measured:
         flat.update(measured)
     return dict(sorted(flat.items()))

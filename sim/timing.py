@@ -11,13 +11,13 @@ hardware sweep can re-run ``estimate`` on one render's records without rendering
 """
 from __future__ import annotations
 
-
 import numpy as np
 
 from . import _core
+from .derived import Derived, evaluate, ratio
+from .derived import docs as derived_docs
 from .errors import ConfigError
 from .hardware import HardwareConfig
-from .stats import Derived, _ratio
 
 #: The units in pipeline order.
 UNITS: tuple[str, ...] = tuple(name for name, _currency, _desc in _core.timing_units())
@@ -92,7 +92,7 @@ def _bound(s: dict) -> float:
     return max(s[f"timing.{u}.busy_cycles"] for u in UNITS) / s["timing.cores"]
 
 
-# Derived timing figures, declared like sim.stats.DERIVED (formulas over the flat timing dict).
+# Derived timing figures (sim.derived), formulas over the flat timing dict.
 DERIVED: tuple[Derived, ...] = (
     Derived("timing.bottleneck", "unit name",
      "The unit with the most busy clocks (first in pipeline order on ties; 'none' without work)", _bottleneck),
@@ -100,7 +100,7 @@ DERIVED: tuple[Derived, ...] = (
      "max over units of timing.<unit>.busy_cycles / timing.cores: no pipeline can be faster", _bound),
     Derived("timing.bound_ratio", "ratio",
      "timing.cycles / timing.throughput_bound (1 = throughput-bound; more = latency, FIFO and imbalance losses)",
-     lambda s: _ratio(s["timing.cycles"], _bound(s))),
+     lambda s: ratio(s["timing.cycles"], _bound(s))),
 ) + tuple(
     item for u in UNITS for item in (
         Derived(f"timing.{u}.stall_cycles", "clocks",
@@ -108,22 +108,18 @@ DERIVED: tuple[Derived, ...] = (
          lambda s, u=u: s[f"timing.{u}.blocked_cycles"] + s[f"timing.{u}.starved_cycles"]),
         Derived(f"timing.{u}.utilization", "ratio",
          f"timing.{u}.busy_cycles / (timing.cycles x timing.cores)",
-         lambda s, u=u: _ratio(s[f"timing.{u}.busy_cycles"], s["timing.cycles"] * s["timing.cores"])),
+         lambda s, u=u: ratio(s[f"timing.{u}.busy_cycles"], s["timing.cycles"] * s["timing.cores"])),
     )
 )
 
 
 def derive(raw: dict) -> dict:
     """Raw timing figures + derived ones."""
-    flat = dict(raw)
-    for d in DERIVED:
-        flat[d.name] = d.formula(flat)
-    return flat
+    return evaluate(DERIVED, dict(raw))
 
 
 def docs() -> dict[str, tuple[str, str]]:
     """{name: (unit, description)} of every timing figure, raw and derived."""
     d = dict(_core.timing_docs())
-    for fig in DERIVED:
-        d[fig.name] = (fig.unit, fig.description)
+    d.update(derived_docs(DERIVED))
     return d

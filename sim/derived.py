@@ -1,0 +1,33 @@
+"""Derived figures: a name, a unit, a one-line description and a formula over a flat dict of raw
+figures, evaluated at export and never stored. sim.stats declares the counter figures and
+sim.timing the timing figures with this one type."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable, Iterable
+
+
+def ratio(a: float, b: float) -> float:
+    """a / b, nan when b is zero (a rate over no events is undefined, not zero)."""
+    return a / b if b else math.nan
+
+
+@dataclass(frozen=True)
+class Derived:
+    name: str
+    unit: str
+    description: str
+    formula: Callable[[dict], float]
+
+
+def evaluate(derived: Iterable[Derived], flat: dict) -> dict:
+    """flat with every derived figure added, in declaration order (a formula may use earlier ones)."""
+    for d in derived:
+        flat[d.name] = d.formula(flat)
+    return flat
+
+
+def docs(derived: Iterable[Derived]) -> dict[str, tuple[str, str]]:
+    """{name: (unit, description)} of the derived figures."""
+    return {d.name: (d.unit, d.description) for d in derived}
