@@ -80,8 +80,7 @@ def assert_identical(a, b, what):
 
 
 @pytest.mark.parametrize("cls", [CLASS_2D, CLASS_3D, CLASS_4D, CLASS_5D], ids=["2D", "3D", "4D", "5D"])
-def test_specialised_kernel_equals_general_kernel(cls, request):
-    rng = np.random.default_rng(1000 + cls)
+def test_specialised_kernel_equals_general_kernel(cls, rng, request):
     hits = samples = 0
     for i in range(N_PER_CLASS):
         cam, p0, p1 = triangle_of_class(rng, cls)
@@ -138,11 +137,10 @@ def test_grid_aligned_ties_identical():
 
 @pytest.mark.parametrize("has_lens,has_time", [(False, True), (True, False), (False, False)],
                          ids=["no_lens", "no_time", "neither"])
-def test_table_without_dimension_classifies_down(has_lens, has_time):
+def test_table_without_dimension_classifies_down(has_lens, has_time, rng):
     """Without a lens dimension (every u = v = 0) 4D -> 2D and 5D -> 3D; without time (every t = 0)
     3D -> 2D and 5D -> 4D. The reduced kernel must equal both the general kernel and the full
     classification on those samples, bit for bit."""
-    rng = np.random.default_rng(77 + 2 * has_lens + has_time)
     for cls in (CLASS_2D, CLASS_3D, CLASS_4D, CLASS_5D):
         want = cls
         if not has_lens:

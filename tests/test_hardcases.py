@@ -39,10 +39,9 @@ def test_every_algorithm_is_covered():
 
 @pytest.mark.parametrize("table_kind", ["stratified", "interleaved"])
 @pytest.mark.parametrize("case", sorted(CASES))
-def test_hard_case(case, table_kind, request):
+def test_hard_case(case, table_kind, rng, request):
     cam_kw, p0, p1, counters = CASES[case]
     cam = sim.Camera(**cam_kw)
-    rng = np.random.default_rng(sorted(CASES).index(case))
     scene = SimpleNamespace(positions=p0, positions_t1=p1, colors=rng.uniform(0.2, 1.0, p0.shape))
     table = tables()[table_kind]
     results = {}
@@ -94,12 +93,11 @@ def test_near_counters_fire_for_single_triangles():
 
 
 @pytest.mark.parametrize("case", sorted(CASES))
-def test_hard_case_probe(case):
+def test_hard_case_probe(case, rng):
     """Each hard-case triangle alone, 8,000 probe samples aimed at it (edges, near-plane cut): the
     exact sample test vs the ray caster, with the tolerances of test_raycaster.py."""
     cam_kw, p0, p1, _ = CASES[case]
     cam = sim.Camera(**cam_kw)
-    rng = np.random.default_rng(500 + sorted(CASES).index(case))
     for i in range(len(p0)):
         pts = ref.sample_points(rng, cam, p0[i], p1[i], 8000)
         r = ref.compare_probe(cam, p0[i], p1[i], pts)

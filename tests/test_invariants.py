@@ -3,12 +3,12 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass
 
 import numpy as np
 import pytest
 
 import sim
+from tests.reference import Tris, make_scene, world_from_pixel
 
 pytestmark = pytest.mark.invariants
 
@@ -16,29 +16,6 @@ ALGORITHMS = sim.algorithm_names()
 INTERLEAVED = sorted(name for name, _desc, needs in sim._core.algorithms() if needs)
 SPP = 16
 NOT_COMPARED = {"time.wall_s"}  # measured, not counted
-
-
-@dataclass
-class Tris:
-    """The duck-typed scene sim.render accepts: world-space (N, 3, 3) arrays."""
-
-    positions: np.ndarray
-    positions_t1: np.ndarray
-    colors: np.ndarray
-
-
-def make_scene(p0, p1=None, seed=0) -> Tris:
-    p0 = np.asarray(p0, dtype=np.float64).reshape(-1, 3, 3)
-    p1 = p0.copy() if p1 is None else np.asarray(p1, dtype=np.float64).reshape(-1, 3, 3)
-    rng = np.random.default_rng(seed)
-    return Tris(p0, p1, rng.uniform(0.1, 1.0, size=(p0.shape[0], 3, 3)))
-
-
-def world_from_pixel(px, py, depth, width, height, fov_y_deg=45.0):
-    """The world point at view depth `depth` that the lens centre sees at pixel (px, py)."""
-    s_y = 1.0 / math.tan(math.radians(fov_y_deg) / 2.0)
-    s_x = s_y * height / width
-    return np.array([(2.0 * px / width - 1.0) * depth / s_x, (1.0 - 2.0 * py / height) * depth / s_y, -depth])
 
 
 def synthetic_scene(width, height, focus, moving=False, seed=3) -> Tris:
@@ -60,7 +37,7 @@ def synthetic_scene(width, height, focus, moving=False, seed=3) -> Tris:
         vel = rng.uniform(-0.4, 0.4, size=p0.shape)
         vel[1::2] = 0.0
         p1 = p0 + vel
-    return make_scene(p0, p1, seed)
+    return make_scene(p0, p1, colour_seed=seed)
 
 
 @functools.lru_cache(maxsize=None)
@@ -368,7 +345,7 @@ def test_backface_cull_removes_exactly_the_back_facing_hits(algorithm, coc):
     assert ccw(front) > 0 > ccw(back)
     cam = sim.Camera(width=w, height=h, fov_y_deg=45, focus_distance=F, coc_px=coc)
     table = interleaved_table()
-    both = make_scene(np.array([front, back]), seed=1)
+    both = make_scene(np.array([front, back]))
     only_front = Tris(both.positions[:1], both.positions_t1[:1], both.colors[:1])
     culled = render(both, cam, table, algorithm=algorithm, backface_cull=True)
     kept = render(both, cam, table, algorithm=algorithm, backface_cull=False)
@@ -378,6 +355,6 @@ def test_backface_cull_removes_exactly_the_back_facing_hits(algorithm, coc):
     assert hits_back > 0 and (culled.sample_triangle != 1).all()
     assert kept.flat_stats["raster.samples_hit"] == alone.flat_stats["raster.samples_hit"] + hits_back
     # the same with the winding swapped: now the other one survives
-    flipped = make_scene(np.array([front[::-1], back[::-1]]), seed=1)
+    flipped = make_scene(np.array([front[::-1], back[::-1]]))
     culled2 = render(flipped, cam, table, algorithm=algorithm, backface_cull=True)
     assert (culled2.sample_triangle != 0).all() and (culled2.sample_triangle == 1).sum() == hits_back

@@ -2,13 +2,13 @@
 from __future__ import annotations
 
 import functools
-import math
-from dataclasses import dataclass
 
 import numpy as np
 import pytest
 
 import sim
+from tests import reference
+from tests.reference import Tris
 
 pytestmark = pytest.mark.invariants
 
@@ -90,20 +90,10 @@ def test_inside_costs_compose_from_their_parts():
 # ---------------------------------------------------------------------------------- renders
 
 
-@dataclass
-class Tris:
-    positions: np.ndarray
-    positions_t1: np.ndarray
-    colors: np.ndarray
-
-
 W, H, F = 40, 32, 4.0
 
 
-def world_from_pixel(px, py, depth):
-    s_y = 1.0 / math.tan(math.radians(45.0) / 2.0)
-    s_x = s_y * H / W
-    return [(2.0 * px / W - 1.0) * depth / s_x, (1.0 - 2.0 * py / H) * depth / s_y, -depth]
+world_from_pixel = functools.partial(reference.world_from_pixel, width=W, height=H)
 
 
 def single_class_scene(cls):

@@ -100,10 +100,9 @@ def test_probe_matches_raycaster_many():
     _check(summary, failures)
 
 
-def test_reference_lens_projection_is_the_documented_coc():
+def test_reference_lens_projection_is_the_documented_coc(rng):
     """The reference's lens geometry (R = aperture_radius, lens at w = 0) reproduces the documented
     CoC: a point at depth w seen from lens point (u, v) moves by K (1 - F/w) (u, -v) pixels."""
-    rng = np.random.default_rng(3)
     for _ in range(20):
         cam = ref.random_camera(rng)
         p = ref.screen_to_world(cam, rng.uniform(0, cam.width, 3), rng.uniform(0, cam.height, 3),
@@ -156,12 +155,11 @@ RENDER_CASES = {
 
 
 @pytest.mark.parametrize("case", sorted(RENDER_CASES))
-def test_render_matches_raycaster(case, request):
+def test_render_matches_raycaster(case, rng, request):
     """End to end: sim.render's exported per-sample winner and depth vs the ray caster resolving
     visibility by the nearest hit over all triangles."""
     cam_kw, (gen, tab_kw) = RENDER_CASES[case]
     cam = sim.Camera(**cam_kw)
-    rng = np.random.default_rng(100 + sorted(RENDER_CASES).index(case))
     scene = _random_scene(rng, cam, 14)
     table = getattr(sim.SampleTable, gen)(**tab_kw)
     res = sim.render(scene, cam, table, sim.PipelineConfig(algorithm="bruteforce", threads=2), export_samples=True)

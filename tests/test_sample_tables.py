@@ -16,11 +16,6 @@ GENERATORS = ["random", "stratified", "stratified_permuted", "sobol", "interleav
 EXTRA = {"interleaved": {"n_lens": 64}, "multiview": {"views": 2}}
 
 
-@pytest.fixture
-def np_rng():
-    return np.random.default_rng(20240917)
-
-
 def make(name, **params):
     return SampleTable.create(name, **{**EXTRA.get(name, {}), **params})
 
@@ -155,8 +150,8 @@ def test_inside_lens_boundaries():
 
 
 @pytest.mark.parametrize("shape", LENS_SHAPES)
-def test_maps_land_inside_and_fill_the_shape(shape, np_rng):
-    a, b = np_rng.random((2, 200_000))
+def test_maps_land_inside_and_fill_the_shape(shape, rng):
+    a, b = rng.random((2, 200_000))
     u, v = map_to_lens(a, b, shape)
     assert u.dtype == np.float64 and inside_lens(u, v, shape, eps=1e-12).all()
     # The images reach the boundary everywhere: the extreme point in 16 directions is near the edge.
@@ -179,8 +174,8 @@ def disk_cell_p(u, v, rings=10, sectors=16):
     return stats.chisquare(counts).pvalue
 
 
-def test_disk_map_is_area_preserving_and_polar_map_is_not(np_rng):
-    a, b = np_rng.random((2, 400_000))
+def test_disk_map_is_area_preserving_and_polar_map_is_not(rng):
+    a, b = rng.random((2, 400_000))
     u, v = map_to_lens(a, b, "disk")
     assert disk_cell_p(u, v) > P_MIN
     r, theta = a, 2 * np.pi * b  # the biased map: uniform in r crowds the centre
@@ -204,8 +199,8 @@ def hexagon_cell_p(u, v, n=16):
     return stats.chisquare(observed, expected).pvalue
 
 
-def test_hexagon_map_is_area_preserving_and_a_warped_map_is_not(np_rng):
-    a, b = np_rng.random((2, 400_000))
+def test_hexagon_map_is_area_preserving_and_a_warped_map_is_not(rng):
+    a, b = rng.random((2, 400_000))
     u, v = map_to_lens(a, b, "hexagon")
     assert hexagon_cell_p(u, v) > P_MIN
     u_bad, v_bad = map_to_lens(a, b**1.5, "hexagon")  # still inside, but not uniform
@@ -356,8 +351,8 @@ def test_lens_grid_rejects_other_sizes(grid):
 # ------------------------------------------------------------------ user arrays
 
 
-def test_from_array_round_trip_and_inference(np_rng):
-    raw = np_rng.random((2, 2, 8, 5))
+def test_from_array_round_trip_and_inference(rng):
+    raw = rng.random((2, 2, 8, 5))
     raw[..., 2:4] = raw[..., 2:4] - 0.5
     table = SampleTable.from_array(raw)
     assert table.period == 2 and table.spp == 8 and table.has_lens and table.has_time

@@ -2,15 +2,15 @@
 from __future__ import annotations
 
 import functools
-import math
 from dataclasses import dataclass
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import sim
+from tests import reference
 from tests.reference import make_scene
 
 pytestmark = pytest.mark.invariants
@@ -40,16 +40,7 @@ HYPO = dict(deadline=None, derandomize=True, database=None,
 
 
 
-def proj_scales(width, height, fov_y_deg):
-    s_y = 1.0 / math.tan(math.radians(fov_y_deg) / 2.0)
-    return s_y * height / width, s_y  # s_x = s_y / aspect
-
-
-def world_from_pixel(px, py, depth, width=WIDTH, height=HEIGHT, fov_y_deg=45.0):
-    """The world point at view depth `depth` (> 0) seen by the lens centre at pixel (px, py):
-    the inverse of pixel x = ((x / d) s_x + 1) W / 2, y = (1 - (y / d) s_y) H / 2."""
-    s_x, s_y = proj_scales(width, height, fov_y_deg)
-    return np.array([(2.0 * px / width - 1.0) * depth / s_x, (1.0 - 2.0 * py / height) * depth / s_y, -depth])
+world_from_pixel = functools.partial(reference.world_from_pixel, width=WIDTH, height=HEIGHT)
 
 
 # ---------------------------------------------------------------------------------- tables
@@ -80,7 +71,7 @@ def engine_vertex_camera(v0, **kw):
 
 def world_from_engine(v, width=WIDTH, height=HEIGHT, fov_y_deg=45.0):
     v = np.asarray(v, dtype=np.float64)
-    return np.stack([world_from_pixel(X / W, Y / W, W, width, height, fov_y_deg) for X, Y, W in v.reshape(-1, 3)]
+    return np.stack([reference.world_from_pixel(X / W, Y / W, W, width, height, fov_y_deg) for X, Y, W in v.reshape(-1, 3)]
                     ).reshape(v.shape)
 
 
@@ -218,7 +209,7 @@ def coc_seen_one_side(tri, focus, frac, width=WIDTH, fov_y_deg=45.0, height=HEIG
     if reach == 0 or not np.isfinite(reach):
         return 10.0
     radius = frac * abs(n @ p) / reach
-    s_x, _ = proj_scales(width, height, fov_y_deg)
+    s_x, _ = reference.pinhole_scales(width, height, fov_y_deg)
     return float(min(radius * s_x * width / (2.0 * focus), 300.0))
 
 
@@ -545,13 +536,12 @@ def test_conservative_exact_region_boundaries(T, where, third):
     assert h_lines > 0  # the H_j lines (and so the region table) were used
 
 
-def test_ties_on_shared_edges_and_vertices_agree():
+def test_ties_on_shared_edges_and_vertices_agree(rng):
     """Samples exactly on a shared edge or at a vertex (top-left rule): every algorithm, including the
     pre-sheared 2D kernel of the interleaved ones, resolves the tie like brute force."""
     F = 1.0
     tbl = table("interleaved")
     smp = tbl.samples("disk")
-    rng = np.random.default_rng(7)
     tris = []
     for _ in range(12):
         px, py, k = int(rng.integers(3, WIDTH - 3)), int(rng.integers(3, HEIGHT - 3)), int(rng.integers(SPP))

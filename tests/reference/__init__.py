@@ -12,14 +12,15 @@ from .compare import (DEPTH_TOL_REL, EDGE_TOL_PX, EPS32, KAPPA_FACTOR, NEAR_TOL_
                       engine_probe, lens_homogeneous, table_points)
 from .generators import KINDS, Tris, lens_uv, make_scene, random_camera, random_triangle, sample_points
 from .hardcases import hard_cases
-from .raycaster import (edge_distance_px, near_rel_distance, proj_scales, ray_cast, resolve_nearest,
-                        sample_rays, screen_to_world, triangle_at, world_to_view)
+from .raycaster import (edge_distance_px, near_rel_distance, pinhole_scales, proj_scales, ray_cast,
+                        resolve_nearest, sample_rays, screen_to_world, triangle_at, world_from_pixel, world_to_view)
 
 __all__ = [
-    "DEPTH_TOL_REL", "EDGE_TOL_PX", "EPS32", "KAPPA_FACTOR", "KINDS", "NEAR_TOL_REL", "Tris", "Z_ROUND",
+    "DEPTH_TOL_REL", "EDGE_TOL_PX", "EPS32", "KAPPA_FACTOR", "KINDS", "NEAR_TOL_REL", "Z_ROUND",
     "check_resolved", "compare_probe", "compare_resolved", "depth_condition", "depth_tolerances",
     "edge_distance_px", "engine_params", "engine_probe", "fronto_square", "hard_cases", "lens_homogeneous",
-    "lens_uv", "make_scene", "near_rel_distance", "overlap", "overlap_integral", "proj_scales", "random_camera",
-    "random_triangle", "ray_cast", "rect_coverage", "resolve_nearest", "sample_points", "sample_rays",
-    "screen_to_world", "table_points", "triangle_at", "world_to_view",
+    "lens_uv", "make_scene", "near_rel_distance", "overlap", "overlap_integral", "pinhole_scales",
+    "proj_scales", "random_camera", "random_triangle", "ray_cast", "rect_coverage", "resolve_nearest",
+    "sample_points", "sample_rays", "screen_to_world", "table_points", "triangle_at", "Tris",
+    "world_from_pixel", "world_to_view",
 ]

@@ -16,10 +16,22 @@ import numpy as np
 # ----------------------------------------------------------------------------- camera geometry
 
 
+def pinhole_scales(width, height, fov_y_deg):
+    """(s_x, s_y) of the projection: x_ndc = s_x x / w, y_ndc = s_y y / w at view depth w."""
+    s_y = 1.0 / math.tan(math.radians(fov_y_deg) / 2.0)
+    return s_y * height / width, s_y
+
+
 def proj_scales(cam):
-    s_y = 1.0 / math.tan(math.radians(cam.fov_y_deg) / 2.0)
-    s_x = s_y * cam.height / cam.width
-    return s_x, s_y
+    return pinhole_scales(cam.width, cam.height, cam.fov_y_deg)
+
+
+def world_from_pixel(px, py, depth, width, height, fov_y_deg=45.0):
+    """The world point at view depth `depth` (> 0) that the lens centre of a camera in the default
+    pose (at the origin, looking down -z, so view space is world space) sees at pixel (px, py): the
+    inverse of px = ((x / depth) s_x + 1) W / 2, py = (1 - (y / depth) s_y) H / 2."""
+    s_x, s_y = pinhole_scales(width, height, fov_y_deg)
+    return np.array([(2.0 * px / width - 1.0) * depth / s_x, (1.0 - 2.0 * py / height) * depth / s_y, -depth])
 
 
 def world_to_view(cam, p):
