@@ -1,4 +1,4 @@
-"""Scenes for the 5D-pipeline reports (issue 5, docs/intervals.md): triangles moving a given number of
+"""Scenes for the 5D-pipeline reports (docs/intervals.md): triangles moving a given number of
 pixels over the shutter, and stacks of screen-filling layers for depth complexity."""
 from __future__ import annotations
 

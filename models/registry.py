@@ -1,5 +1,5 @@
 """Named scenes: a registry filled by the @register_scene decorator. The scene modules are found by
-walking the models package, so a new module with decorated builders needs no other edit."""
+walking the models package, so adding a module with decorated builders needs no other edit."""
 from __future__ import annotations
 
 import functools

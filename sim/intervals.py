@@ -1,4 +1,4 @@
-"""Issue 5 Python APIs over the 5D pipeline's intervals (docs/intervals.md):
+"""Python APIs over the 5D pipeline's intervals (docs/intervals.md):
 
 * ``conservative_raster``: the conservative rasterization mode (002 §2, Fig. 2): 1 x 1 tiles, no
   sample test, one fragment record (pixel, triangle, û, v̂, t̂, ẑ) per (triangle, pixel) pair, or a

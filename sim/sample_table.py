@@ -150,7 +150,7 @@ class SampleTable:
 
         `lens` declares the aperture the (u, v) were made for: "any" (default) means no shape
         check at all, and `samples(shape)` returns the values as given for every shape; a shape
-        name means every (u, v) must lie inside it now, and `samples(shape)` / `lens_positions`
+        name means every (u, v) must lie inside it, and `samples(shape)` / `lens_positions`
         raise ValueError for a requested shape that some (u, v) lies outside of.
 
         Interleaved user tables give both `lens_positions` (N, 2) and `lens_index` (same leading

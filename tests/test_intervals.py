@@ -1,4 +1,4 @@
-"""Issue 5, the 5D pipeline: conservative (û, v̂, t̂) and ẑ per tile against brute force (random and adversarial moving/defocused triangles, hypothesis), same image for every algorithm with time intervals, clip planes and HiZ, per-class costs (static triangles pay nothing for time, in-focus nothing for lens), conservative mode, occlusion queries."""
+"""The 5D pipeline's intervals: conservative (û, v̂, t̂) and ẑ per tile against brute force (random and adversarial moving/defocused triangles, hypothesis), same image for every algorithm with time intervals, clip planes and HiZ, per-class costs (static triangles pay nothing for time, in-focus nothing for lens), conservative mode, occlusion queries."""
 from __future__ import annotations
 
 import functools

@@ -302,8 +302,8 @@ def _degenerate_scene():
 @pytest.mark.parametrize("coc", [0.0, 8.0])
 @pytest.mark.parametrize("algorithm", ALGORITHMS)
 def test_documented_op_counts_degenerate(algorithm, coc):
-    """Zero-area and edge-on triangles, in focus and defocused: documented == exact. Regression: a
-    zero-area triangle skipped the 2D tile test but was still charged cost::kTile2D."""
+    """Zero-area and edge-on triangles, in focus and defocused: documented == exact; in
+    particular a zero-area triangle that skips the 2D tile test is not charged cost::kTile2D."""
     check_honest_counts(_degenerate_scene(), coc, algorithm=algorithm, tile_size=2)
 
 

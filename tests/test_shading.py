@@ -1,4 +1,4 @@
-"""Shading, texturing and the texture cache (issue 6 part A, docs/shading.md): quad counting on
+"""Shading, texturing and the texture cache (docs/shading.md): quad counting on
 hand-made cases against numpy references built from the exported per-sample coverage, the cache
 model against a tiny Python reference simulator, the mip level against the closed form for a
 textured plane, texel layouts, and the same-image invariant with texturing on."""

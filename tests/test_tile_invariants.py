@@ -404,10 +404,10 @@ STRATEGIES = {
 
 def on_one_view_ray(p0, max_angle=1e-5) -> bool:
     """A triangle whose three vertices lie within max_angle (radians) of one line through the eye: a
-    needle pointing at the camera, or a sub-1e-3-px speck. The float sample test used to give such
-    triangles spurious hits (fixed: setup culls footprints below float resolution, counted in
-    setup.culled_degenerate, and every traversal masks pixels outside the setup bounds); the
-    regression tests below pin the cases hypothesis found."""
+    needle pointing at the camera, or a sub-1e-3-px speck. A float sample test can give such triangles
+    spurious hits, so setup culls footprints below float resolution (counted in
+    setup.culled_degenerate) and every traversal masks pixels outside the setup bounds; the tests
+    below pin the cases hypothesis found."""
     p = np.asarray(p0, dtype=np.float64).reshape(-1, 3, 3)
     norm = np.linalg.norm(p, axis=2, keepdims=True)
     d = np.divide(p, norm, out=np.zeros_like(p), where=norm > 0)
@@ -587,8 +587,8 @@ def test_conservative_subnormal_coc_laine():
         check_conservative(case, ["laine", "tile", "interval"])
 
 
-# Regression: the float sample test used to hit samples of a triangle collapsed onto a view ray (zero or
-# ~1e-8 px projected area), also outside the setup bounds, so brute force and tile/laine disagreed.
+# A triangle collapsed onto a view ray (zero or ~1e-8 px projected area): a float sample test can hit
+# its samples, also outside the setup bounds, and brute force and tile/laine must still agree.
 
 
 @pytest.mark.parametrize("algorithm", ["tile", "laine"])
