@@ -23,6 +23,7 @@ def pinhole_scales(width, height, fov_y_deg):
 
 
 def proj_scales(cam):
+    """pinhole_scales of camera cam."""
     return pinhole_scales(cam.width, cam.height, cam.fov_y_deg)
 
 
