@@ -36,7 +36,7 @@ class BinBuffers {
     }
   }
 
-  // ---- HiZ (issue 5; 002 §3, 000 §5.4): per HiZ tile (hiz_tile x hiz_tile pixels of the bin) the
+  // ---- HiZ (002 §3, 000 §5.4): per HiZ tile (hiz_tile x hiz_tile pixels of the bin) the
   // min and max of the per-sample depths, +inf while any sample is empty. Conservative at all
   // times: a traversal marks the HiZ tiles it may have written (hiz_mark) and calls hiz_update()
   // after each triangle, which recomputes the marked tiles from the depth buffer (as hardware does

@@ -78,7 +78,7 @@ class SampleTable {
 
   // Index every pixel's samples by (lens-grid cell, time stratum) with S strata of equal length in
   // t (1 <= S <= 64), so that a traversal can skip the samples outside a time interval without
-  // touching them (issue 5: samples culled by the intervals before the sample test).
+  // touching them (samples culled by the time intervals before the sample test).
   void set_time_strata(int S);
   int time_strata() const { return strata_; }
   // Sub-interval k of S on [0, 1]: [k / S, (k + 1) / S].

@@ -211,7 +211,6 @@ struct TileIntervals {
 template <class A>
 inline bool motion_tile_intervals(const MotionSetup& ms, const ClipBox& clip, DimClass cls, double x0, double x1,
                                   double y0, double y1, TileIntervals& ti, std::uint64_t& ops, Counters& c) {
-  using D = typename A::f64;
   ti.n_active = 0;
   ti.u0 = ti.v0 = ti.t0 = kInfD;
   ti.u1 = ti.v1 = ti.t1 = -kInfD;

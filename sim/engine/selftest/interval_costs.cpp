@@ -1,4 +1,4 @@
-// Cost self-tests of the issue-5 interval kernels (intervals.h): each run executes a kernel once
+// Cost self-tests of the interval kernels (intervals/): each run executes a kernel once
 // on the counting type (ExactArith: the tally) and once on the fast path (FastArith: the
 // documented cost it charges) with the same random input; tests/test_op_costs.py requires equality.
 #include <random>

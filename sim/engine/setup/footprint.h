@@ -103,7 +103,6 @@ inline Footprint build_footprint(const TriSetup& tri, const Frame& f, bool with_
     // The lens sees the triangle edge-on somewhere: cull with H_j only in lens cells where the
     // orientation has one sign (cells where it is ~0 see a sliver and are left to the sample test).
     const int Gc = p.lens_grid;
-    const std::uint64_t cells = static_cast<std::uint64_t>(Gc) * Gc;
     fp.orient_pos = tiletest::line_cells<D>(tiletest::Line{-orient.A, -orient.B, thr - orient.C}, Gc, 0, Gc - 1, 0, Gc - 1);
     fp.orient_neg = tiletest::line_cells<D>(tiletest::Line{orient.A, orient.B, orient.C + thr}, Gc, 0, Gc - 1, 0, Gc - 1);
     charge<A>(ops, 2 * tiletest::line_cells_cost(Gc, Gc));

@@ -68,7 +68,7 @@ struct TileWork {
 
 // THE mapping from the engine's counters to work: the work a worker thread's counters add up to.
 // A record is work_from_counters(after).since(work_from_counters(before)) around one call of
-// Traversal::rasterize. Extend it here when new counters exist.
+// Traversal::rasterize. A counter that is work for a unit is mapped here.
 TileWork work_from_counters(const Counters& c);
 
 struct UnitTiming {

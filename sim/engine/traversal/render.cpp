@@ -35,7 +35,7 @@ void validate_frame_params(const RenderParams& p) {
   if (!(p.focus_w > 0)) fail("focus_w: expected > 0, got " + std::to_string(p.focus_w));
   if (!(p.near_w > 0)) fail("near_w: expected > 0, got " + std::to_string(p.near_w));
   if (p.time_splits < 1 || p.time_splits > 16 || p.time_strata < 1 || p.time_strata > 64 ||
-      p.time_strata % p.time_splits != 0)  // issue 5: each time stratum lies in one sub-interval
+      p.time_strata % p.time_splits != 0)  // each time stratum lies in one sub-interval
     fail("time_splits/time_strata: expected 1..16 / 1..64 with time_strata a multiple of time_splits, got " +
          std::to_string(p.time_splits) + " / " + std::to_string(p.time_strata));
   if (p.shading_mode < 0 || p.shading_mode > 4)

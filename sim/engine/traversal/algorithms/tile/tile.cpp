@@ -81,7 +81,7 @@ class Tile final : public Traversal {
     raster_lens(tri, fp, bin);
   }
 
-  // Pre-shear the static triangle to every discrete lens coordinate (OUR (i) setup cost).
+  // Shear the static triangle to every discrete lens coordinate (OUR (i) setup cost).
   void shear_lens_positions(const TriSetup& tri, std::uint64_t& ops) {
     const int n = f_.table.n_lens();
     sx_.resize(static_cast<std::size_t>(n) * 3);
