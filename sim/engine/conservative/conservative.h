@@ -5,7 +5,7 @@
 //
 // Contract: for every sample (x, y, u, v, t) the exact sample test hits in pixel (px, py), the
 // triangle's record of that pixel exists and contains (u, v, t) in its intervals and the hit's
-// depth in [z_lo, z_hi] (geometric ẑ, no float margin: see intervals.h).
+// depth in [z_lo, z_hi] (geometric ẑ, no float margin: see intervals/depth_interval.h).
 #pragma once
 
 #include <cstdint>

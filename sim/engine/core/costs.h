@@ -9,31 +9,13 @@
 
 namespace rast5d::cost {
 
-// ---- sample test (sample_test.h) ----
-inline constexpr std::uint64_t kEdges = 18;      // 6 MADD relative coords, 3x(2 MUL + SUB), det 3
-inline constexpr std::uint64_t kSigns = 4;       // sign(det), 3 sign(e_i)
-inline constexpr std::uint64_t kShear = 6;       // 6 MADD
-inline constexpr std::uint64_t kLerp = 9;        // 9 MADD
-inline constexpr std::uint64_t kShearMoving = 12;  // 6 MADD coefficients + 6 MADD shear
-inline constexpr std::uint64_t kTieBreak = 12;   // per zero edge: 4 MADD, 2x(2 MUL + SUB), 2 CMP
-
-inline constexpr std::uint64_t kInside2D = kEdges + kSigns;                        // 22
-inline constexpr std::uint64_t kInside3D = kLerp + kEdges + kSigns;                // 31
-inline constexpr std::uint64_t kInside4D = kShear + kEdges + kSigns;               // 28
-inline constexpr std::uint64_t kInside5D = kLerp + kShearMoving + kEdges + kSigns;  // 43
-
-// ---- covered samples (same for all algorithms; ops.interp) ----
-inline constexpr std::uint64_t kDepth = 6;      // 2 ADD, RCP, MUL, MADD, CMP (near plane)
-inline constexpr std::uint64_t kDepthTest = 1;  // CMP against the depth buffer
-inline constexpr std::uint64_t kColor = 13;     // RCP, 3 MUL, 3x(MUL + 2 MADD)
-
-// ---- triangle setup (setup.h) ----
+// ---- triangle setup (setup/setup.h) ----
 inline constexpr std::uint64_t kSetupMotion = 9;       // dX, dY, dW: 9 SUB
 inline constexpr std::uint64_t kSetupShear = 6;        // static cx, cy: 6 MADD
 inline constexpr std::uint64_t kBoundsPoint = 7;       // RCP, 2 MUL, 2 MIN, 2 MAX
 inline constexpr std::uint64_t kBoundsPointLens = 14;  // RCP, 2 MUL, MADD, 2 MUL, 4 ADD, 2 MIN, 2 MAX
 
-// ---- tile tests (tile_tests.h) ----
+// ---- tile tests (tiletest/) ----
 inline constexpr std::uint64_t kLensVertexBase = 6;     // RCP, 2 MUL, MADD, 2 MUL
 inline constexpr std::uint64_t kLensVertexAxis = 2;     // per axis with a line: RCP, MUL
 inline constexpr std::uint64_t kGapVertex = 4;          // per vertex per axis: 2 MADD, MIN, MAX
@@ -70,6 +52,24 @@ inline constexpr std::uint64_t kSubSetup3D = 2 * 9 + 3 * (2 + kFormCull);      /
 inline constexpr std::uint64_t kSubSetup5D = kSubSetup3D + 2 * 3 * 4;          // 69
 // Clip box applied to one axis' interval list: MAX + MIN per interval.
 inline constexpr std::uint64_t kClipInterval = 2;
+
+// ---- sample test (sampletest/sample_test.h) ----
+inline constexpr std::uint64_t kEdges = 18;      // 6 MADD relative coords, 3x(2 MUL + SUB), det 3
+inline constexpr std::uint64_t kSigns = 4;       // sign(det), 3 sign(e_i)
+inline constexpr std::uint64_t kShear = 6;       // 6 MADD
+inline constexpr std::uint64_t kLerp = 9;        // 9 MADD
+inline constexpr std::uint64_t kShearMoving = 12;  // 6 MADD coefficients + 6 MADD shear
+inline constexpr std::uint64_t kTieBreak = 12;   // per zero edge: 4 MADD, 2x(2 MUL + SUB), 2 CMP
+
+inline constexpr std::uint64_t kInside2D = kEdges + kSigns;                        // 22
+inline constexpr std::uint64_t kInside3D = kLerp + kEdges + kSigns;                // 31
+inline constexpr std::uint64_t kInside4D = kShear + kEdges + kSigns;               // 28
+inline constexpr std::uint64_t kInside5D = kLerp + kShearMoving + kEdges + kSigns;  // 43
+
+// ---- covered samples (backend/sample_backend.h; same for all algorithms; ops.interp) ----
+inline constexpr std::uint64_t kDepth = 6;      // 2 ADD, RCP, MUL, MADD, CMP (near plane)
+inline constexpr std::uint64_t kDepthTest = 1;  // CMP against the depth buffer
+inline constexpr std::uint64_t kColor = 13;     // RCP, 3 MUL, 3x(MUL + 2 MADD)
 
 // ---- depth intervals ẑ (intervals/depth_interval.h) ----
 // Documented costs of ẑ. Vertex test (the moving box in W over t̂; W is linear in t): per vertex

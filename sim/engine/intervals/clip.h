@@ -1,8 +1,9 @@
-// User clip planes (002_95ea0844b256f75b.txt §2): an axis-aligned box in (u, v, t). Semantics:
-// a sample whose (u, v, t) lies outside the closed box is never hit, for every algorithm (the
-// sample pipeline rejects it after the inside test, counted in interval.samples_clipped); the
-// tile algorithm also intersects its intervals with the box (counted MIN/MAX) so that such
-// samples are mostly never tested.
+// User clip planes (002_95ea0844b256f75b.txt §2): an axis-aligned box in (u, v, t).
+//
+// Contract: a sample whose (u, v, t) lies outside the closed box is never hit, for every
+// algorithm (backend/sample_backend.h rejects it after the inside test, counted in
+// interval.samples_clipped); the tile algorithm also intersects its lens intervals with the box
+// (clip_lens, cost::kClipInterval) so that such samples are mostly never tested.
 #pragma once
 
 #include <cstdint>

@@ -1,6 +1,10 @@
 // Per-triangle tile-test setup shared by the tile-based algorithms (tile, tile_interleaved, laine):
 // the lens projection of the footprint vertices (h_i lines), the triangle's orientation over the
 // lens, the per-edge H_j constants and the selective-H oracle (001 Appendix A).
+//
+// Contract: the footprint's lens vertices bound the triangle's projection from every lens point
+// (and, for a moving triangle, every time), so the h_i and H_j lines built on them are
+// conservative (tiletest/tile_test.h).
 #pragma once
 
 #include <algorithm>

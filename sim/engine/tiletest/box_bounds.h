@@ -1,5 +1,8 @@
 // Screen bounds of the footprint over a lens box (INTERVAL, INTERLEAVE): the pixels a triangle can
 // cover from any lens point of the box.
+//
+// Contract (tile_test.h): the bounds contain the footprint's projection from every lens point of
+// the box, and pixel_range the pixels they touch.
 #pragma once
 
 #include <cmath>

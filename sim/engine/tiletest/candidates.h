@@ -1,6 +1,9 @@
 // Fast-path candidate selection of one pixel's samples against a tile's lens region (active lens
 // cells and the h_i cuts): a vectorisable scan, then compaction. The counting path walks the
 // cells' buckets instead and charges the same per-sample comparisons.
+//
+// Contract: select_candidates flags exactly the samples that the bucket walk over the active cells
+// with axis_pass (halfspace_lens.h) selects, so both paths test the same samples.
 #pragma once
 
 #include <algorithm>

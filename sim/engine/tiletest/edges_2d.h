@@ -1,5 +1,8 @@
 // The standard 2D tile test of static, in-focus triangles (TILE's 2D class, HINTERLEAVE): the
 // triangle's edge functions evaluated at each tile's most inside corner.
+//
+// Contract (tile_test.h): tile_outside_2d is true only if no point of the (expanded) tile is inside
+// the triangle.
 #pragma once
 
 #include "core/arith.h"

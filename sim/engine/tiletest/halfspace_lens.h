@@ -17,6 +17,10 @@
 // c_X1(q): the lines x_p(u) and x_q(u) cross once, and only one of the two gaps can be open. One
 // interior gap leaves two intervals. (001 describes two boxes, A and B; the product of the
 // per-axis sets also keeps A's u-range with B's v-range, from which the triangle can be visible.)
+//
+// Contract (tile_test.h): a lens coordinate is cut only if every footprint vertex seen from it lies
+// beyond the same edge of the expanded tile; axis_pass and axis_cells keep every float sample and
+// every lens cell that is not inside a cut.
 #pragma once
 
 #include <algorithm>

@@ -1,5 +1,7 @@
 // The lens shape against uv-boxes and lens-grid cells: a box of the lens square that misses the
 // lens (disk or hexagon) holds no sample.
+//
+// Contract (tile_test.h): box_overlaps_lens is false only if the box misses the lens shape.
 #pragma once
 
 #include "core/arith.h"

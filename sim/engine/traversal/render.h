@@ -1,4 +1,7 @@
 // The render orchestrator: setup -> binning -> per-bin traversal on worker threads -> resolve.
+//
+// Contract: the image, the per-sample depths and the counters do not depend on the thread count
+// (bins are owned by one thread at a time and triangles reach a bin in submission order).
 #pragma once
 
 #include <functional>

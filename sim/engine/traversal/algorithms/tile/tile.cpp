@@ -331,7 +331,7 @@ class Tile final : public Traversal {
     pipe_.flush();
   }
 
-  // ---- moving triangles (3D, 5D): time sub-intervals with t̂ and lens sets (intervals.h) -------
+  // ---- moving triangles (3D, 5D): time sub-intervals with t̂ and lens sets (intervals/) ---------
   void raster_motion(const TriSetup& tri, const BinRect& bin) {
     const RenderParams& p = f_.p;
     const int T = p.tile_size, G = p.lens_grid, S = ms_.S;
