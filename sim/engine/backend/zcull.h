@@ -7,7 +7,7 @@
 // the traversal stops).
 //
 // Contract: never culls a pair with a sample that would pass the depth test (ẑ is conservative and
-// HiZ is conservative at all times, backend/bin_buffers.h); the image is the same with and without
+// HiZ is conservative at all times, backend/hiz.h); the image is the same with and without
 // HiZ. Counters: zcull.*, hiz.*, occlusion.* and ops.zhat.
 #pragma once
 
@@ -16,6 +16,7 @@
 #include <cstdint>
 
 #include "backend/bin_buffers.h"
+#include "backend/hiz.h"
 #include "core/arith.h"
 #include "core/costs.h"
 #include "core/counters.h"
@@ -31,7 +32,7 @@ class DepthCull {
 
  public:
   DepthCull(const Frame& f, Counters& c, BinBuffers& buf, Pipeline& pipe) : f_(f), c_(c), buf_(buf), pipe_(pipe) {
-    if (f.p.hiz_enabled || f.p.query_mode == 2) buf_.set_hiz_tile(f.p.hiz_tile);
+    if (f.p.hiz_enabled || f.p.query_mode == 2) buf_.hiz().set_tile(f.p.hiz_tile);
   }
 
   // Per triangle, in every bin: query state and the moving planes of ẑ (charged in the first bin).
@@ -76,7 +77,7 @@ class DepthCull {
     if (!(p.hiz_enabled || query_iv)) return true;
     double zlo, zhi;
     iv::zhat_widen(z, nr, zlo, zhi);
-    const double zmax = buf_.hiz_max(tx, ty), zmin = buf_.hiz_min(tx, ty);
+    const double zmax = buf_.hiz().max(tx, ty), zmin = buf_.hiz().min(tx, ty);
     c_[Counter::hiz_bytes_read] += 8;
     const bool behind = D(zlo) >= D(zmax);
     const bool front = D(zhi) < D(zmin);
@@ -93,7 +94,7 @@ class DepthCull {
     }
     if (front) ++c_[Counter::zcull_pairs_zmin];
     set_mode(front);
-    if (p.hiz_enabled) buf_.hiz_mark(tx, ty);
+    if (p.hiz_enabled) buf_.hiz().mark(tx, ty);
     return true;
   }
 
