@@ -26,6 +26,8 @@
 #include "tiletest/halfspace_edges.h"
 #include "tiletest/halfspace_lens.h"
 #include "tiletest/lens_shape.h"
+#include "traversal/algorithms/tile/active_cells.h"
+#include "traversal/algorithms/tile/hj_cells.h"
 #include "traversal/traversal.h"
 
 namespace rast5d {
@@ -153,7 +155,6 @@ class Tile final : public Traversal {
     const int T = p.tile_size, G = p.lens_grid;
     const bool use_h = p.halfspace_h && fp.h_valid;
     const bool use_H = p.halfspace_H && !tri.moving;  // build_footprint set up H_j (sigma, or per-cell signs)
-    const int cells = G * G;
     if (kInterleaved && !tri.moving)
       pipe_.begin_sheared(tri, sx_.data(), sy_.data(), 3);
     else
@@ -194,86 +195,19 @@ class Tile final : public Traversal {
       const std::uint32_t bx = tiletest::axis_cells<D>(sx, G);
       const std::uint32_t by = tiletest::axis_cells<D>(sy, G);
       charge<A>(c_[Counter::ops_tile], sx.n_cmp + sy.n_cmp);
-      // Active cells: a 64-bit mask for grids up to 8 x 8, a bitset above.
-      const bool small = cells <= 64;
-      tiletest::CellMask active;
-      std::uint64_t act64 = 0;
-      int i0 = G, i1 = -1, j0 = G, j1 = -1;
-      if (small) {
-        for (int j = 0; j < G; ++j)
-          if (by >> j & 1u) act64 |= static_cast<std::uint64_t>(bx) << (j * G);
-        act64 &= lens_mask64_;
-        std::uint64_t cols = 0;
-        for (int j = 0; j < G; ++j) {
-          const std::uint64_t row = (act64 >> (j * G)) & ((std::uint64_t(1) << G) - 1);
-          if (row) j0 = std::min(j0, j), j1 = j, cols |= row;
-        }
-        if (cols) i0 = __builtin_ctzll(cols), i1 = 63 - __builtin_clzll(cols);
-      } else {
-        for (int j = 0; j < G; ++j) {
-          if (!(by >> j & 1u)) continue;
-          for (int i = 0; i < G; ++i)
-            if ((bx >> i & 1u) && lens_mask_.test(j * G + i)) {
-              active.set(j * G + i);
-              i0 = std::min(i0, i), i1 = std::max(i1, i), j0 = std::min(j0, j), j1 = std::max(j1, j);
-            }
-        }
-      }
-      if (small ? act64 == 0 : active.none()) {
+      ActiveCells active = active_cells(bx, by, G, lens_mask_, lens_mask64_);
+      if (active.none()) {
         ++c_[Counter::tile_culled_lens];
         return;
       }
       // H_j lines: conservative overlap bitmask over the cells (001 §5.1).
       if (use_H) {
-        tiletest::CellMask culled;
-        bool any_line = false;
-        for (int k = 0; k < fp.n_edges; ++k) {
-          const tiletest::EdgeH& e = fp.edges[k];
-          if (!e.active) continue;
-          int m, n;
-          const bool has = tiletest::tangent_corners<D>(e, x0, x1, y0, y1, m, n);
-          charge<A>(c_[Counter::ops_tile], e.parallel ? 0 : cost::kTangentCorners);
-          if (!has) continue;  // region 5: the edge points at the tile
-          const int rows = j1 - j0 + 1, cols = i1 - i0 + 1;
-          const std::uint64_t cells_cost = tiletest::line_cells_cost(rows, cols);
-          tiletest::CellMask edge_culled;
-          if (fp.sigma != 0) {  // one orientation over the lens: cull where sigma * H < 0 for both
-            edge_culled.set();
-            for (const int corner : {m, n}) {
-              const double xc = (corner & 1) ? x1 : x0, yc = (corner & 2) ? y1 : y0;
-              const tiletest::Line l = tiletest::line_at_corner<D>(e, xc, yc, fp.sigma);
-              edge_culled &= tiletest::line_cells<D>(l, G, i0, i1, j0, j1);
-              charge<A>(c_[Counter::ops_tile], cost::kLineAtCorner + cells_cost);
-              ++c_[Counter::tile_H_lines];
-            }
-          } else {  // orientation changes over the lens: per cell of one sign (H < 0 or H > 0)
-            tiletest::CellMask neg_both, pos_both;
-            neg_both.set(), pos_both.set();
-            for (const int corner : {m, n}) {
-              const double xc = (corner & 1) ? x1 : x0, yc = (corner & 2) ? y1 : y0;
-              const tiletest::Line l = tiletest::line_at_corner<D>(e, xc, yc, 1);
-              neg_both &= tiletest::line_cells<D>(l, G, i0, i1, j0, j1);
-              pos_both &= tiletest::line_cells<D>(tiletest::Line{-l.A, -l.B, -l.C}, G, i0, i1, j0, j1);
-              charge<A>(c_[Counter::ops_tile], cost::kLineAtCorner + 2 * cells_cost);
-              ++c_[Counter::tile_H_lines];
-            }
-            edge_culled = (fp.orient_pos & neg_both) | (fp.orient_neg & pos_both);
-          }
-          culled |= edge_culled;
-          any_line = true;
-        }
+        bool any_line;
+        const tiletest::CellMask culled =
+            hj_culled_cells<A>(fp, x0, x1, y0, y1, G, active.i0, active.i1, active.j0, active.j1, c_, any_line);
         if (any_line) {
-          if (small) {
-            const std::uint64_t culled64 = (culled & low64_).to_ullong();
-            c_[Counter::tile_cells_tested] += static_cast<std::uint64_t>(__builtin_popcountll(act64));
-            c_[Counter::tile_cells_culled] += static_cast<std::uint64_t>(__builtin_popcountll(act64 & culled64));
-            act64 &= ~culled64;
-          } else {
-            c_[Counter::tile_cells_tested] += active.count();
-            c_[Counter::tile_cells_culled] += (active & culled).count();
-            active &= ~culled;
-          }
-          if (small ? act64 == 0 : active.none()) {
+          active.remove(culled, low64_, c_);
+          if (active.none()) {
             ++c_[Counter::tile_culled_H];
             return;
           }
@@ -287,19 +221,13 @@ class Tile final : public Traversal {
           return;
       }
       // Samples of surviving cells, each checked against the h_i lines, then inside-tested.
-      int n_cells = 0;
-      if (small) {
-        for (std::uint64_t m = act64; m; m &= m - 1) cell_list_[n_cells++] = __builtin_ctzll(m);
-      } else {
-        for (int c = 0; c < cells; ++c)
-          if (active.test(c)) cell_list_[n_cells++] = c;
-      }
+      const int n_cells = active.list(cell_list_.data(), G);
       const int* const cl = cell_list_.data();
       const std::uint64_t region_cost = static_cast<std::uint64_t>(sx.n_cmp + sy.n_cmp);
       const bool count_opt = p.count_optimal;
       const int spp = f_.table.spp();
-      const std::uint64_t active_bits = act64;
-      const bool fast_select = !A::counting && small;
+      const std::uint64_t active_bits = active.bits64;
+      const bool fast_select = !A::counting && active.small;
       for (int py = py0; py < ty1; ++py)
         for (int px = px0; px < tx1; ++px) {
           const PixelSamples ps = f_.table.pixel(px, py);
