@@ -35,6 +35,7 @@ inline constexpr std::uint64_t kBBoxTile = 4;           // 4 CMP against the tri
 inline constexpr std::uint64_t kOrientation = 45;       // 3 det (9 each), 2 MUL, 4 corners x (2 ADD, 2 CMP)
 inline constexpr std::uint64_t kOracleSimplified = 6;   // per edge: 2 SUB, 3 MUL, CMP (001 Eq. 15, 13)
 inline constexpr std::uint64_t kOracleFull = 18;        // per edge: 4 SUB, 2 x F(a,b) (5 each), 3 MUL, CMP
+inline constexpr std::uint64_t kOracleBudget = 1;       // per triangle: MUL (tiles x tile cost)
 
 // ---- time intervals t̂ and the clip box (intervals/time_interval.h, intervals/clip.h) ----
 inline constexpr std::uint64_t kFormCull = 7;  // SUB, RCP, MUL, 2 CMP, MAX, MIN
@@ -52,6 +53,11 @@ inline constexpr std::uint64_t kSubSetup3D = 2 * 9 + 3 * (2 + kFormCull);      /
 inline constexpr std::uint64_t kSubSetup5D = kSubSetup3D + 2 * 3 * 4;          // 69
 // Clip box applied to one axis' interval list: MAX + MIN per interval.
 inline constexpr std::uint64_t kClipInterval = 2;
+// Moving triangles in TILE: per active sub-interval and tile, t̂_k to time strata (2 MUL); per
+// selected sample, t against t̂_k (2 CMP) and against each clipped lens axis (2 CMP).
+inline constexpr std::uint64_t kTimeStrata = 2;
+inline constexpr std::uint64_t kSampleTime = 2;
+inline constexpr std::uint64_t kSampleClipAxis = 2;
 
 // ---- sample test (sampletest/sample_test.h) ----
 inline constexpr std::uint64_t kEdges = 18;      // 6 MADD relative coords, 3x(2 MUL + SUB), det 3

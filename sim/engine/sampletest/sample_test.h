@@ -26,8 +26,8 @@ namespace rast5d {
 enum class DimClass : int { k2D = 0, k3D = 1, k4D = 2, k5D = 3 };
 
 // Homogeneous edge functions and determinant of a (sheared) triangle at the sample (sx, sy).
-// Cost: kCostEdges (costs.h). The scalar-argument form is the single definition of the arithmetic
-// (the batched fast path calls it in vectorisable loops); the array form forwards to it.
+// Cost: cost::kEdges (core/costs.h). The scalar-argument form is the single definition of the
+// arithmetic (the batched fast path calls it in vectorisable loops); the array form forwards to it.
 template <class F>
 inline void edge_functions_s(F X0, F X1, F X2, F Y0, F Y1, F Y2, F W0, F W1, F W2, F sx, F sy, F& e0, F& e1,
                              F& e2, F& det) {
@@ -132,7 +132,7 @@ struct BatchTri {
   }
 }
 
-// Sign tests of the edge functions against det. Cost: kCostSigns (4 CMP).
+// Sign tests of the edge functions against det. Cost: cost::kSigns.
 // Returns +1 inside, 0 outside, -1 undecided (some e_i == 0 with the others agreeing: tie rule).
 // back_face_cull: reject det > 0 (back-facing; front faces are counter-clockwise in view space,
 // which is det < 0 in y-down pixel coordinates).
@@ -153,7 +153,7 @@ inline int edge_signs(const F e[3], F det, bool back_face_cull, int& det_sign, i
 // vertex j = i+1 to k = i+2. Its gradient (A, B) = (W_k ry_j - W_j ry_k, W_j rx_k - W_k rx_j),
 // each computed as two products and one subtraction, is exactly negated for the neighbour that
 // lists the edge the other way round, so exactly one of two triangles sharing it owns the sample.
-// Cost per zero edge: kCostTieBreak.
+// Cost per zero edge: cost::kTieBreak.
 template <class F>
 inline bool tie_break_edge(const F X[3], const F Y[3], const F W[3], F sx, F sy, int i, int det_sign) {
   const int j = (i + 1) % 3, k = (i + 2) % 3;
@@ -172,7 +172,7 @@ inline bool tie_break_edge(const F X[3], const F Y[3], const F W[3], F sx, F sy,
 
 // ---- per-class vertex placement --------------------------------------------------------------
 
-// Shear static vertices to lens point (u, v). Cost: kCostShear (6 MADD).
+// Shear static vertices to lens point (u, v). Cost: cost::kShear.
 template <class F>
 inline void shear_static(const F X[3], const F Y[3], const F cx[3], const F cy[3], F u, F v, F Xs[3],
                          F Ys[3]) {
@@ -182,7 +182,7 @@ inline void shear_static(const F X[3], const F Y[3], const F cx[3], const F cy[3
   }
 }
 
-// Move vertices to time t. Cost: kCostLerp (9 MADD).
+// Move vertices to time t. Cost: cost::kLerp.
 template <class F>
 inline void lerp_vertices(const F X[3], const F Y[3], const F W[3], const F dX[3], const F dY[3],
                           const F dW[3], F t, F Xt[3], F Yt[3], F Wt[3]) {
@@ -193,7 +193,7 @@ inline void lerp_vertices(const F X[3], const F Y[3], const F W[3], const F dX[3
   }
 }
 
-// Shear coefficients of moving vertices, then shear. Cost: kCostShearMoving (12 MADD).
+// Shear coefficients of moving vertices, then shear. Cost: cost::kShearMoving.
 // cx = Kx * W + (-Kx F) with the same float constants as the static setup, so a static vertex
 // gets bit-identical coefficients.
 template <class F>
@@ -210,7 +210,7 @@ inline void shear_moving(const F Xt[3], const F Yt[3], const F Wt[3], F kx, F ne
 // ---- interpolation of covered samples (the same for every algorithm) -------------------------
 
 // Depth of the hit point: z = 1 - near / W_hit, W_hit = det / sum(e). Returns z (>= 0 in front of
-// the near plane). Cost: kCostDepth (2 ADD, RCP, MUL, MADD, CMP).
+// the near plane). Cost: cost::kDepth.
 template <class F>
 inline bool hit_depth(const F e[3], F det, F neg_near, F& sum, F& z) {
   sum = e[0] + e[1] + e[2];
@@ -221,7 +221,7 @@ inline bool hit_depth(const F e[3], F det, F neg_near, F& sum, F& z) {
 }
 
 // Perspective-correct barycentrics b_i = e_i / sum(e) and the interpolated vertex colour.
-// Cost: kCostColor (RCP, 3 MUL, 9 for the colour).
+// Cost: cost::kColor.
 template <class F>
 inline void hit_color(const F e[3], F sum, const F c0[3], const F c1[3], const F c2[3], F out[3]) {
   const F inv = rcp(sum);

@@ -122,7 +122,7 @@ inline Footprint build_footprint(const TriSetup& tri, const Frame& f, bool with_
   D tile_budget(0.0);
   if (p.selective_H) {
     tile_budget = D(n_tiles) * D(c_tile);
-    charge<A>(ops, 1);
+    charge<A>(ops, cost::kOracleBudget);
   }
   const double spp = f.table.spp();
   fp.n_edges = fp.n;

@@ -295,9 +295,9 @@ class Tile final : public Traversal {
             if ((bx >> i & 1u) && lens_mask_.test(j * G + i)) list[n_cells[k]++] = j * G + i;
         }
         total_cells += n_cells[k];
-        // Time strata of the table index that overlap t̂_k (2 MUL): samples outside are never touched.
+        // Time strata of the table index that overlap t̂_k: samples outside are never touched.
         const D slo = D(ti.tlo[k]) * D(NT), shi = D(ti.thi[k]) * D(NT);
-        charge<A>(c_[Counter::ops_tile], 2);
+        charge<A>(c_[Counter::ops_tile], cost::kTimeStrata);
         strata_lo_[k] = std::max(k * per_sub, static_cast<int>(std::floor(raw(slo))));
         strata_hi_[k] = std::min((k + 1) * per_sub - 1, static_cast<int>(std::floor(raw(shi))));
       }
@@ -322,8 +322,9 @@ class Tile final : public Traversal {
             const F tk_lo(ti.tlo[k]), tk_hi(ti.thi[k]);
             const tiletest::AxisSet& sx = ti.sx[k];
             const tiletest::AxisSet& sy = ti.sy[k];
-            // per sample: 2 CMP for t̂, the lens cuts (5D), 2 CMP per clipped lens axis
-            const std::uint64_t per = 2 + (lens ? sx.n_cmp + sy.n_cmp : 0) + (cu ? 2 : 0) + (cv ? 2 : 0);
+            // per sample: t̂, the lens cuts (5D), each clipped lens axis
+            const std::uint64_t per = cost::kSampleTime + (lens ? sx.n_cmp + sy.n_cmp : 0) +
+                                      (cu ? cost::kSampleClipAxis : 0) + (cv ? cost::kSampleClipAxis : 0);
             const int* list = &cell_lists_[static_cast<std::size_t>(k) * 256];
             int checked = 0;
             const int j0 = strata_lo_[k], j1 = strata_hi_[k];
