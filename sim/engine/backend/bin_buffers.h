@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "backend/hiz.h"
+#include "core/bin_rect.h"
 
 namespace rast5d {
 

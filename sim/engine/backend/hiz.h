@@ -14,11 +14,9 @@
 #include <limits>
 #include <vector>
 
-namespace rast5d {
+#include "core/bin_rect.h"
 
-struct BinRect {
-  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;  // pixels [x0, x1) x [y0, y1)
-};
+namespace rast5d {
 
 class HiZBuffer {
  public:

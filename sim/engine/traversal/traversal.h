@@ -25,7 +25,7 @@
 #include <memory>
 #include <string>
 
-#include "backend/bin_buffers.h"
+#include "core/bin_rect.h"
 #include "setup/setup.h"
 #include "traversal/sample_pipeline.h"
 
