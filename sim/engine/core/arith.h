@@ -6,7 +6,7 @@
 // negation, absolute value, moves, integer/bit work and control flow are free.
 //
 // The fast path instantiates kernels on float/double and adds the documented cost of each
-// executed kernel (costs.h). The counting path instantiates the same kernels on Counted<T>,
+// executed kernel (core/costs.h). The counting path instantiates the same kernels on Counted<T>,
 // which performs the identical IEEE operation in the identical order (the build uses
 // -ffp-contract=off) and tallies one operation per call, so the two paths produce bit-identical
 // results and tests/test_op_costs.py proves the documented costs.

@@ -21,7 +21,7 @@ struct FrameConst {
   int width = 0, height = 0;
   bool lens_active = false;  // camera has a blur and the table has a lens dimension
   bool time_active = false;  // the table has a time dimension
-  // float constants of the sample kernels (see sample_test.h): cx = kx * W + neg_kx_f
+  // float constants of the sample kernels (see sampletest/sample_test.h): cx = kx * W + neg_kx_f
   float kx = 0, ky = 0, neg_kx_f = 0, neg_ky_f = 0, focus = 1, neg_near = 0;
   // double versions for tile tests
   double kx_d = 0, ky_d = 0, focus_d = 1, near_d = 0;

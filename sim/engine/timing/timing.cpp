@@ -57,7 +57,7 @@ TileWork work_from_counters(const Counters& c) {
   w.texel_fetches = d(Counter::tex_fetches);
   // Memory: per-sample depth traffic and HiZ traffic (depth.*, hiz.*). Texture-cache misses and
   // the line bytes they fetch are added per record by the cache replay after the render
-  // (render.cpp), since the cache is simulated in bin order once all bins are done.
+  // (traversal/render.cpp), since the cache is simulated in bin order once all bins are done.
   w.memory_bytes = d(Counter::depth_bytes_read) + d(Counter::depth_bytes_written) + d(Counter::hiz_bytes_read) +
                    d(Counter::hiz_bytes_written);
   return w;

@@ -78,7 +78,7 @@ void validate_params(const RenderParams& p, const SampleTable& table) {
 }
 
 // The per-render shading constants: textures with mip chains and addresses, per-triangle texture
-// slots, uvs, analytic uv derivatives and levels of detail (texture.h).
+// slots, uvs, analytic uv derivatives and levels of detail (backend/texture.h).
 static void build_shade_frame(const RenderParams& p, const SceneArrays& scene, const std::vector<TriSetup>& setups,
                               const std::vector<char>& alive, int n_bins, ShadeFrame& sf) {
   sf.mode = static_cast<ShadingMode>(p.shading_mode);

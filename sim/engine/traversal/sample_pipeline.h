@@ -33,7 +33,7 @@ namespace rast5d {
 struct ThreadState {
   Counters counters;
   BinBuffers buffers;
-  ShadeState shade;  // the open shading visit, shading cache, texture stream (shading.h)
+  ShadeState shade;  // the open shading visit, shading cache, texture stream (backend/shading.h)
 };
 
 // Two ways in: test() / test_sheared() for one sample, or the batch protocol
@@ -152,7 +152,7 @@ class SamplePipeline {
     }
   }
 
-  // The end of a shading visit (shading.h): every sample pushed since the previous end_visit()
+  // The end of a shading visit (backend/shading.h): every sample pushed since the previous end_visit()
   // belongs to one visit, whose shading work is counted now. Algorithms call it when they leave a
   // screen tile (or finish a pass) for the current triangle, and always before rasterize() returns.
   // Without a shading model (mode none) it does nothing, not even flush(): callers still flush.

@@ -1,16 +1,16 @@
 // Traversal algorithms: one interface, one file per implementation, registered by name
-// (STYLE.md; Ramulator 2's self-registering factory). Adding an algorithm = one .cpp file with a
-// RAST5D_REGISTER_TRAVERSAL line.
+// (STYLE.md; Ramulator 2's self-registering factory). Adding an algorithm = one .cpp file in
+// traversal/algorithms/ (or a folder there, like tile/) with a RAST5D_REGISTER_TRAVERSAL line.
 //
 // Calling protocol (one instance per worker thread, created once per render):
-//   1. The engine runs triangle setup (setup.h) for every triangle, once.
+//   1. The engine runs triangle setup (setup/setup.h) for every triangle, once.
 //   2. For each screen bin, in any order across threads, and for each triangle whose bounds
 //      overlap the bin, in submission order, the engine calls rasterize(tri, bin, charge_setup).
 //      charge_setup is true in exactly one bin per triangle (its first bin in raster order): an
 //      algorithm recomputes its per-triangle setup in every bin it is called for, but charges the
 //      operations only then, so counts never depend on binning or thread count.
-//   3. rasterize() hands candidate samples of pixels inside the bin to the SamplePipeline, which
-//      runs the exact sample test and the backend.
+//   3. rasterize() hands candidate samples of pixels inside the bin to the SamplePipeline
+//      (traversal/sample_pipeline.h), which runs the exact sample test and the backend.
 //
 // Contract: an implementation must be *exact*: it must pass to the sample pipeline every sample
 // of the bin that the exact sample test hits (it may pass more: that is its inefficiency), each
