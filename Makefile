@@ -4,7 +4,7 @@ PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMPS := .make-stamps
-SOURCES := $(shell find sim/src sim/include sim/bindings -type f 2>/dev/null) CMakeLists.txt pyproject.toml
+SOURCES := $(shell find sim/engine sim/bindings -type f 2>/dev/null) CMakeLists.txt pyproject.toml
 export CMAKE_BUILD_PARALLEL_LEVEL ?= $(shell nproc 2>/dev/null || echo 2)
 
 .PHONY: install run test test-all bench golden report report-quick clean

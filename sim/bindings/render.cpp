@@ -1,0 +1,126 @@
+// The render entry point, the sample table's lens-grid buckets, and the counter and algorithm
+// registries.
+#include "bindings.h"
+
+#include <pybind11/functional.h>
+#include <pybind11/stl.h>
+
+#include <optional>
+#include <vector>
+
+#include "backend/shading.h"
+#include "timing/timing.h"
+#include "traversal/render.h"
+
+namespace rast5d::bindings {
+
+void register_render(py::module_& m) {
+  m.def(
+      "render",
+      [](const RenderParams& p, const FArr& v0, const FArr& v1, const FArr& colors, const FArr& samples,
+         const IArr& lens_index, const FArr& lens_uv, bool export_samples, std::optional<FArr> uvs,
+         std::optional<IArr> tex_slots, std::vector<FArr> textures) {
+        require_shape(v0, {-1, 3, 3}, "v0");
+        const py::ssize_t n = v0.shape(0);
+        require_shape(v1, {n, 3, 3}, "v1");
+        require_shape(colors, {n, 3, 3}, "colors");
+        SampleTable table = make_table(samples, p.lens_grid, lens_index, lens_uv);
+        table.set_time_strata(p.time_strata);  // the (lens cell, time stratum) index
+        SceneArrays scene{static_cast<int>(n), v0.data(), v1.data(), colors.data()};
+        if (uvs && tex_slots) {  // texturing: uvs (n, 3, 2), tex_slots (n, 4), textures (H, W, C)
+          require_shape(*uvs, {n, 3, 2}, "uvs");
+          require_shape(*tex_slots, {n, kMaxTexSlots}, "tex_slots");
+          scene.uvs = uvs->data(), scene.tex_slots = tex_slots->data();
+        }
+        for (const FArr& t : textures) {
+          require_shape(t, {-1, -1, -1}, "textures[i]");
+          if (t.shape(0) < 1 || t.shape(1) < 1 || t.shape(2) < 1 || t.shape(2) > 4)
+            throw std::invalid_argument("textures[i]: expected (H, W, 1..4) with H, W >= 1");
+          scene.textures.push_back({t.data(), static_cast<int>(t.shape(0)), static_cast<int>(t.shape(1)),
+                                    static_cast<int>(t.shape(2))});
+        }
+        std::optional<py::error_already_set> pending;
+        RenderResult res;
+        {
+          py::gil_scoped_release release;
+          res = render(
+              p, scene, table,
+              [&pending]() {
+                py::gil_scoped_acquire acquire;
+                if (PyErr_CheckSignals() != 0) {
+                  pending.emplace();
+                  return true;
+                }
+                return false;
+              },
+              export_samples);
+        }
+        if (pending) throw *pending;
+        py::array_t<float> image({p.height, p.width, 3});
+        std::copy(res.image.begin(), res.image.end(), image.mutable_data());
+        py::dict out;
+        out["image"] = image;
+        out["counters"] = counters_to_dict(res.counters);
+        if (p.record_timing) {
+          py::array_t<TileWork> recs(static_cast<py::ssize_t>(res.timing_records.size()));
+          std::copy(res.timing_records.begin(), res.timing_records.end(), recs.mutable_data());
+          out["timing_records"] = recs;
+        }
+        if (export_samples) {
+          const py::ssize_t spp = table.spp();
+          py::array_t<float> depth({static_cast<py::ssize_t>(p.height), static_cast<py::ssize_t>(p.width), spp});
+          py::array_t<std::int32_t> tri({static_cast<py::ssize_t>(p.height), static_cast<py::ssize_t>(p.width), spp});
+          std::copy(res.sample_depth.begin(), res.sample_depth.end(), depth.mutable_data());
+          std::copy(res.sample_triangle.begin(), res.sample_triangle.end(), tri.mutable_data());
+          out["sample_depth"] = depth;
+          out["sample_triangle"] = tri;
+        }
+        return out;
+      },
+      py::arg("params"), py::arg("v0"), py::arg("v1"), py::arg("colors"), py::arg("samples"),
+      py::arg("lens_index"), py::arg("lens_uv"), py::arg("export_samples") = false, py::arg("uvs") = py::none(),
+      py::arg("tex_slots") = py::none(), py::arg("textures") = std::vector<FArr>(),
+      "Render pixel-homogeneous triangles; returns {'image', 'counters'[, 'timing_records'][, "
+      "'sample_depth', 'sample_triangle']}. The GIL is released; Ctrl-C interrupts.");
+
+  m.def(
+      "lens_grid_buckets",
+      [](const FArr& samples, int grid) {
+        if (grid < 1 || grid > 64) throw std::invalid_argument("grid: expected 1..64");
+        SampleTable t = make_table(samples, grid, IArr(), FArr());
+        const py::ssize_t P = t.period(), S = t.spp(), C = static_cast<py::ssize_t>(grid) * grid;
+        py::array_t<std::int32_t> order({P, P, S}), counts({P, P, C}), offsets({P, P, C});
+        auto o = order.mutable_unchecked<3>();
+        auto cn = counts.mutable_unchecked<3>();
+        auto of = offsets.mutable_unchecked<3>();
+        for (int y = 0; y < P; ++y)
+          for (int x = 0; x < P; ++x) {
+            const PixelSamples ps = t.pixel(x, y);
+            for (int s = 0; s < S; ++s) o(y, x, s) = ps.cell_order[s];
+            for (int c = 0; c < C; ++c) {
+              of(y, x, c) = ps.cell_offsets[c];
+              cn(y, x, c) = ps.cell_offsets[c + 1] - ps.cell_offsets[c];
+            }
+          }
+        return py::make_tuple(order, counts, offsets);
+      },
+      py::arg("samples"), py::arg("grid"),
+      "Lens-grid buckets (001 Fig. 10): (order (P,P,spp), counts (P,P,G*G), offsets (P,P,G*G)).");
+
+  m.def("counter_docs", []() {
+    py::dict d;
+    for (const auto& info : kCounterInfo)
+      d[py::str(std::string(info.name))] =
+          py::make_tuple(std::string(info.unit), std::string(info.description));
+    return d;
+  });
+
+  m.def("algorithms", []() {
+    py::list l;
+    for (const auto& a : algorithms())
+      l.append(py::make_tuple(a.name, a.description, a.needs_interleaved_table));
+    return l;
+  });
+}
+
+}  // namespace rast5d::bindings

@@ -1,0 +1,96 @@
+// Documented operation costs of every kernel (ops per executed kernel; ADD, MUL, MADD, CMP, MIN,
+// MAX and RCP count one each, 001_3248aaf17c219d5e.txt §6.2). The fast path charges these
+// constants; tests/test_op_costs.py runs each kernel on the counting scalar type and checks that
+// the tallies equal them, and test_invariants checks whole renders in both modes agree.
+// docs/op_costs.md explains each figure.
+#pragma once
+
+#include <cstdint>
+
+namespace rast5d::cost {
+
+// ---- triangle setup (setup/setup.h) ----
+inline constexpr std::uint64_t kSetupMotion = 9;       // dX, dY, dW: 9 SUB
+inline constexpr std::uint64_t kSetupShear = 6;        // static cx, cy: 6 MADD
+inline constexpr std::uint64_t kBoundsPoint = 7;       // RCP, 2 MUL, 2 MIN, 2 MAX
+inline constexpr std::uint64_t kBoundsPointLens = 14;  // RCP, 2 MUL, MADD, 2 MUL, 4 ADD, 2 MIN, 2 MAX
+
+// ---- tile tests (tiletest/) ----
+inline constexpr std::uint64_t kLensVertexBase = 6;     // RCP, 2 MUL, MADD, 2 MUL
+inline constexpr std::uint64_t kLensVertexAxis = 2;     // per axis with a line: RCP, MUL
+inline constexpr std::uint64_t kGapVertex = 4;          // per vertex per axis: 2 MADD, MIN, MAX
+inline constexpr std::uint64_t kGapVertexInFocus = 2;   // 2 CMP
+inline constexpr std::uint64_t kAxisSetGap = 5;         // 5 CMP per gap that is not blocked
+// axis_cells: 1 MADD per finite cut end (= AxisSet::n_cmp); per-sample axis_pass: n_cmp CMP
+inline constexpr std::uint64_t kBoxDisk = 7;            // 2 MIN, 2 MAX, MUL, MADD, CMP
+inline constexpr std::uint64_t kBoxHexagon = 14;        // 4 MUL, 4 MADD, 6 CMP
+inline constexpr std::uint64_t kEdgeSetup = 25;         // q x r, d, line constants, v
+inline constexpr std::uint64_t kEdgeSetupParallel = 17; // d_w == 0: no focus-plane intersection
+inline constexpr std::uint64_t kTangentCorners = 4;     // 4 CMP (0 for parallel edges)
+inline constexpr std::uint64_t kLineAtCorner = 4;       // 4 MADD
+inline constexpr std::uint64_t kLineCellsBase = 7;      // 2 CMP, 2 MUL, 2 MADD, ADD; + rows + 2/cell
+inline constexpr std::uint64_t kEdges2DSetup = 28;      // 3 edges x 3 x (MUL + MADD), det 3, CMP, 6 CMP
+inline constexpr std::uint64_t kTile2D = 9;             // 3 x (2 MADD + CMP)
+inline constexpr std::uint64_t kBBoxTile = 4;           // 4 CMP against the triangle's bounds
+inline constexpr std::uint64_t kOrientation = 45;       // 3 det (9 each), 2 MUL, 4 corners x (2 ADD, 2 CMP)
+inline constexpr std::uint64_t kOracleSimplified = 6;   // per edge: 2 SUB, 3 MUL, CMP (001 Eq. 15, 13)
+inline constexpr std::uint64_t kOracleFull = 18;        // per edge: 4 SUB, 2 x F(a,b) (5 each), 3 MUL, CMP
+inline constexpr std::uint64_t kOracleBudget = 1;       // per triangle: MUL (tiles x tile cost)
+
+// ---- time intervals t̂ and the clip box (intervals/time_interval.h, intervals/clip.h) ----
+inline constexpr std::uint64_t kFormCull = 7;  // SUB, RCP, MUL, 2 CMP, MAX, MIN
+// Per (tile, sub-interval), excluding the forms: 4 edges x (MAX, MIN) against the W-valid
+// interval, 2 x 4 passes x 4 edges x 2 CMP for the hull of the complement, MADD x 2 back to t,
+// MAX + MIN against the clip box, CMP for emptiness.
+inline constexpr std::uint64_t kTimeHull = 8 + 64 + 2 + 2 + 1;
+// 3D: per edge, 3 vertices x 2 ends MADD (distance) + 3 forms.
+inline constexpr std::uint64_t kTimeInterval3D = 4 * (6 + 3 * kFormCull) + kTimeHull;  // 185
+// 5D: 12 MADD per axis (shear at the two lens corners), per edge 12 MADD + 6 forms.
+inline constexpr std::uint64_t kTimeInterval5D = 24 + 4 * (12 + 6 * kFormCull) + kTimeHull;  // 317
+// Per sub-interval setup (tile independent): per end and vertex 3 MADD lerp; 5D: 2 MADD shear
+// slopes (MADD + MUL per axis); the W-valid interval: 3 x (SUB for each end) + 3 forms.
+inline constexpr std::uint64_t kSubSetup3D = 2 * 9 + 3 * (2 + kFormCull);      // 45
+inline constexpr std::uint64_t kSubSetup5D = kSubSetup3D + 2 * 3 * 4;          // 69
+// Clip box applied to one axis' interval list: MAX + MIN per interval.
+inline constexpr std::uint64_t kClipInterval = 2;
+// Moving triangles in TILE: per active sub-interval and tile, t̂_k to time strata (2 MUL); per
+// selected sample, t against t̂_k (2 CMP) and against each clipped lens axis (2 CMP).
+inline constexpr std::uint64_t kTimeStrata = 2;
+inline constexpr std::uint64_t kSampleTime = 2;
+inline constexpr std::uint64_t kSampleClipAxis = 2;
+
+// ---- sample test (sampletest/sample_test.h) ----
+inline constexpr std::uint64_t kEdges = 18;      // 6 MADD relative coords, 3x(2 MUL + SUB), det 3
+inline constexpr std::uint64_t kSigns = 4;       // sign(det), 3 sign(e_i)
+inline constexpr std::uint64_t kShear = 6;       // 6 MADD
+inline constexpr std::uint64_t kLerp = 9;        // 9 MADD
+inline constexpr std::uint64_t kShearMoving = 12;  // 6 MADD coefficients + 6 MADD shear
+inline constexpr std::uint64_t kTieBreak = 12;   // per zero edge: 4 MADD, 2x(2 MUL + SUB), 2 CMP
+
+inline constexpr std::uint64_t kInside2D = kEdges + kSigns;                        // 22
+inline constexpr std::uint64_t kInside3D = kLerp + kEdges + kSigns;                // 31
+inline constexpr std::uint64_t kInside4D = kShear + kEdges + kSigns;               // 28
+inline constexpr std::uint64_t kInside5D = kLerp + kShearMoving + kEdges + kSigns;  // 43
+
+// ---- covered samples (backend/sample_backend.h; same for all algorithms; ops.interp) ----
+inline constexpr std::uint64_t kDepth = 6;      // 2 ADD, RCP, MUL, MADD, CMP (near plane)
+inline constexpr std::uint64_t kDepthTest = 1;  // CMP against the depth buffer
+inline constexpr std::uint64_t kColor = 13;     // RCP, 3 MUL, 3x(MUL + 2 MADD)
+
+// ---- depth intervals ẑ (intervals/depth_interval.h) ----
+// Documented costs of ẑ. Vertex test (the moving box in W over t̂; W is linear in t): per vertex
+// 2 MADD (ends) + 2 MIN + 2 MAX, near clamp MAX, z = 1 - near / W twice (RCP + MADD).
+inline constexpr std::uint64_t kZhatVertex = 3 * 6 + 1 + 2 + 2;  // 23
+// Moving planes, per triangle: t = 1 vertices 9 ADD; per base time 6 SUB (edges), 3 x (MUL +
+// MADD) normal, MUL + 2 MADD offset, 3 x 3 MADD distances, 2 MAX + 2 MIN.
+inline constexpr std::uint64_t kZhatPlaneSetup = 9 + 2 * (6 + 6 + 3 + 9 + 4);  // 65
+// Per plane (4 planes) and tile: per lens corner (u, v) [1 or 4]: per screen corner 2 MADD + 2 CMP
+// (+2 MADD ray offset with lens), the lens term (4 MUL + 2 MADD with lens), 2 MADD time terms;
+// per (lens, screen) corner RCP + 2 x (MUL + MIN/MAX); MIN + MAX into the bound.
+inline constexpr std::uint64_t kZhatPlaneTile3D = 4 * (1 * (4 * 4 + 0 + 2) + 4 * 5 + 2);  // 160
+inline constexpr std::uint64_t kZhatPlaneTile5D = 4 * (4 * (4 * 6 + 6 + 2) + 16 * 5 + 2);  // 840
+inline constexpr std::uint64_t zhat_plane_cost(bool lens) { return lens ? kZhatPlaneTile5D : kZhatPlaneTile3D; }
+// ẑ against the HiZ tile (backend/zcull.h): 2 CMP (zmax, zmin).
+inline constexpr std::uint64_t kHiZCompare = 2;
+
+}  // namespace rast5d::cost

@@ -1,0 +1,91 @@
+// Triangle setup (STYLE.md: setup builds per-triangle work, traversal consumes it).
+//
+// Contract: setup_triangle() fills a TriSetup whose pixel bounds contain every pixel with a sample
+// the exact sample test can hit, for every (u, v) in [-1, 1]^2 and t in [0, 1]. It classifies the
+// triangle as 2D/3D/4D/5D (the cheapest exact sample kernel) and prepares the constants of that
+// kernel. When a vertex can be behind the near plane, static triangles are bounded through their
+// near-clipped polygon and moving ones fall back to full-screen bounds (counted).
+#pragma once
+
+#include <cstdint>
+
+#include "core/counters.h"
+#include "core/params.h"
+#include "core/sample_table.h"
+#include "sampletest/sample_test.h"
+
+namespace rast5d {
+
+// Per-render constants shared by every stage.
+struct FrameConst {
+  int width = 0, height = 0;
+  bool lens_active = false;  // camera has a blur and the table has a lens dimension
+  bool time_active = false;  // the table has a time dimension
+  // float constants of the sample kernels (see sampletest/sample_test.h): cx = kx * W + neg_kx_f
+  float kx = 0, ky = 0, neg_kx_f = 0, neg_ky_f = 0, focus = 1, neg_near = 0;
+  // double versions for tile tests
+  double kx_d = 0, ky_d = 0, focus_d = 1, near_d = 0;
+};
+
+FrameConst make_frame_const(const RenderParams& p);
+
+// What every stage of one frame reads: the parameters, their derived constants, the sample table.
+struct Frame {
+  const RenderParams& p;
+  const FrameConst& fc;
+  const SampleTable& table;
+};
+
+struct TriSetup {
+  std::uint32_t index = 0;  // submission order
+  DimClass cls = DimClass::k2D;
+  bool moving = false;
+  bool defocused = false;
+  bool near_clipped = false;  // static, crosses the near plane: footprint is the clipped polygon
+  bool full_bounds = false;   // moving and may cross the near plane: full-screen bounds
+  // Sample-kernel data: pixel-homogeneous vertices at t = 0, deltas to t = 1, static shear.
+  float X[3], Y[3], W[3];
+  float dX[3], dY[3], dW[3];
+  float cx[3], cy[3];
+  float color[3][3];
+  // Conservative pixel bounds, clipped to the image: [bx0, bx1) x [by0, by1), and the unrounded
+  // bounds they came from (before widening and clipping).
+  int bx0 = 0, by0 = 0, bx1 = 0, by1 = 0;
+  double lo_x = 0, hi_x = 0, lo_y = 0, hi_y = 0;
+  // Footprint for tile tests, in double: a convex polygon with W >= near (static triangles: the
+  // triangle or its near-clipped polygon, 3 or 4 vertices; moving triangles: poly_n = 0).
+  int poly_n = 0;
+  double poly[4][3];
+};
+
+// Returns false when the triangle is culled (the reason is counted).
+// Operations are charged to c[ops_setup] (exact mode: tallied by the counting type).
+template <class A>
+bool setup_triangle(const float* v0, const float* v1, const float* col, std::uint32_t index,
+                    const RenderParams& p, const FrameConst& fc, TriSetup& out, Counters& c);
+
+// The x-extent of the conservative bounds of point (X, Y, W) over the lens square: the bounds
+// kernel, exposed for the op-cost tests. Cost: cost::kBoundsPointLens (or kBoundsPoint).
+template <class F>
+inline void bounds_point(F X, F Y, F W, F neg_focus, F kx, F ky, bool lens, F& minx, F& maxx,
+                         F& miny, F& maxy) {
+  const F r = rcp(W);
+  const F px = X * r;
+  const F py = Y * r;
+  if (lens) {
+    const F b = madd(neg_focus, r, F(1.0f));
+    const F ex = vabs(b * kx);
+    const F ey = vabs(b * ky);
+    minx = vmin(minx, px - ex);
+    maxx = vmax(maxx, px + ex);
+    miny = vmin(miny, py - ey);
+    maxy = vmax(maxy, py + ey);
+  } else {
+    minx = vmin(minx, px);
+    maxx = vmax(maxx, px);
+    miny = vmin(miny, py);
+    maxy = vmax(maxy, py);
+  }
+}
+
+}  // namespace rast5d

@@ -1,0 +1,303 @@
+#include "traversal/render.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <exception>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+
+#include "setup/setup.h"
+#include "traversal/traversal.h"
+
+namespace rast5d {
+
+std::vector<AlgorithmEntry> algorithms() {
+  std::vector<AlgorithmEntry> out;
+  for (const auto& [name, info] : TraversalRegistry::entries())
+    out.push_back({name, info.description, info.needs_interleaved_table});
+  return out;
+}
+
+void validate_frame_params(const RenderParams& p) {
+  auto fail = [](const std::string& m) { throw std::invalid_argument(m); };
+  if (p.width < 1 || p.width > 16384) fail("width: expected 1..16384, got " + std::to_string(p.width));
+  if (p.height < 1 || p.height > 16384)
+    fail("height: expected 1..16384, got " + std::to_string(p.height));
+  if (p.tile_size != 1 && p.tile_size != 2 && p.tile_size != 4 && p.tile_size != 8)
+    fail("tile_size: expected 1, 2, 4 or 8, got " + std::to_string(p.tile_size));
+  if (p.bin_size < 8 || p.bin_size % 8 != 0 || p.bin_size > 4096)
+    fail("bin_size: expected a multiple of 8 in 8..4096, got " + std::to_string(p.bin_size));
+  if (p.threads < 0 || p.threads > 1024)
+    fail("threads: expected 0 (all) .. 1024, got " + std::to_string(p.threads));
+  if (!(p.focus_w > 0)) fail("focus_w: expected > 0, got " + std::to_string(p.focus_w));
+  if (!(p.near_w > 0)) fail("near_w: expected > 0, got " + std::to_string(p.near_w));
+  if (p.time_splits < 1 || p.time_splits > 16 || p.time_strata < 1 || p.time_strata > 64 ||
+      p.time_strata % p.time_splits != 0)  // each time stratum lies in one sub-interval
+    fail("time_splits/time_strata: expected 1..16 / 1..64 with time_strata a multiple of time_splits, got " +
+         std::to_string(p.time_splits) + " / " + std::to_string(p.time_strata));
+  if (p.shading_mode < 0 || p.shading_mode > 4)
+    fail("shading_mode: expected 0..4, got " + std::to_string(p.shading_mode));
+  if (p.shading_cache_entries < 1 || p.shading_cache_entries > (1 << 24))
+    fail("shading_cache_entries: expected 1..16777216, got " + std::to_string(p.shading_cache_entries));
+  if (p.shading_grid < 1 || p.shading_grid > 16)
+    fail("shading_grid: expected 1..16, got " + std::to_string(p.shading_grid));
+  if (p.tex_count < 0 || p.tex_count > kMaxTexSlots)
+    fail("tex_count: expected 0..4, got " + std::to_string(p.tex_count));
+  if (p.tex_filter < 0 || p.tex_filter > 1) fail("tex_filter: expected 0..1, got " + std::to_string(p.tex_filter));
+  if (p.tex_layout < 0 || p.tex_layout > 2) fail("tex_layout: expected 0..2, got " + std::to_string(p.tex_layout));
+  const int lb = p.tex_cache_line_bytes;
+  if (lb < 4 || lb > 4096 || (lb & (lb - 1))) fail("tex_cache_line_bytes: expected a power of two in 4..4096");
+  if (p.tex_cache_bytes < lb || p.tex_cache_bytes % lb)
+    fail("tex_cache_bytes: expected a positive multiple of the line size, got " + std::to_string(p.tex_cache_bytes));
+  if (p.tex_cache_ways < 0 || (p.tex_cache_ways && (p.tex_cache_bytes / lb) % p.tex_cache_ways))
+    fail("tex_cache_ways: expected 0 or a divisor of the number of lines, got " + std::to_string(p.tex_cache_ways));
+  if (p.tex_cache_count < 1 || p.tex_cache_count > 1024)
+    fail("tex_cache_count: expected 1..1024, got " + std::to_string(p.tex_cache_count));
+}
+
+void validate_params(const RenderParams& p, const SampleTable& table) {
+  auto fail = [](const std::string& m) { throw std::invalid_argument(m); };
+  validate_frame_params(p);
+  const auto& reg = TraversalRegistry::entries();
+  auto it = reg.find(p.algorithm);
+  if (it == reg.end()) {
+    std::string names;
+    for (const auto& kv : reg) names += (names.empty() ? "" : ", ") + kv.first;
+    fail("algorithm: unknown '" + p.algorithm + "' (known: " + names + ")");
+  }
+  if (it->second.needs_interleaved_table && table.n_lens() == 0)
+    fail("algorithm: '" + p.algorithm +
+         "' needs an interleaved sample table (SampleTable.interleaved), got a table without "
+         "discrete lens coordinates");
+  if (p.lens_grid != table.grid())
+    fail("lens_grid: the sample table was bucketed for G=" + std::to_string(table.grid()) +
+         ", got " + std::to_string(p.lens_grid));
+}
+
+// The per-render shading constants: textures with mip chains and addresses, per-triangle texture
+// slots, uvs, analytic uv derivatives and levels of detail (backend/texture.h).
+static void build_shade_frame(const RenderParams& p, const SceneArrays& scene, const std::vector<TriSetup>& setups,
+                              const std::vector<char>& alive, int n_bins, ShadeFrame& sf) {
+  sf.mode = static_cast<ShadingMode>(p.shading_mode);
+  sf.grid = p.shading_grid;
+  sf.cache_entries = p.shading_cache_entries;
+  sf.filter = static_cast<TexFilter>(p.tex_filter);
+  sf.line_bytes = p.tex_cache_line_bytes;
+  const bool have_tex = scene.uvs && scene.tex_slots && !scene.textures.empty();
+  sf.tex_count = have_tex ? p.tex_count : 0;
+  sf.sample_dist_tex = !scene.textures.empty() ? p.tex_sample_dist : -1;
+  if (sf.sample_dist_tex >= static_cast<int>(scene.textures.size()))
+    throw std::invalid_argument("tex_sample_dist: no texture " + std::to_string(sf.sample_dist_tex));
+  if (!sf.textured()) return;
+  for (const auto& t : scene.textures) sf.textures.add(t.data, t.height, t.width, t.channels);
+  sf.textures.layout(static_cast<TexLayout>(p.tex_layout));
+  if (sf.mode != ShadingMode::kNone) sf.streams.assign(static_cast<std::size_t>(n_bins), {});
+  if (sf.tex_count == 0) return;
+  const std::size_t n = static_cast<std::size_t>(scene.n);
+  sf.uvs.assign(scene.uvs, scene.uvs + n * 6);
+  sf.tex_ids.assign(scene.tex_slots, scene.tex_slots + n * kMaxTexSlots);
+  for (std::size_t i = 0; i < sf.tex_ids.size(); ++i) {
+    std::int32_t& id = sf.tex_ids[i];
+    if (static_cast<int>(i % kMaxTexSlots) >= sf.tex_count) {
+      id = -1;
+    } else if (id < -1 || id >= sf.textures.size()) {
+      throw std::invalid_argument("tex_slots: triangle " + std::to_string(i / kMaxTexSlots) + " uses texture " +
+                                  std::to_string(id) + ", expected -1.." + std::to_string(sf.textures.size() - 1));
+    }
+  }
+  sf.jac.assign(n * 4, 0.0);
+  sf.lod.assign(n * kMaxTexSlots, 0.0f);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!alive[i]) continue;
+    const TriSetup& t = setups[i];
+    uv_jacobian(t.X, t.Y, t.W, &sf.uvs[i * 6], p.near_w, &sf.jac[i * 4]);
+    for (int k = 0; k < kMaxTexSlots; ++k) {
+      const int id = sf.tex_ids[i * kMaxTexSlots + k];
+      if (id >= 0) {
+        const MipLevel& l0 = sf.textures[id].levels[0];
+        sf.lod[i * kMaxTexSlots + k] = lod_from_jacobian(&sf.jac[i * 4], l0.w, l0.h);
+      }
+    }
+  }
+}
+
+RenderResult render(const RenderParams& p, const SceneArrays& scene, const SampleTable& table,
+                    const std::function<bool()>& interrupted, bool export_samples) {
+  validate_params(p, table);
+  const FrameConst fc = make_frame_const(p);
+  const int n_threads = p.threads > 0
+                            ? p.threads
+                            : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  RenderResult result;
+  result.image.assign(static_cast<std::size_t>(p.width) * p.height * 3, 0.0f);
+  if (export_samples) {
+    const std::size_t n = static_cast<std::size_t>(p.width) * p.height * table.spp();
+    result.sample_depth.assign(n, 0.0f);
+    result.sample_triangle.assign(n, -1);
+  }
+
+  // ---- setup: static partition over triangles, each thread its own counters ----
+  std::vector<TriSetup> setups(static_cast<std::size_t>(scene.n));
+  std::vector<char> alive(static_cast<std::size_t>(scene.n), 0);
+  std::vector<Counters> setup_counters(n_threads);
+  {
+    auto work = [&](int t) {
+      const int lo = static_cast<int>(static_cast<long long>(scene.n) * t / n_threads);
+      const int hi = static_cast<int>(static_cast<long long>(scene.n) * (t + 1) / n_threads);
+      for (int i = lo; i < hi; ++i) {
+        const float* v0 = scene.v0 + static_cast<std::size_t>(i) * 9;
+        const float* v1 = scene.v1 + static_cast<std::size_t>(i) * 9;
+        const float* col = scene.colors + static_cast<std::size_t>(i) * 9;
+        alive[i] = p.exact_ops ? setup_triangle<ExactArith>(v0, v1, col, i, p, fc, setups[i],
+                                                            setup_counters[t])
+                               : setup_triangle<FastArith>(v0, v1, col, i, p, fc, setups[i],
+                                                           setup_counters[t]);
+      }
+    };
+    std::vector<std::thread> pool;
+    for (int t = 1; t < n_threads; ++t) pool.emplace_back(work, t);
+    work(0);
+    for (auto& th : pool) th.join();
+  }
+  std::vector<std::uint32_t> live;
+  live.reserve(scene.n);
+  for (int i = 0; i < scene.n; ++i)
+    if (alive[i]) live.push_back(static_cast<std::uint32_t>(i));
+
+  // ---- binning: each bin lists the triangles overlapping it, in submission order ----
+  const int B = p.bin_size;
+  const int bins_x = (p.width + B - 1) / B, bins_y = (p.height + B - 1) / B;
+  const int n_bins = bins_x * bins_y;
+  std::vector<std::vector<std::uint32_t>> bin_lists(n_bins);
+  for (std::uint32_t i : live) {
+    const TriSetup& t = setups[i];
+    for (int by = t.by0 / B; by <= (t.by1 - 1) / B; ++by)
+      for (int bx = t.bx0 / B; bx <= (t.bx1 - 1) / B; ++bx) bin_lists[by * bins_x + bx].push_back(i);
+  }
+
+  ShadeFrame shade_frame;
+  build_shade_frame(p, scene, setups, alive, n_bins, shade_frame);
+
+  // ---- traversal: workers take whole bins ----
+  // Timing records per bin: each bin is rasterized by exactly one worker, so its stream is
+  // written without locks and its content does not depend on the thread count.
+  std::vector<std::vector<TileWork>> bin_records(p.record_timing ? n_bins : 0);
+  // The texture-cache line stream length after each record, so the cache replay can hand every
+  // record its own misses (the cache is simulated after the render, in bin order).
+  const bool track_stream_ends = p.record_timing && !shade_frame.streams.empty();
+  std::vector<std::vector<std::uint32_t>> bin_stream_ends(track_stream_ends ? n_bins : 0);
+  std::vector<ThreadState> states(n_threads);
+  for (auto& s : states) s.shade.attach(&shade_frame, &s.counters);
+  std::atomic<int> next_bin{0};
+  std::atomic<bool> cancel{false};
+  std::atomic<int> running{n_threads};
+  std::mutex mu;
+  std::condition_variable cv;
+  std::exception_ptr error;
+  const Frame frame{p, fc, table};
+  auto worker = [&](int t) {
+    try {
+      ThreadState& ts = states[t];
+      auto algo = TraversalRegistry::entries().at(p.algorithm).create(frame, ts, p.exact_ops);
+      for (;;) {
+        const int b = next_bin.fetch_add(1);
+        if (b >= n_bins || cancel.load(std::memory_order_relaxed)) break;
+        const int bx = b % bins_x, by = b / bins_x;
+        BinRect r{bx * B, by * B, std::min(p.width, (bx + 1) * B), std::min(p.height, (by + 1) * B)};
+        ts.buffers.begin(r, table.spp());
+        ts.shade.begin_bin(b);
+        for (std::uint32_t i : bin_lists[b]) {
+          if (cancel.load(std::memory_order_relaxed)) break;  // Ctrl-C: stop within one triangle
+          const TriSetup& tri = setups[i];
+          const bool home = (tri.by0 / B) * bins_x + (tri.bx0 / B) == b;
+          const TileWork before = p.record_timing ? work_from_counters(ts.counters) : TileWork{};
+          algo->rasterize(tri, r, home);
+          if (!p.record_timing) continue;
+          TileWork w = work_from_counters(ts.counters).since(before);
+          w.bin = b;
+          w.triangles = home ? 1u : 0u;  // setup is done once, charged in the triangle's first bin
+          bin_records[b].push_back(w);
+          if (track_stream_ends)
+            bin_stream_ends[b].push_back(static_cast<std::uint32_t>(shade_frame.streams[b].size()));
+        }
+        ts.shade.close_visit();  // algorithms end their visits; this only guards the contract
+        ts.buffers.resolve(result.image.data(), p.width);
+        if (export_samples)
+          ts.buffers.export_samples(result.sample_depth.data(), result.sample_triangle.data(), p.width);
+      }
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(mu);
+      if (!error) error = std::current_exception();
+      cancel = true;
+    }
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      --running;
+    }
+    cv.notify_all();
+  };
+  std::vector<std::thread> pool;
+  for (int t = 0; t < n_threads; ++t) pool.emplace_back(worker, t);
+  {
+    std::unique_lock<std::mutex> lock(mu);
+    while (running.load() > 0) {
+      cv.wait_for(lock, std::chrono::milliseconds(20));
+      if (running.load() == 0) break;
+      lock.unlock();
+      const bool stop = interrupted && interrupted();
+      lock.lock();
+      if (stop) {
+        cancel = true;
+        result.interrupted = true;
+      }
+    }
+  }
+  for (auto& th : pool) th.join();
+  if (error) std::rethrow_exception(error);
+
+  for (const auto& c : setup_counters) result.counters.merge(c);
+  for (const auto& s : states) result.counters.merge(s.counters);
+  result.counters[Counter::frame_pixels] = static_cast<std::uint64_t>(p.width) * p.height;
+  result.counters[Counter::frame_samples] =
+      static_cast<std::uint64_t>(p.width) * p.height * table.spp();
+  result.counters[Counter::frame_bins] = static_cast<std::uint64_t>(n_bins);
+  if (shade_frame.textured() && shade_frame.mode != ShadingMode::kNone && !result.interrupted) {
+    const std::uint64_t lines = static_cast<std::uint64_t>(p.tex_cache_bytes / p.tex_cache_line_bytes);
+    std::vector<std::vector<std::uint32_t>> seg_misses;
+    const CacheStats cs = simulate_texture_caches(shade_frame.streams, p.tex_cache_count, lines,
+                                                  static_cast<std::uint64_t>(p.tex_cache_ways),
+                                                  track_stream_ends ? &bin_stream_ends : nullptr,
+                                                  track_stream_ends ? &seg_misses : nullptr);
+    if (track_stream_ends)  // each record's texture misses and the line bytes they fetch (docs/timing.md)
+      for (std::size_t b = 0; b < bin_records.size(); ++b)
+        for (std::size_t k = 0; k < bin_records[b].size(); ++k) {
+          bin_records[b][k].tex_misses += seg_misses[b][k];
+          bin_records[b][k].memory_bytes += static_cast<std::uint64_t>(seg_misses[b][k]) * p.tex_cache_line_bytes;
+        }
+    Counters& c = result.counters;
+    c[Counter::tex_cache_accesses] = cs.accesses;
+    c[Counter::tex_cache_hits] = cs.hits;
+    c[Counter::tex_cache_misses] = cs.misses;
+    c[Counter::tex_cache_misses_cold] = cs.cold;
+    c[Counter::tex_cache_misses_capacity] = cs.capacity;
+    c[Counter::tex_cache_misses_conflict] = cs.conflict;
+    c[Counter::tex_cache_bytes_fetched] = cs.misses * static_cast<std::uint64_t>(p.tex_cache_line_bytes);
+  }
+  if (p.record_timing && !result.interrupted) {
+    std::size_t total = static_cast<std::size_t>(scene.n) - live.size();
+    for (const auto& v : bin_records) total += v.size();
+    result.timing_records.reserve(total);
+    // Culled triangles still pass through setup: setup-only records, before the bins.
+    TileWork culled;
+    culled.bin = -1;
+    culled.triangles = 1;
+    result.timing_records.insert(result.timing_records.end(), static_cast<std::size_t>(scene.n) - live.size(), culled);
+    for (const auto& v : bin_records) result.timing_records.insert(result.timing_records.end(), v.begin(), v.end());
+  }
+  return result;
+}
+
+}  // namespace rast5d

@@ -1,0 +1,65 @@
+// The render orchestrator: setup -> binning -> per-bin traversal on worker threads -> resolve.
+//
+// Contract: the image, the per-sample depths and the counters do not depend on the thread count
+// (bins are owned by one thread at a time and triangles reach a bin in submission order).
+#pragma once
+
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/counters.h"
+#include "core/params.h"
+#include "core/sample_table.h"
+#include "timing/timing.h"
+
+namespace rast5d {
+
+struct SceneArrays {
+  int n = 0;
+  const float* v0 = nullptr;      // n x 3 x 3: (X_h, Y_h, W) per vertex at t = 0
+  const float* v1 = nullptr;      // same at t = 1
+  const float* colors = nullptr;  // n x 3 x 3 linear RGB per vertex
+  // Texturing (optional): uvs n x 3 x 2; tex_slots n x 4 texture indices (-1 unused); textures.
+  const float* uvs = nullptr;
+  const std::int32_t* tex_slots = nullptr;
+  struct TextureView {
+    const float* data;
+    int height, width, channels;
+  };
+  std::vector<TextureView> textures;
+};
+
+struct RenderResult {
+  std::vector<float> image;  // height x width x 3, linear, row 0 at the top
+  Counters counters;
+  bool interrupted = false;
+  // Per-sample depth (z = 1 - near / W, +inf where empty) and winning triangle index (-1 where
+  // empty), height x width x spp; filled only when requested.
+  std::vector<float> sample_depth;
+  std::vector<std::int32_t> sample_triangle;
+  // Timing model input (p.record_timing): one record per culled triangle (setup only, bin -1),
+  // then per screen bin in raster order one record per (triangle, bin) visit in submission order.
+  // Independent of the thread count.
+  std::vector<TileWork> timing_records;
+};
+
+// Throws std::invalid_argument for bad parameters. `interrupted` is polled from the calling
+// thread every few milliseconds while workers run; when it returns true the render stops and
+// RenderResult::interrupted is set.
+RenderResult render(const RenderParams& p, const SceneArrays& scene, const SampleTable& table,
+                    const std::function<bool()>& interrupted, bool export_samples = false);
+
+void validate_params(const RenderParams& p, const SampleTable& table);
+// The checks that need no sample table (image size, tile and bin sizes, intervals, shading...).
+void validate_frame_params(const RenderParams& p);
+
+// (name, description, needs an interleaved table) of every registered traversal algorithm.
+struct AlgorithmEntry {
+  std::string name, description;
+  bool needs_interleaved_table;
+};
+std::vector<AlgorithmEntry> algorithms();
+
+}  // namespace rast5d

@@ -1,0 +1,351 @@
+// The sample pipeline: the exact sample test and the backend, shared by every traversal algorithm
+// (traversal.h). An algorithm hands it candidate samples; it runs the inside test of the triangle's
+// class (sampletest/) and hands covered samples to the backend (backend/sample_backend.h: clip
+// box, depth, depth test, colour, texturing, shading visit). Counters: raster.*,
+// ops.sample_inside.
+//
+// Contract: for one triangle the pipeline's results and counters depend only on the set of
+// samples pushed, not on how they are batched (test(), push(), push_pixel(), push_pixel_masked())
+// or on the arithmetic path: the fast path's vectorised kernels perform exactly the float
+// operations of the scalar kernels and charge the documented costs (core/costs.h) that the
+// counting path tallies.
+#pragma once
+
+#include <algorithm>
+#include <cstring>
+#include <vector>
+
+#include "backend/bin_buffers.h"
+#include "backend/sample_backend.h"
+#include "backend/shading.h"
+#include "core/arith.h"
+#include "core/costs.h"
+#include "core/counters.h"
+#include "core/params.h"
+#include "core/sample_table.h"
+#include "sampletest/inside.h"
+#include "sampletest/sample_test.h"
+#include "setup/setup.h"
+
+namespace rast5d {
+
+// Per worker thread: counters, the screen bin's buffers, the shading state.
+struct ThreadState {
+  Counters counters;
+  BinBuffers buffers;
+  ShadeState shade;  // the open shading visit, shading cache, texture stream (backend/shading.h)
+};
+
+// Two ways in: test() / test_sheared() for one sample, or the batch protocol
+//   begin(tri) | begin_sheared(tri, Xs, Ys, stride);  push(px, py, ps, s)... | push_pixel(...);  flush()
+// A batch holds candidate samples of one triangle (any pixels; each sample at most once). On the
+// fast path the batch is evaluated by vectorised straight-line kernels performing exactly the
+// float operations of the scalar kernels (bit-identical results, same counts); on the counting
+// path push() tests immediately with the counting scalar type. begin() flushes a pending batch.
+template <class A>
+class SamplePipeline {
+ public:
+  using F = typename A::f32;
+
+  SamplePipeline(const Frame& f, ThreadState& ts)
+      : f_(f), c_(ts.counters), sh_(ts.shade), backend_(f, ts.counters, ts.buffers, ts.shade), cap_(std::max(kBatch, f.table.spp())) {
+    for (auto* v : {&gx_, &gy_, &gu_, &gv_, &gt_, &bdet_}) v->resize(cap_);
+    for (auto* v : {&bpx_, &bpy_, &bs_, &bl_}) v->resize(cap_);
+    be_.resize(3 * static_cast<std::size_t>(cap_));
+    flags_.assign(cap_ + 8, 0);
+  }
+
+  // Test canonical sample s of pixel (px, py) against tri with the kernel of tri's class.
+  inline void test(const TriSetup& tri, int px, int py, const PixelSamples& ps, int s) {
+    test_values(tri, F(static_cast<float>(px) + ps.x[s]), F(static_cast<float>(py) + ps.y[s]), F(ps.u[s]),
+                F(ps.v[s]), F(ps.t[s]), px, py, s);
+  }
+
+  // Test with static vertices already sheared to the sample's (discrete) lens coordinate: the 2D
+  // kernel. Xs = madd(u_i, cx, X) computed with the same float operations as the 4D kernel, so the
+  // result is bit-identical to test().
+  inline void test_sheared(const TriSetup& tri, const float Xs[3], const float Ys[3], int px, int py,
+                           const PixelSamples& ps, int s) {
+    test_sheared_values(tri, Xs, Ys, F(static_cast<float>(px) + ps.x[s]), F(static_cast<float>(py) + ps.y[s]),
+                        px, py, s);
+  }
+
+  // ---- batch protocol ----
+  inline void begin(const TriSetup& tri) {
+    flush();
+    tri_ = &tri;
+    sheared_ = false;
+    stride_ = 0;
+  }
+  // Static triangle pre-sheared to discrete lens coordinates: lens_stride 0 = every sample uses
+  // Xs/Ys; 3 = sample s uses Xs + 3 * lens_index[s] (interleaved tables).
+  inline void begin_sheared(const TriSetup& tri, const float* Xs, const float* Ys, int lens_stride) {
+    flush();
+    tri_ = &tri;
+    sheared_ = true;
+    xs_ = Xs, ys_ = Ys, stride_ = lens_stride;
+  }
+  inline void push(int px, int py, const PixelSamples& ps, int s) {
+    if constexpr (A::counting) {
+      if (!sheared_) {
+        test(*tri_, px, py, ps, s);
+      } else {
+        const int off = stride_ ? stride_ * ps.lens_index[s] : 0;
+        test_sheared(*tri_, xs_ + off, ys_ + off, px, py, ps, s);
+      }
+    } else {
+      if (n_ == cap_) flush();
+      const int i = n_++;
+      gx_[i] = static_cast<float>(px) + ps.x[s];
+      gy_[i] = static_cast<float>(py) + ps.y[s];
+      gu_[i] = ps.u[s], gv_[i] = ps.v[s], gt_[i] = ps.t[s];
+      bpx_[i] = px, bpy_[i] = py, bs_[i] = s;
+      if (stride_) bl_[i] = ps.lens_index[s];
+    }
+  }
+  // Every sample of pixel (px, py).
+  inline void push_pixel(int px, int py, const PixelSamples& ps) {
+    const int spp = f_.table.spp();
+    if constexpr (A::counting) {
+      for (int s = 0; s < spp; ++s) push(px, py, ps, s);
+    } else if (spp >= 32) {
+      run_pixel(px, py, ps, nullptr, spp);  // large enough to be its own batch
+    } else {
+      if (n_ + spp > cap_) flush();
+      const int i0 = n_;
+      const float fx = static_cast<float>(px), fy = static_cast<float>(py);
+      gather_pixel(fx, fy, ps, spp, i0);
+      for (int s = 0; s < spp; ++s) bpx_[i0 + s] = px, bpy_[i0 + s] = py, bs_[i0 + s] = s;
+      if (stride_)
+        for (int s = 0; s < spp; ++s) bl_[i0 + s] = ps.lens_index[s];
+      n_ += spp;
+    }
+  }
+  // The samples s of pixel (px, py) with sel[s] != 0 (n_sel of them). With enough samples per
+  // pixel the fast path evaluates the kernel for the whole pixel in one vectorised pass and keeps
+  // the selected lanes (predication, as SIMD hardware would); only the selected samples are tested,
+  // counted and shaded, so the results and counts equal pushing them one by one.
+  // idx[0..n_sel) lists the selected samples.
+  inline void push_pixel_masked(int px, int py, const PixelSamples& ps, const std::uint8_t* sel, const int* idx,
+                                int n_sel) {
+    if constexpr (!A::counting) {
+      const int spp = f_.table.spp();
+      if (spp >= 32 && 3 * n_sel >= spp) {
+        run_pixel(px, py, ps, sel, n_sel);
+        return;
+      }
+    }
+    for (int i = 0; i < n_sel; ++i) push(px, py, ps, idx[i]);
+  }
+
+  // Depth-test switches set by z-culling (backend/zcull.h, backend/sample_backend.h). Flush before
+  // changing them: they apply to the samples evaluated by the next flush.
+  void set_depth_mode(bool skip_depth_reads, bool query) {
+    flush();
+    backend_.set_depth_mode(skip_depth_reads, query);
+  }
+
+  inline void flush() {
+    if constexpr (!A::counting) {
+      if (n_ > 0) run_batch(false);
+      n_ = 0;
+    }
+  }
+
+  // The end of a shading visit (backend/shading.h): every sample pushed since the previous end_visit()
+  // belongs to one visit, whose shading work is counted now. Algorithms call it when they leave a
+  // screen tile (or finish a pass) for the current triangle, and always before rasterize() returns.
+  // Without a shading model (mode none) it does nothing, not even flush(): callers still flush.
+  inline void end_visit() {
+    if (!sh_.counting()) return;
+    flush();
+    sh_.close_visit();
+  }
+
+ private:
+  static constexpr Counter kTestedByClass[4] = {
+      Counter::raster_samples_tested_2d, Counter::raster_samples_tested_3d,
+      Counter::raster_samples_tested_4d, Counter::raster_samples_tested_5d};
+  static constexpr int kBatch = 1024;  // small enough for the batch to stay in L1/L2
+
+  inline void test_values(const TriSetup& tri, F sx, F sy, F u, F v, F t, int px, int py, int s) {
+    F X[3], Y[3], W[3], e[3], det;
+    int n_ties;
+    const bool covered = inside_test(tri, tri.cls, f_.fc, sx, sy, u, v, t, f_.p.backface_cull, X, Y, W, e, det, n_ties);
+    ++c_[kTestedByClass[static_cast<int>(tri.cls)]];
+    finish(tri, covered, e, det, n_ties, px, py, s, kInsideCost[static_cast<int>(tri.cls)]);
+  }
+
+  inline void test_sheared_values(const TriSetup& tri, const float Xs[3], const float Ys[3], F sx, F sy, int px,
+                                  int py, int s) {
+    F X[3], Y[3], W[3], e[3], det;
+    for (int j = 0; j < 3; ++j) X[j] = F(Xs[j]), Y[j] = F(Ys[j]), W[j] = F(tri.W[j]);
+    int n_ties;
+    const bool covered = inside_from_vertices(X, Y, W, sx, sy, f_.p.backface_cull, e, det, n_ties);
+    ++c_[Counter::raster_samples_tested_2d];
+    finish(tri, covered, e, det, n_ties, px, py, s, cost::kInside2D);
+  }
+
+  // One pixel's samples as a batch of their own (no per-sample pixel/index bookkeeping); with sel,
+  // only the selected samples count (fast path only).
+  void run_pixel(int px, int py, const PixelSamples& ps, const std::uint8_t* sel, int n_sel) {
+    const int spp = f_.table.spp();
+    flush();
+    gather_xy(static_cast<float>(px), static_cast<float>(py), ps, spp);
+    uniform_ps_ = &ps;
+    if (stride_)
+      for (int s = 0; s < spp; ++s) bl_[s] = ps.lens_index[s];
+    n_ = spp;
+    uniform_px_ = px, uniform_py_ = py;
+    run_batch(true, sel, n_sel);
+    n_ = 0;
+  }
+
+  static void mask_flags(int n, const std::uint8_t* __restrict sel, std::uint8_t* __restrict flags) {
+    for (int i = 0; i < n; ++i) flags[i] = static_cast<std::uint8_t>(flags[i] * (sel[i] != 0));
+  }
+
+  void gather_xy(float fx, float fy, const PixelSamples& ps, int spp) {
+    float* __restrict gx = gx_.data();
+    float* __restrict gy = gy_.data();
+    const float* __restrict x = ps.x;
+    const float* __restrict y = ps.y;
+    for (int s = 0; s < spp; ++s) gx[s] = fx + x[s], gy[s] = fy + y[s];
+  }
+
+  void gather_pixel(float fx, float fy, const PixelSamples& ps, int spp, int i0) {
+    float* __restrict gx = gx_.data() + i0;
+    float* __restrict gy = gy_.data() + i0;
+    float* __restrict gu = gu_.data() + i0;
+    float* __restrict gv = gv_.data() + i0;
+    float* __restrict gt = gt_.data() + i0;
+    for (int s = 0; s < spp; ++s) {
+      gx[s] = fx + ps.x[s], gy[s] = fy + ps.y[s];
+      gu[s] = ps.u[s], gv[s] = ps.v[s], gt[s] = ps.t[s];
+    }
+  }
+
+  // Evaluate the pending batch (fast path). uniform: the batch is samples 0..n-1 of pixel
+  // (uniform_px_, uniform_py_).
+  void run_batch(bool uniform, const std::uint8_t* sel = nullptr, int n_sel = 0) {
+    uniform_ = uniform;
+    const TriSetup& tri = *tri_;
+    const int n = n_;
+    float* e = be_.data();
+    float* d = bdet_.data();
+    std::uint64_t inside_cost;
+    const float* bu = uniform ? uniform_ps_->u : gu_.data();
+    const float* bv = uniform ? uniform_ps_->v : gv_.data();
+    const float* bt = uniform ? uniform_ps_->t : gt_.data();
+    if (!sheared_) {
+      const int cls = static_cast<int>(tri.cls);
+      const FrameConst& fc = f_.fc;
+      const BatchTri T{tri.X[0],  tri.X[1],  tri.X[2],  tri.Y[0],  tri.Y[1],  tri.Y[2],  tri.W[0],
+                       tri.W[1],  tri.W[2],  tri.cx[0], tri.cx[1], tri.cx[2], tri.cy[0], tri.cy[1],
+                       tri.cy[2], tri.dX[0], tri.dX[1], tri.dX[2], tri.dY[0], tri.dY[1], tri.dY[2],
+                       tri.dW[0], tri.dW[1], tri.dW[2], fc.kx,     fc.neg_kx_f, fc.ky, fc.neg_ky_f};
+      switch (cls) {
+        case 0: batch_edges_2d(n, T, gx_.data(), gy_.data(), e, e + n, e + 2 * n, d); break;
+        case 2: batch_edges_4d(n, T, gx_.data(), gy_.data(), bu, bv, e, e + n, e + 2 * n, d); break;
+        case 1: batch_edges_3d(n, T, gx_.data(), gy_.data(), bt, e, e + n, e + 2 * n, d); break;
+        default: batch_edges_5d(n, T, gx_.data(), gy_.data(), bu, bv, bt, e, e + n, e + 2 * n, d); break;
+      }
+      c_[kTestedByClass[cls]] += static_cast<std::uint64_t>(sel ? n_sel : n);
+      inside_cost = kInsideCost[cls];
+    } else {
+      const float W[3] = {tri.W[0], tri.W[1], tri.W[2]};
+      if (stride_ == 0) {
+        BatchTri T{};
+        T.X0 = xs_[0], T.X1 = xs_[1], T.X2 = xs_[2], T.Y0 = ys_[0], T.Y1 = ys_[1], T.Y2 = ys_[2];
+        T.W0 = W[0], T.W1 = W[1], T.W2 = W[2];
+        batch_edges_2d(n, T, gx_.data(), gy_.data(), e, e + n, e + 2 * n, d);
+      } else {
+        for (int i = 0; i < n; ++i) {
+          const int off = stride_ * bl_[i];
+          edge_functions_s(xs_[off], xs_[off + 1], xs_[off + 2], ys_[off], ys_[off + 1], ys_[off + 2], W[0], W[1],
+                           W[2], gx_[i], gy_[i], e[i], e[n + i], e[2 * n + i], d[i]);
+        }
+      }
+      c_[Counter::raster_samples_tested_2d] += static_cast<std::uint64_t>(sel ? n_sel : n);
+      inside_cost = cost::kInside2D;
+    }
+    // Flags: 1 = covered, 2 = an e_i is exactly zero (scalar top-left path). Then skip 8 flags at a
+    // time (most batches are mostly misses).
+    const bool bfc = f_.p.backface_cull;
+    batch_flags(n, e, e + n, e + 2 * n, d, bfc, flags_.data());
+    if (sel) mask_flags(n, sel, flags_.data());
+    const int tested = sel ? n_sel : n;
+    c_[Counter::raster_samples_tested] += static_cast<std::uint64_t>(tested);
+    c_[Counter::ops_sample_inside] += inside_cost * static_cast<std::uint64_t>(tested);
+    for (int w = 0; w < n; w += 8) {
+      std::uint64_t word;
+      std::memcpy(&word, &flags_[w], 8);
+      if (!word) continue;
+      for (int i = w; i < std::min(n, w + 8); ++i) {
+        const std::uint8_t fl = flags_[i];
+        const int px = uniform ? uniform_px_ : bpx_[i], py = uniform ? uniform_py_ : bpy_[i];
+        const int smp = uniform ? i : bs_[i];
+        if (fl & 1) {
+          const F ev[3] = {e[i], e[n + i], e[2 * n + i]};
+          shade(tri, ev, d[i], px, py, smp);
+        } else if (fl & 2) {
+          tie_break_sample(tri, i, px, py, smp);
+        }
+      }
+    }
+  }
+
+  // An edge function was exactly zero: settle the sample with the scalar test (top-left rule).
+  void tie_break_sample(const TriSetup& tri, int i, int px, int py, int smp) {
+    float X[3], Y[3], W[3], e[3], det;
+    int n_ties;
+    bool covered;
+    if (sheared_) {
+      const int off = stride_ ? stride_ * bl_[i] : 0;
+      for (int j = 0; j < 3; ++j) X[j] = xs_[off + j], Y[j] = ys_[off + j], W[j] = tri.W[j];
+      covered = inside_from_vertices(X, Y, W, gx_[i], gy_[i], f_.p.backface_cull, e, det, n_ties);
+    } else {
+      const bool u = uniform_;
+      covered = inside_test(tri, tri.cls, f_.fc, gx_[i], gy_[i], u ? uniform_ps_->u[i] : gu_[i],
+                            u ? uniform_ps_->v[i] : gv_[i], u ? uniform_ps_->t[i] : gt_[i], f_.p.backface_cull, X,
+                            Y, W, e, det, n_ties);
+    }
+    c_[Counter::ops_sample_inside] += static_cast<std::uint64_t>(n_ties) * cost::kTieBreak;
+    if (n_ties) ++c_[Counter::raster_tie_breaks];
+    if (covered) shade(tri, e, det, px, py, smp);
+  }
+
+  inline void finish(const TriSetup& tri, bool covered, const F e[3], F det, int n_ties, int px, int py,
+                     int s, std::uint64_t inside_cost) {
+    ++c_[Counter::raster_samples_tested];
+    charge<A>(c_[Counter::ops_sample_inside], inside_cost + n_ties * cost::kTieBreak);
+    if (n_ties) ++c_[Counter::raster_tie_breaks];
+    if (covered) shade(tri, e, det, px, py, s);
+  }
+
+  // A covered sample goes to the backend (clip box, depth, depth test, colour, shading).
+  template <class G>
+  inline void shade(const TriSetup& tri, const G e[3], G det, int px, int py, int s) {
+    backend_.covered(tri, e, det, px, py, s);
+  }
+
+  const Frame& f_;
+  Counters& c_;
+  ShadeState& sh_;
+  SampleBackend<A> backend_;
+  // Pending batch (fast path).
+  const TriSetup* tri_ = nullptr;
+  bool sheared_ = false;
+  const float *xs_ = nullptr, *ys_ = nullptr;
+  int stride_ = 0;
+  int n_ = 0;
+  int cap_;
+  int uniform_px_ = 0, uniform_py_ = 0;
+  bool uniform_ = false;
+  const PixelSamples* uniform_ps_ = nullptr;
+  std::vector<float> gx_, gy_, gu_, gv_, gt_, be_, bdet_;
+  std::vector<int> bpx_, bpy_, bs_, bl_;
+  std::vector<std::uint8_t> flags_;
+};
+
+}  // namespace rast5d
