@@ -12,7 +12,8 @@ import pandas as pd
 import pytest
 
 from experiments import config as xc
-from experiments import plots, report, runner
+from experiments.report import figures, frames, pages
+from experiments.run import points, runner, store as result_store
 
 pytestmark = pytest.mark.smoke
 
@@ -157,7 +158,7 @@ def test_second_run_computes_zero_points_and_force_recomputes(tmp_path, store):
     df2 = runner.run_sweep(c, workers=2, progress=False)
     assert df2.attrs["summary"] == {**df2.attrs["summary"], "rendered": 0, "cached": 4}
     assert df2["raster.samples_tested"].tolist() == df1["raster.samples_tested"].tolist()
-    loaded = runner.load("s")
+    loaded = result_store.load("s")
     assert len(loaded) == 4 and list(loaded["pipeline.algorithm"]) == ["bruteforce", "tile"] * 2
     for col in ("camera.coc_px", "camera.width", "samples.kind", "hardware.tex_cache.size_bytes", "ops.total",
                 "time.wall_s", "engine.version", "engine.git_rev", "config_hash"):
@@ -233,17 +234,17 @@ def _frame():
 
 
 def test_derived_columns_accept_dotted_names():
-    df = plots.apply_derived(_frame(), {"per_hit": "ops.total / raster.samples_hit", "twice": "2 * per_hit"})
+    df = frames.apply_derived(_frame(), {"per_hit": "ops.total / raster.samples_hit", "twice": "2 * per_hit"})
     np.testing.assert_allclose(df["twice"], 2 * df["ops.total"] / df["raster.samples_hit"])
-    with pytest.raises(plots.PlotError, match="derived 'bad'.*no_such"):
-        plots.apply_derived(_frame(), {"bad": "no_such.column + 1"})
+    with pytest.raises(frames.PlotError, match="derived 'bad'.*no_such"):
+        frames.apply_derived(_frame(), {"bad": "no_such.column + 1"})
 
 
 def test_plot_kinds_write_png_pdf_and_tables_with_paper_values(tmp_path):
     df = _frame()
     spec = xc.PlotSpec(kind="line", x="camera.coc_px", y="ops.total", hue="pipeline.algorithm", logy=True,
                        paper={"b": {1: 2.5, 8: "130"}})
-    res = plots.render_plot(spec, df, tmp_path / "line")
+    res = figures.render_plot(spec, df, tmp_path / "line")
     assert [p.suffix for p in res["files"]] == [".png", ".pdf"]
     assert res["files"][0].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and res["files"][1].read_bytes()[:4] == b"%PDF"
     table = "\n".join(res["markdown"])
@@ -251,20 +252,20 @@ def test_plot_kinds_write_png_pdf_and_tables_with_paper_values(tmp_path):
     assert "| 8 | 64 | 128 | 130 |" in table and "| 1 | 1 | 2 | 2.5 |" in table
     for kind in ("bar", "scatter"):
         spec = xc.PlotSpec(kind=kind, x="camera.coc_px", y="ops.total", hue="pipeline.algorithm", pareto=kind == "scatter")
-        assert plots.render_plot(spec, df, tmp_path / kind)["files"][0].exists()
+        assert figures.render_plot(spec, df, tmp_path / kind)["files"][0].exists()
     spec = xc.PlotSpec(kind="bar", x="pipeline.algorithm", y=["ops.total", "raster.samples_hit"], stacked=True,
                        where={"camera.coc_px": 2})
-    assert plots.render_plot(spec, df, tmp_path / "stacked")["files"]
+    assert figures.render_plot(spec, df, tmp_path / "stacked")["files"]
     spec = xc.PlotSpec(kind="table", x="camera.coc_px", y="ops.total", where={"pipeline.algorithm": ["b"]})
-    assert "| 4 | 32 |" in "\n".join(plots.render_plot(spec, df, None)["markdown"])
-    with pytest.raises(plots.PlotError, match="unknown column 'ops.totl'"):
-        plots.render_plot(xc.PlotSpec(kind="line", x="camera.coc_px", y="ops.totl"), df, None)
+    assert "| 4 | 32 |" in "\n".join(figures.render_plot(spec, df, None)["markdown"])
+    with pytest.raises(frames.PlotError, match="unknown column 'ops.totl'"):
+        figures.render_plot(xc.PlotSpec(kind="line", x="camera.coc_px", y="ops.totl"), df, None)
 
 
 def test_pareto_front_against_brute_force():
     rng = np.random.default_rng(3)
     x, y = rng.random(60), rng.random(60)
-    front = set(plots.pareto_front(x, y).tolist())
+    front = set(frames.pareto_front(x, y).tolist())
     brute = {i for i in range(60) if not any((x[j] <= x[i] and y[j] < y[i]) or (x[j] < x[i] and y[j] <= y[i])
                                              for j in range(60))}
     assert front == brute
@@ -274,7 +275,7 @@ def test_powerlaw_fit_recovers_known_exponents():
     rows = [{"samples.spp": s, "metric.rmse": 0.3 * s ** -a, "samples.kind": k}
             for k, a in (("random", 0.5), ("sobol", 0.75)) for s in (1, 2, 4, 8, 16)]
     spec = xc.PlotSpec(kind="table", x="samples.spp", y="metric.rmse", hue="samples.kind", fit="powerlaw")
-    res = plots.render_plot(spec, pd.DataFrame(rows), None)
+    res = figures.render_plot(spec, pd.DataFrame(rows), None)
     alphas = {f["hue"]: f["alpha"] for f in res["fits"]}
     assert alphas["random"] == pytest.approx(0.5) and alphas["sobol"] == pytest.approx(0.75)
 
@@ -303,7 +304,7 @@ def test_report_quick_writes_pages_figures_and_index(tmp_path, store):
     write(cdir, "tiny2.yaml", "extends: _base.yaml\noutputs: {page: tiny, title: Second, order: -1, "
                               "plots: [{kind: bar, x: pipeline.algorithm, y: ops.total}]}\n")
     write(cdir, "_base.yaml", PAGE)
-    rc = report.main(configs_dir=cdir, reports_dir=tmp_path / "reports", quick=True, workers=2)
+    rc = pages.main(configs_dir=cdir, reports_dir=tmp_path / "reports", quick=True, workers=2)
     assert rc == 0
     page = (tmp_path / "reports" / "quick" / "paper" / "tiny.md").read_text()
     assert page.index("## Second") < page.index("## Tiny: samples tested against CoC")  # order
@@ -318,7 +319,7 @@ def test_report_quick_writes_pages_figures_and_index(tmp_path, store):
     assert df["camera.width"].tolist() == [64] * 4
     # --only one config of a shared page rewrites the whole page (the other section from the store)
     (tmp_path / "reports" / "quick" / "paper" / "tiny.md").unlink()
-    assert report.main(only=["tiny2"], configs_dir=cdir, reports_dir=tmp_path / "reports", quick=True, workers=0) == 0
+    assert pages.main(only=["tiny2"], configs_dir=cdir, reports_dir=tmp_path / "reports", quick=True, workers=0) == 0
     again = (tmp_path / "reports" / "quick" / "paper" / "tiny.md").read_text()
     assert "## Second" in again and "## Tiny: samples tested against CoC" in again
 
@@ -340,12 +341,12 @@ def test_experiments_load_names_known_tables(store):
 
 
 def test_every_paper_config_is_valid():
-    paths = report.paper_configs()
+    paths = pages.report_configs()
     assert paths
     for p in paths:
         c = xc.load_config(p)
         assert c.outputs.page and c.outputs.plots, f"{p.name}: no report spec"
-        data, _ = xc.load_dict(p, report.quick_overrides(xc.load_dict(p)[0]))
+        data, _ = xc.load_dict(p, pages.quick_overrides(xc.load_dict(p)[0]))
         xc.expand_sweep(xc.validate(data, str(p)))
 
 
@@ -356,10 +357,10 @@ def test_full_quick_report(tmp_path):
     r = subprocess.run([sys.executable, "-m", "experiments.cli", "report", "--quick"], capture_output=True, text=True,
                        env=env)
     assert r.returncode == 0, r.stderr[-2000:]
-    from experiments.report import REPORTS
+    from experiments.report.pages import REPORTS
 
     index = (REPORTS / "quick" / "README.md").read_text()
-    for p in report.paper_configs():
+    for p in pages.report_configs():
         page = xc.load_config(p).outputs.page
         assert f"[{page}](paper/{page}.md)" in index
 
@@ -380,14 +381,14 @@ def test_the_documented_spec_example_is_valid():
 
 def test_a_point_that_kills_its_worker_fails_alone(tmp_path, store, monkeypatch):
     """A crash in native code takes the worker process down; only that point is an error."""
-    real = runner.render_point
+    real = points.render_point
 
     def crashing(config, *args, **kwargs):
         if config.samples.spp == 8:
             os._exit(3)  # as a segfault would: no exception, the process is gone
         return real(config, *args, **kwargs)
 
-    monkeypatch.setattr(runner, "render_point", crashing)  # inherited by the forked workers
+    monkeypatch.setattr(points, "render_point", crashing)  # inherited by the forked workers
     c = xc.load_config(write(tmp_path, "k.yaml", BASE + "sweep:\n  samples.spp: [4, 8, 16, 2]\n"))
     df = runner.run_sweep(c, workers=2, progress=False)
     assert df["status"].tolist() == ["ok", "error", "ok", "ok"]

@@ -11,7 +11,7 @@ overlap, the pair is not in the potentially colliding set (PCS).
 Departure from the paper: the three views use perspective cameras (far away, narrow field of
 view) instead of orthographic projections; the argument above holds for any central projection
 whose frustum contains both objects over the whole shutter, which `views()` ensures for the
-example's extent. Run `python -m experiments.ccd` for the example (writes reports/ccd/).
+example's extent. Run `python -m experiments.examples.ccd` for the example (writes reports/ccd/).
 """
 from __future__ import annotations
 
@@ -23,7 +23,7 @@ import numpy as np
 
 import sim
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 
 
 @dataclass
@@ -127,7 +127,7 @@ def main(argv=None) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     lines = ["# Continuous collision detection (002 §3, Fig. 4-6)", "",
-             "Command: `python -m experiments.ccd`. Per view: pixels whose tz-boxes overlap in depth only, "
+             "Command: `python -m experiments.examples.ccd`. Per view: pixels whose tz-boxes overlap in depth only, "
              "and in time and depth. Images: blue = overlap in depth, red = overlap in time (purple: both).", "",
              "| case | view | depth-overlap px | tz-overlap px |", "|---|---|---|---|"]
     for same in (False, True):

@@ -1,8 +1,9 @@
-"""`rast5d report`: run every config in configs/paper/ (through the result store's cache) and write
-one Markdown page per `outputs.page` into reports/paper/ (figures as PNG + PDF, our numbers, the
-paper's published numbers beside them, the exact command and config), plus the index
-reports/README.md. `--quick` renders a small-resolution variant into reports/quick/ with its own
-result store (results/quick/), so it never clobbers the full report.
+"""`rast5d report`: run every report config (configs/paper/*.yaml, and each configs/*.yaml that names
+an `outputs.page`) through the result store's cache and write one Markdown page per `outputs.page`
+into reports/<outputs.folder>/ (figures as PNG + PDF, our numbers, the paper's published numbers
+beside them, the exact command and config), plus the index reports/README.md. `--quick` renders a
+small-resolution variant into reports/quick/ with its own result store (results/quick/), so it never
+clobbers the full report.
 
 Configs whose file name starts with `_` are bases for `extends:` and are not run.
 """
@@ -15,25 +16,17 @@ import time
 from collections import defaultdict
 from pathlib import Path
 
-from .config import REPO, ConfigError, RenderConfig, load_dict, validate
-from .plots import PlotError, apply_derived, md_table, render_plot
+from ..config import REPO, ConfigError, RenderConfig, load_dict, validate
+from ..run import results_dir, run_sweep
+from .figures import render_plot
+from .frames import PlotError, apply_derived
+from .tables import TABLES, md_table
 
-CONFIGS = REPO / "configs" / "paper"
+CONFIGS = REPO / "configs"
 REPORTS = REPO / "reports"
 # --quick: every point at most QUICK_SIZE pixels on a side (aspect kept when the config gives both),
 # the same samples per pixel, sweeps and pages.
 QUICK_SIZE = 64
-REGISTERED_TABLES: dict = {}
-
-
-def derived_table(name: str):
-    """Register a page table that no plot spec can express: fn(df, config) -> Markdown lines, placed where
-    `outputs.text` says {{table:NAME}}. The escape hatch: prefer `derived:` columns and `table` plots."""
-    def deco(fn):
-        REGISTERED_TABLES[name] = fn
-        return fn
-
-    return deco
 
 
 def quick_overrides(data: dict) -> list[str]:
@@ -56,7 +49,7 @@ def section_markdown(config: RenderConfig, config_path: Path, df, out_dir: Path,
     lines = [f"## {o.title or config.name}", ""]
     if o.text:
         text = o.text.strip()
-        for key, fn in REGISTERED_TABLES.items():
+        for key, fn in TABLES.items():
             marker = "{{table:" + key + "}}"
             if marker in text:
                 text = text.replace(marker, "\n".join(fn(df, config)))
@@ -65,6 +58,8 @@ def section_markdown(config: RenderConfig, config_path: Path, df, out_dir: Path,
         dfd = apply_derived(df, o.derived)
     except PlotError as e:
         return lines + [f"**Error:** {e}", ""]
+    if o.images and "config_hash" in dfd.columns:  # the points' images, for image_grid plots
+        dfd = dfd.assign(**{"image.path": [str(images_dir(config) / f"{h}.png") for h in dfd["config_hash"]]})
     for i, spec in enumerate(o.plots):
         base = out_dir / f"{config.name}_{i + 1}" if len(o.plots) > 1 else out_dir / config.name
         try:
@@ -76,6 +71,8 @@ def section_markdown(config: RenderConfig, config_path: Path, df, out_dir: Path,
             continue
         if spec.title and spec.kind == "table":
             lines += [f"**{spec.title}**", ""]
+        if spec.echo:
+            print("\n".join(([spec.title, ""] if spec.title else []) + res["markdown"]))
         if res["files"]:
             png = res["files"][0]
             lines += [f"![{spec.title or config.name}]({png.name})", "",
@@ -108,10 +105,13 @@ def section_markdown(config: RenderConfig, config_path: Path, df, out_dir: Path,
     return lines
 
 
+def images_dir(config: RenderConfig) -> Path:
+    """Where a sweep with outputs.images keeps the images of its points."""
+    return results_dir() / "images" / config.name
+
+
 def write_config_page(config: RenderConfig, config_path, df, overrides=()) -> Path:
     """`rast5d run`: the config's own page, results/pages/<name>/<name>.md (not committed)."""
-    from .runner import results_dir
-
     out_dir = results_dir() / "pages" / config.name
     out_dir.mkdir(parents=True, exist_ok=True)
     cmd = "rast5d run " + str(config_path) + "".join(f" --set {shlex.quote(s)}" for s in overrides)
@@ -122,22 +122,24 @@ def write_config_page(config: RenderConfig, config_path, df, overrides=()) -> Pa
     return page
 
 
-def paper_configs(configs_dir: Path = CONFIGS) -> list[Path]:
-    """The report configs of a directory (files starting with _ are bases for `extends:`)."""
-    return sorted(p for p in Path(configs_dir).glob("*.yaml") if not p.name.startswith("_"))
+def report_configs(configs_dir: Path | None = None) -> list[Path]:
+    """The report configs: configs/paper/*.yaml and each configs/*.yaml that names an outputs.page, or
+    every config of ``configs_dir`` (files starting with _ are bases for `extends:`)."""
+    def run(paths):
+        return [p for p in sorted(paths) if not p.name.startswith("_")]
+
+    if configs_dir is not None:
+        return run(Path(configs_dir).glob("*.yaml"))
+    top = [p for p in run(CONFIGS.glob("*.yaml")) if (load_dict(p)[0].get("outputs") or {}).get("page")]
+    return run((CONFIGS / "paper").glob("*.yaml")) + top
 
 
 def main(only=None, workers=None, scheduler=None, force=False, quick=False, configs_dir: Path | None = None,
          reports_dir: Path | None = None) -> int:
-    from . import report_tables  # noqa: F401 - registers the page tables
-    from .runner import results_dir, run_sweep
-
-    configs_dir = configs_dir or CONFIGS
     out_root = (reports_dir or REPORTS) / ("quick" if quick else "")
-    page_dir = out_root / "paper"
     if quick:
         os.environ["RAST5D_RESULTS"] = str(results_dir() / "quick")
-    paths = paper_configs(configs_dir)
+    paths = report_configs(configs_dir)
     loaded = []
     for p in paths:
         data, lines = load_dict(p)
@@ -159,8 +161,7 @@ def main(only=None, workers=None, scheduler=None, force=False, quick=False, conf
         loaded = [x for x in loaded if (x[1].outputs.page or x[1].name) in pages]
     else:
         chosen = {c.name for _, c, _, _ in loaded}
-    page_dir.mkdir(parents=True, exist_ok=True)
-    sections: dict[str, list] = defaultdict(list)
+    sections: dict[tuple[str, str], list] = defaultdict(list)
     failures = 0
     counts = {"rendered": 0, "cached": 0}
     t_all = time.perf_counter()
@@ -172,10 +173,13 @@ def main(only=None, workers=None, scheduler=None, force=False, quick=False, conf
         for k in counts:
             counts[k] += df.attrs.get("summary", {}).get(k, 0)
         page = config.outputs.page or config.name
+        page_dir = out_root / config.outputs.folder
+        page_dir.mkdir(parents=True, exist_ok=True)
         md = section_markdown(config, p, df, page_dir, _command(config.name, quick), overrides,
                               time.perf_counter() - t0)
-        sections[page].append((config.outputs.order, config.name, md, config))
-    for page, parts in sections.items():
+        sections[config.outputs.folder, page].append((config.outputs.order, config.name, md, config))
+    for (folder, page), parts in sections.items():
+        page_dir = out_root / folder
         parts.sort(key=lambda t: (t[0], t[1]))
         text = [f"# {page}", "", f"Regenerate with `{_command(page, quick)}` (this page) or "
                 f"`rast5d report{' --quick' if quick else ''}` (all pages)."
@@ -186,7 +190,7 @@ def main(only=None, workers=None, scheduler=None, force=False, quick=False, conf
         (page_dir / f"{page}.md").write_text("\n".join(text) + "\n")
         print(f"wrote {(page_dir / f'{page}.md').relative_to(out_root.parent if quick else REPORTS.parent)}")
     if not only:
-        write_index(out_root, page_dir, quick, time.perf_counter() - t_all, counts)
+        write_index(out_root, out_root / "paper", quick, time.perf_counter() - t_all, counts)
     return 1 if failures else 0
 
 
@@ -207,11 +211,12 @@ def write_index(out_root: Path, page_dir: Path, quick: bool, elapsed: float, cou
     lines += [f"Last run: {elapsed:.0f} s on this machine ({counts['rendered']} points rendered, "
               f"{counts['cached']} from the result store).", ""]
     lines += md_table(["page", "sections"], rows) + [""]
-    other = [p for p in (REPORTS / "quickstart" / "README.md", REPORTS / "bench" / "bench_core.md") if p.exists()]
+    other = [p for p in (REPORTS / "quickstart" / "quickstart.md", REPORTS / "bench" / "bench_core.md",
+                         REPORTS / "ccd" / "README.md") if p.exists()]
     if other and not quick:
         lines += ["Other reports: " + ", ".join(f"[{p.relative_to(REPORTS)}]({p.relative_to(REPORTS)})"
                                                  for p in other), ""]
     (out_root / "README.md").write_text("\n".join(lines) + "\n")
 
 
-__all__ = ["main", "write_config_page", "section_markdown", "derived_table", "ConfigError"]
+__all__ = ["main", "write_config_page", "section_markdown", "report_configs", "ConfigError"]

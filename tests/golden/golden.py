@@ -1,8 +1,8 @@
-"""Golden operation counts: tests/golden/ops.csv.
+"""Golden operation counts: tests/golden/ops.csv (beside this file).
 
 Rows are (scene, algorithm, table, coc, spp, tile, grid, counter) -> value, one counter per line so
 that a change in the model shows up in review as exactly the counters it moved. `make golden`
-(`python -m experiments.golden`) regenerates the file and prints a summary of the differences;
+(`python -m tests.golden.golden`) regenerates the file and prints a summary of the differences;
 change the file only on purpose and say why in the commit. tests/test_golden.py compares the key
 sets first, then the values.
 """
@@ -10,12 +10,13 @@ from __future__ import annotations
 
 import argparse
 import csv
+import functools
 import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parent.parent
-GOLDEN = REPO / "tests" / "golden" / "ops.csv"
+REPO = Path(__file__).resolve().parents[2]
+GOLDEN = Path(__file__).resolve().parent / "ops.csv"
 KEY = ("scene", "algorithm", "table", "coc", "spp", "tile", "grid")
 
 # Small renders of the paper's workloads (and two hard cases) so the whole file recomputes in seconds.
@@ -28,11 +29,28 @@ SCENES = {
     "focus_crossing": dict(name="focus_crossing", params={}, size=(64, 64)),
     "moving_quads": dict(name="moving_quads", params={}, size=(64, 64)),
 }
-ARBITRARY = ("bruteforce", "interval", "tile", "laine")
-INTERLEAVED = ("interleave", "hinterleave", "tile_interleaved")
 
 
-# Issue 5 variants: the scene column reads "<scene>+<variant>" and the variant adds pipeline settings.
+@functools.cache
+def algorithms() -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """(algorithms for arbitrary tables, algorithms that need an interleaved table), from the registry
+    (sim.algorithm_names()); an algorithm needs an interleaved table when it rejects a stratified one."""
+    import models
+    import sim
+
+    probe = (models.named("single_triangle"), sim.Camera(width=8, height=8, coc_px=2.0),
+             sim.SampleTable.stratified(spp=4, seed=1))
+    arbitrary, interleaved = [], []
+    for name in sim.algorithm_names():
+        try:
+            sim.render(*probe, sim.PipelineConfig(algorithm=name, threads=1))
+            arbitrary.append(name)
+        except sim.ConfigError:
+            interleaved.append(name)
+    return tuple(arbitrary), tuple(interleaved)
+
+
+# Variants: the scene column reads "<scene>+<variant>" and the variant adds pipeline settings.
 VARIANTS = {
     "splits4": {"time_splits": 4},
     "splits16": {"time_splits": 16, "time_strata": 16},
@@ -41,7 +59,7 @@ VARIANTS = {
     "clip": {"clip": {"u": [-0.5, 0.75], "v": [-1.0, 0.5], "t": [0.125, 0.75]}},
     "hiz": {"hiz": {"enabled": True, "tile_size": 8}, "zhat_stats": True},
     "hiz_vertex": {"hiz": {"enabled": True, "tile_size": 4}, "zhat": "vertex", "zhat_stats": True},
-    # Issue 6: shading modes, texturing and the texture cache (spot has its own texture)
+    # shading modes, texturing and the texture cache (spot has its own texture)
     "msaa_tex": {"shading": "msaa", "texture_count": 1},
     "per_sample": {"shading": "per_sample"},
     "per_lens_cell": {"shading": "per_lens_cell"},
@@ -63,7 +81,7 @@ class Case:
 
     @property
     def table(self) -> str:
-        return "interleaved64" if self.algorithm in INTERLEAVED else "stratified"
+        return "interleaved64" if self.algorithm in algorithms()[1] else "stratified"
 
     def key(self) -> tuple:
         return (self.scene, self.algorithm, self.table, f"{self.coc:g}", str(self.spp), str(self.tile), str(self.grid))
@@ -71,21 +89,22 @@ class Case:
 
 def cases() -> list[Case]:
     out = []
+    arbitrary, interleaved = algorithms()
     for scene in SCENES:
-        for algorithm in ARBITRARY + INTERLEAVED:
+        for algorithm in arbitrary + interleaved:
             for coc in (0.0, 10.0, 50.0):
                 out.append(Case(scene, algorithm, coc))
     for tile in (1, 4, 8):  # tile sizes, and the 8x8 grid at 64 spp
         out.append(Case("bunny", "tile", 10.0, tile=tile))
     out.append(Case("bunny", "tile", 20.0, spp=64, grid=8))
     out.append(Case("bunny", "interval", 20.0, spp=64, grid=8))
-    for variant in VARIANTS:  # issue 5: time intervals, clip planes, HiZ on the moving scene
+    for variant in VARIANTS:  # time intervals, clip planes, HiZ on the moving scene
         for coc in (0.0, 10.0):
             out.append(Case(f"moving_quads+{variant}", "tile", coc))
     out.append(Case("moving_quads+clip", "bruteforce", 10.0))
     for variant in ("hiz", "hiz_vertex"):
         out.append(Case(f"spot+{variant}", "tile", 10.0))
-    for algorithm in ARBITRARY + ("interleave",):  # issue 6: quads, texture fetches, cache misses
+    for algorithm in arbitrary + ("interleave",):  # quads, texture fetches, cache misses
         out.append(Case("spot+msaa_tex", algorithm, 10.0))
     for variant in ("per_sample", "per_lens_cell", "cache_tex"):
         out.append(Case(f"spot+{variant}", "tile", 10.0))

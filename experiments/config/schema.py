@@ -1,29 +1,22 @@
-"""Experiment configuration: the YAML schema (pydantic v2), `extends:`, `--set` overrides, sweep
-expansion (cartesian product and `zip:` groups), and the construction of the scene, camera, sample
-table and pipeline of one point.
+"""The experiment schema (pydantic v2): every section and key of a config file, with its type,
+default and description, and the validation of a merged config into a RenderConfig.
 
-Every parameter is declared once, with its type, default and description: the `pipeline` section
-comes from sim.PipelineConfig's field declarations, the `hardware` section from
-sim.HardwareConfig.field_docs(). Unknown keys are errors that name the key, the file and the line
-(STYLE.md §Configuration). ``python -m experiments.config`` prints docs/config.md.
+Every parameter is declared once: the `pipeline` section comes from sim.PipelineConfig's field
+declarations, the `hardware` section from sim.HardwareConfig.field_docs(). Unknown keys are errors
+that name the key, the file and the line (STYLE.md §Configuration).
 """
 from __future__ import annotations
 
 import copy
-import hashlib
-import itertools
-import json
 import typing
 from pathlib import Path
 from typing import Any, Literal, Optional, Union
 
-import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, create_model, field_validator, model_validator
 
 import sim
-from models.loader import UniqueKeyLoader
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 
 
 class ConfigError(ValueError):
@@ -131,9 +124,16 @@ HardwareSpec.__doc__ = ("The modelled hardware (sim.HardwareConfig: timing units
 class PlotSpec(_Strict):
     """One figure or table of a report page (docs/reports.md)."""
 
-    kind: Literal["line", "bar", "table", "scatter"] = Field("line", description="line | bar | table | scatter")
-    x: Optional[str] = Field(None, description="Column on the x axis (table: the row key)")
-    y: Union[str, list[str]] = Field(..., description="Column(s) on the y axis (table: the value columns)")
+    kind: Literal["line", "bar", "table", "scatter", "heatmap", "image_grid"] = Field(
+        "line", description="line | bar | table | scatter | heatmap | image_grid")
+    x: Optional[str] = Field(None, description=(
+        "Column on the x axis (table: the row key; heatmap and image_grid: the column whose values make the "
+        "columns)"))
+    y: Union[str, list[str]] = Field(..., description=(
+        "Column(s) on the y axis (table: the value columns; heatmap: the cell value; image_grid: the value "
+        "written under each image)"))
+    row: Optional[str] = Field(None, description=(
+        "heatmap and image_grid: the column whose values make the rows"))
     hue: Optional[Union[str, list[str]]] = Field(None, description=(
         "Column whose values get one line/bar colour (table: one column each); a list of columns combines "
         "their values with spaces ('tile 1')"))
@@ -160,6 +160,7 @@ class PlotSpec(_Strict):
         "the keys of paper: and where: for that column"))
     columns: list[str] = Field(default_factory=list, description=(
         "scatter and x-less tables: extra columns shown in the data table (e.g. samples.spp)"))
+    echo: bool = Field(False, description="table only: also print the table on the terminal when the page is written")
     optional: bool = Field(False, description=(
         "Leave the plot out (silently) when a column it names is missing, e.g. timing.cycles before the timing "
         "model exists"))
@@ -168,6 +169,12 @@ class PlotSpec(_Strict):
     def _check(self):
         if self.kind in ("line", "bar", "scatter") and self.x is None:
             raise ValueError(f"a {self.kind} plot needs x")
+        if self.kind in ("heatmap", "image_grid") and (self.x is None or self.row is None):
+            raise ValueError(f"a {self.kind} plot needs x and row")
+        if self.row is not None and self.kind not in ("heatmap", "image_grid"):
+            raise ValueError("row: only for heatmap and image_grid plots")
+        if self.echo and self.kind != "table":
+            raise ValueError("echo: only for table plots")
         if self.fit and self.kind != "table":
             raise ValueError("fit: only for table plots")
         if self.fit and (self.x is None or not isinstance(self.y, str)):
@@ -181,7 +188,7 @@ class PlotSpec(_Strict):
 
 class MetricsSpec(_Strict):
     """Image error against a reference image of the same point at many samples per pixel
-    (experiments/metrics.py). Adds columns metric.rmse, metric.psnr, metric.ssim (and metric.flip)."""
+    (experiments/run/references.py, experiments/report/metrics.py). Adds columns metric.rmse, metric.psnr, metric.ssim (and metric.flip)."""
 
     reference_spp: int = Field(1024, description="Samples per pixel of the reference image (>= 1024 for reports)")
     reference_kind: Literal["random", "stratified", "sobol"] = Field(
@@ -198,7 +205,9 @@ class OutputsSpec(_Strict):
     stats: Optional[str] = Field(None, description="`rast5d render`: JSON path for the statistics (--stats takes precedence)")
     images: bool = Field(False, description="`rast5d run`: also write each point's PNG next to the results")
     metrics: Optional[MetricsSpec] = Field(None, description="Image error of every point against a reference")
-    page: Optional[str] = Field(None, description="Report page name: reports/paper/<page>.md (configs may share a page)")
+    page: Optional[str] = Field(None, description=(
+        "Report page name: reports/<folder>/<page>.md (configs may share a page)"))
+    folder: str = Field("paper", description="Folder of the page under reports/")
     title: Optional[str] = Field(None, description="Section title on the page")
     text: Optional[str] = Field(None, description="Markdown above the figures: what, how, departures, caveats")
     derived: dict[str, str] = Field(default_factory=dict, description=(
@@ -224,6 +233,32 @@ class ExecutorSpec(_Strict):
         return self
 
 
+class PointSpec(_Strict):
+    """What one point of the sweep computes (docs/reports.md §Point kinds). `render` renders the scene;
+    `occlusion_query` asks whether `query` is hidden behind the scene (sim.occlusion_query) and records
+    the query's own work; `conservative` rasterizes the scene conservatively (sim.conservative_raster,
+    1 x 1 tiles, per-pixel t-z boxes); `retime` re-times the stored work records of the render on the
+    hardware `hardware` (sim.timing.estimate, no re-render when the records are in the result store)."""
+
+    kind: Literal["render", "occlusion_query", "conservative", "retime"] = Field(
+        "render", description="render | occlusion_query | conservative | retime")
+    query: Optional[SceneSpec] = Field(None, description="occlusion_query: the query scene (the config's scene "
+                                                         "is the occluders)")
+    mode: Literal["samples", "intervals"] = Field("samples", description=(
+        "occlusion_query: 'samples' (test the query's samples) or 'intervals' (ẑ against HiZ, no sample tests)"))
+    hardware: dict[str, Any] = Field(default_factory=dict, description=(
+        "retime: hardware keys deep-merged over the config's hardware section for the timing estimate "
+        "(the render itself uses the config's hardware)"))
+
+    @model_validator(mode="after")
+    def _check(self):
+        if (self.kind == "occlusion_query") != (self.query is not None):
+            raise ValueError("point.query: needed by kind 'occlusion_query' and only by it")
+        if self.hardware and self.kind != "retime":
+            raise ValueError("point.hardware: only for kind 'retime'")
+        return self
+
+
 class RenderConfig(_Strict):
     """One experiment: a scene, camera, sample table, pipeline and hardware, optionally swept."""
 
@@ -242,6 +277,7 @@ class RenderConfig(_Strict):
         "Dotted keys to lists of values, e.g. {camera.coc_px: [0, 10, 50]}: `rast5d run` renders the "
         "cartesian product. `zip: [[key1, key2], ...]` makes each group of swept keys vary together (equal "
         "lengths); a key can be a whole section (scene: [{name: a}, {name: b}])"))
+    point: PointSpec = Field(default_factory=PointSpec, description="What each point computes (default: a render)")
     outputs: OutputsSpec = Field(default_factory=OutputsSpec, description="Files, metrics and the report spec")
     executor: ExecutorSpec = Field(default_factory=ExecutorSpec, description="Where the points run")
 
@@ -273,47 +309,9 @@ class RenderConfig(_Strict):
     def hardware_config(self) -> "sim.HardwareConfig":
         return sim.HardwareConfig.from_dict(_drop_none(self.hardware.model_dump()))
 
-
-def _drop_none(d):
-    if isinstance(d, dict):
-        return {k: _drop_none(v) for k, v in d.items() if v is not None}
-    return d
-
-
-# ---- loading: YAML with line numbers, extends, overrides ----------------------------------------
-
-def _node_lines(node, source: str, path: tuple = (), out: dict | None = None) -> dict:
-    """{key path: 'file:line'} for every mapping key and sequence item of a composed YAML tree."""
-    out = {} if out is None else out
-    if isinstance(node, yaml.MappingNode):
-        for k, v in node.value:
-            key = path + (str(k.value),)
-            out[key] = f"{source}:{k.start_mark.line + 1}"
-            _node_lines(v, source, key, out)
-    elif isinstance(node, yaml.SequenceNode):
-        for i, v in enumerate(node.value):
-            key = path + (i,)
-            out[key] = f"{source}:{v.start_mark.line + 1}"
-            _node_lines(v, source, key, out)
-    return out
-
-
-def _read_yaml(path: Path) -> tuple[dict, dict]:
-    if not path.exists():
-        raise ConfigError(f"config: file not found: {path}")
-    text = path.read_text()
-    try:
-        data = yaml.load(text, Loader=UniqueKeyLoader)  # noqa: S506 (a SafeLoader subclass)
-        lines = _node_lines(yaml.compose(text, Loader=yaml.SafeLoader), str(path))
-    except yaml.constructor.ConstructorError as e:
-        if not (e.problem or "").startswith("duplicate key"):
-            raise ConfigError(f"{path}: not valid YAML: {e}") from None
-        raise ConfigError(f"{path}: {e.problem} at line {e.problem_mark.line + 1}") from None
-    except yaml.YAMLError as e:
-        raise ConfigError(f"{path}: not valid YAML: {e}") from None
-    if not isinstance(data, dict):
-        raise ConfigError(f"{path}: expected a mapping at the top level, got {type(data).__name__}")
-    return data, lines
+    def retime_hardware(self) -> "sim.HardwareConfig":
+        """The hardware of a retime point: the hardware section with point.hardware merged over it."""
+        return sim.HardwareConfig.from_dict(deep_merge(self.hardware_config().describe(), self.point.hardware))
 
 
 def deep_merge(base: dict, over: dict) -> dict:
@@ -327,60 +325,13 @@ def deep_merge(base: dict, over: dict) -> dict:
     return out
 
 
-def _load_with_extends(path: Path, chain: tuple[Path, ...] = ()) -> tuple[dict, dict]:
-    path = path.resolve()
-    if path in chain:
-        cycle = " -> ".join(str(p) for p in chain + (path,))
-        raise ConfigError(f"{chain[-1]}: extends: cycle {cycle}")
-    data, lines = _read_yaml(path)
-    bases = data.pop("extends", None)
-    if bases is None:
-        return data, lines
-    if isinstance(bases, str):
-        bases = [bases]
-    if not isinstance(bases, list) or not all(isinstance(b, str) for b in bases):
-        raise ConfigError(f"{lines.get(('extends',), path)}: extends: expected a file name or a list of them, "
-                          f"got {bases!r}")
-    merged, merged_lines = {}, {}
-    for b in bases:
-        base_path = path.parent / b
-        if not base_path.exists():
-            raise ConfigError(f"{lines.get(('extends',), path)}: extends: base config {b!r} not found "
-                              f"(looked for {base_path})")
-        bdata, blines = _load_with_extends(base_path, chain + (path,))
-        bdata.pop("name", None)  # the name identifies a file's result table: never inherited
-        merged = deep_merge(merged, bdata)
-        merged_lines.update(blines)
-    merged = deep_merge(merged, data)
-    merged_lines.update(lines)
-    return merged, merged_lines
+def _drop_none(d):
+    if isinstance(d, dict):
+        return {k: _drop_none(v) for k, v in d.items() if v is not None}
+    return d
 
 
-def _set_dotted(d: dict, dotted: str, value, source: str):
-    parts = dotted.split(".")
-    node = d
-    for p in parts[:-1]:
-        child = node.setdefault(p, {})
-        if not isinstance(child, dict):
-            raise ConfigError(f"{source}: cannot set {dotted!r}: {p!r} is not a section")
-        node = child
-    node[parts[-1]] = value
-
-
-def parse_override(text: str) -> tuple[str, Any]:
-    """'camera.coc_px=10' -> ('camera.coc_px', 10); the value is parsed as YAML."""
-    if "=" not in text:
-        raise ConfigError(f"--set: expected key=value, got {text!r}")
-    key, raw = text.split("=", 1)
-    key = key.strip()
-    if not key:
-        raise ConfigError(f"--set: empty key in {text!r}")
-    try:
-        value = yaml.safe_load(raw) if raw.strip() else None
-    except yaml.YAMLError as e:
-        raise ConfigError(f"--set {key}: cannot parse value {raw!r}: {e}") from None
-    return key, value
-
+# ---- validation ----------------------------------------------------------------------------------
 
 def _format_validation(err: ValidationError, source: str, lines: dict | None = None) -> str:
     out = []
@@ -401,18 +352,6 @@ def _format_validation(err: ValidationError, source: str, lines: dict | None = N
     return "\n".join(dict.fromkeys(out))
 
 
-def load_dict(path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> tuple[dict, dict]:
-    """(merged data, {key path: 'file:line'}) after extends and --set overrides, not validated."""
-    path = Path(path)
-    data, lines = _load_with_extends(path)
-    data.setdefault("name", path.stem)
-    for text in overrides:
-        key, value = parse_override(text)
-        _set_dotted(data, key, value, f"{path} --set")
-        lines[tuple(key.split("."))] = f"--set {text}"
-    return data, lines
-
-
 def validate(data: dict, source: str = "config", lines: dict | None = None) -> RenderConfig:
     try:
         config = RenderConfig.model_validate(data)
@@ -423,175 +362,10 @@ def validate(data: dict, source: str = "config", lines: dict | None = None) -> R
     except sim.ConfigError as e:
         where = lines.get(("hardware",), source) if lines else source
         raise ConfigError(f"{where}: hardware: {e}") from None
+    if config.point.hardware:
+        try:
+            config.retime_hardware()
+        except sim.ConfigError as e:
+            where = lines.get(("point", "hardware"), source) if lines else source
+            raise ConfigError(f"{where}: point.hardware: {e}") from None
     return config
-
-
-def load_config(path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> RenderConfig:
-    """Load a YAML config (following extends), apply --set overrides, validate. Raises ConfigError."""
-    data, lines = load_dict(path, overrides)
-    config = validate(data, str(path), lines)
-    expand_sweep(config, str(path), lines)  # every point is checked up front, not mid-sweep
-    return config
-
-
-def sweep_points(sweep: dict) -> list[dict]:
-    """[{dotted key: value}] for a sweep: the cartesian product over the axes, where each `zip` group
-    is one axis whose values are taken together (item i of every key in the group)."""
-    if not sweep:
-        return [{}]
-    groups = [list(g) for g in sweep.get("zip", [])]
-    in_group = {k for g in groups for k in g}
-    axes: list[list[dict]] = []
-    for k, values in sweep.items():
-        if k == "zip" or k in in_group:
-            continue
-        axes.append([{k: v} for v in values])
-    for g in groups:
-        axes.append([{k: sweep[k][i] for k in g} for i in range(len(sweep[g[0]]))])
-    # Keep the axis order of the file (first axis varies slowest).
-    order = [k for k in sweep if k != "zip"]
-    axes.sort(key=lambda ax: min(order.index(k) for k in ax[0]))
-    points = []
-    for combo in itertools.product(*axes):
-        p = {}
-        for part in combo:
-            p.update(part)
-        points.append(p)
-    return points
-
-
-def expand_sweep(config: RenderConfig, source: str = "config", lines: dict | None = None
-                 ) -> list[tuple[dict, RenderConfig]]:
-    """[(point, config)] for every point of config.sweep (one point without a sweep). Each point is
-    validated on its own; ConfigError names the point."""
-    if not config.sweep:
-        return [({}, config)]
-    base = config.model_dump(exclude={"sweep"})
-    points = []
-    for point in sweep_points(config.sweep):
-        d = copy.deepcopy(base)
-        for k, v in point.items():
-            _set_dotted(d, k, v, f"{source} sweep")
-        points.append((point, validate(d, f"{source} (sweep point {point})")))
-    return points
-
-
-RESULT_EXCLUDE = {"name", "description", "extends", "sweep", "outputs", "executor"}
-
-
-def config_hash(config: RenderConfig) -> str:
-    """Stable hash of everything that determines a point's result row: scene, camera, samples,
-    pipeline (not the thread count: results are identical for any), hardware, and the metrics spec."""
-    d = config.model_dump(exclude=RESULT_EXCLUDE)
-    d["pipeline"].pop("threads", None)
-    d["metrics"] = config.outputs.metrics.model_dump() if config.outputs.metrics else None
-    blob = json.dumps(d, sort_keys=True, default=str).encode()
-    return hashlib.sha256(blob).hexdigest()[:16]
-
-
-def flatten(d: dict, prefix: str = "") -> dict:
-    """{'camera': {'coc_px': 10}} -> {'camera.coc_px': 10}; lists become JSON text (one cell)."""
-    out = {}
-    for k, v in d.items():
-        key = f"{prefix}{k}"
-        if isinstance(v, dict) and v:
-            out.update(flatten(v, key + "."))
-        elif isinstance(v, dict):
-            continue
-        elif isinstance(v, (list, tuple)):
-            out[key] = json.dumps(v)
-        else:
-            out[key] = v
-    return out
-
-
-# ---- building the objects of one point ----------------------------------------------------------
-
-def build(config: RenderConfig):
-    """(scene, camera, table, pipeline) for one (non-swept) config."""
-    import models
-
-    spec = config.scene
-    if spec.name is not None:
-        scene = models.named(spec.name, **spec.params)
-    else:
-        p = Path(spec.path)
-        scene = models.load(str(p if p.is_absolute() else REPO / p))
-    cam_args = dict(scene.camera_hint or {})
-    given = {k: v for k, v in config.camera.model_dump().items() if v is not None}
-    if "coc_px" in given:  # the config's blur replaces any blur in the hint
-        cam_args.pop("aperture_radius", None)
-    if "aperture_radius" in given:
-        cam_args.pop("coc_px", None)
-    cam_args.update(given)
-    if cam_args.get("shutter") is not None:
-        cam_args["shutter"] = tuple(cam_args["shutter"])
-    camera = sim.Camera(**cam_args)
-    t = config.samples
-    params = dict(spp=t.spp, seed=t.seed, period=t.period, lens=t.lens, time=t.time)
-    if t.kind == "interleaved":
-        if t.n_lens is not None:
-            params["n_lens"] = t.n_lens
-    elif t.n_lens is not None:
-        raise ConfigError(f"samples.n_lens: only for the interleaved kind, got kind={t.kind!r}")
-    if t.views is not None:
-        if t.kind != "multiview":
-            raise ConfigError(f"samples.views: only for the multiview kind, got kind={t.kind!r}")
-        params["views"] = t.views
-    table = sim.SampleTable.create(t.kind, **params)
-    pipeline = sim.PipelineConfig(**config.pipeline.model_dump())
-    return scene, camera, table, pipeline
-
-
-# ---- reference documentation --------------------------------------------------------------------
-
-def _type_text(ann) -> str:
-    text = ann.__name__ if isinstance(ann, type) else str(ann).replace("typing.", "")
-    if text.startswith("Optional[") and text.endswith("]"):
-        text = text[len("Optional["):-1] + " or null"
-    text = text.replace("experiments.config.", "")
-    return " ".join(text.replace("|", "or").split())
-
-
-def _section_models() -> list[tuple[str, type[BaseModel]]]:
-    out = [("(top level)", RenderConfig), ("scene", SceneSpec), ("camera", CameraSpec), ("samples", SamplesSpec),
-           ("pipeline", PipelineSpec), ("hardware", HardwareSpec)]
-
-    def nested(prefix, model):
-        for name, f in model.model_fields.items():
-            for cand in typing.get_args(f.annotation) or (f.annotation,):
-                if isinstance(cand, type) and issubclass(cand, BaseModel):
-                    out.append((f"{prefix}.{name}", cand))
-                    nested(f"{prefix}.{name}", cand)
-
-    nested("hardware", HardwareSpec)
-    out += [("outputs", OutputsSpec), ("outputs.metrics", MetricsSpec), ("outputs.plots[]", PlotSpec),
-            ("executor", ExecutorSpec)]
-    return out
-
-
-def markdown_reference() -> str:
-    """docs/config.md: every section and key with type, default and description."""
-    out = ["# Configuration reference", "",
-           "Generated by `python -m experiments.docs` from the schema in `experiments/config.py` (the pipeline "
-           "section from `sim.PipelineConfig`, the hardware section from `sim.HardwareConfig.field_docs()`). "
-           "Unknown keys are errors naming the key, file and line. Report specs (`outputs`): docs/reports.md.",
-           ""]
-    for title, model in _section_models():
-        out += [f"## `{title}`", "", " ".join((model.__doc__ or "").split()), "",
-                "| key | type | default | description |", "|---|---|---|---|"]
-        for name, f in model.model_fields.items():
-            ann = f.annotation
-            cands = typing.get_args(ann) or (ann,)
-            if any(isinstance(c, type) and issubclass(c, BaseModel) for c in cands) and name != "plots":
-                out.append(f"| `{name}` | section | see below | {f.description or ''} |")
-                continue
-            default = "required" if f.is_required() else repr(f.get_default(call_default_factory=True))
-            text = "list of plot specs" if name == "plots" else _type_text(ann)
-            out.append(f"| `{name}` | `{text}` | `{default}` | {f.description or ''} |")
-        out.append("")
-    return "\n".join(out)
-
-
-if __name__ == "__main__":
-    print(markdown_reference())

@@ -1,11 +1,120 @@
-"""Registered page tables that no plot spec can express (docs/reports.md §Escape hatch): each needs a
-baseline row from elsewhere in the sweep. Placed with {{table:NAME}} in a config's outputs.text."""
+"""Tables of a report page: the data table of a plot spec (our numbers, the paper's beside them),
+the power-law fit table, and the named tables that no plot spec can express because each needs a
+baseline row from elsewhere in the sweep (docs/reports.md §Named tables), placed with {{table:NAME}}
+in a config's outputs.text. TABLES is a plain registry filled here; nothing imports back."""
 from __future__ import annotations
 
 import math
 
-from .plots import md_table
-from .report import derived_table
+import numpy as np
+
+from .frames import cell, fmt, label, pareto_front, paper_value, same, sorted_x, unique
+
+
+def md_table(header: list, rows: list[list]) -> list[str]:
+    """A Markdown table; cells are formatted with str()."""
+    return (["| " + " | ".join(map(str, header)) + " |", "|" + "---|" * len(header)]
+            + ["| " + " | ".join(map(str, r)) + " |" for r in rows])
+
+
+def data_table(spec, d, hues) -> list[str]:
+    """Our numbers, one row per (facet, x) and one column per (y, hue), paper columns beside them."""
+    facets = unique(d[spec.facet]) if spec.facet else [None]
+    if spec.kind == "scatter":
+        cols = list(dict.fromkeys(c for c in (spec.facet, spec.hue, spec.style, *spec.columns, spec.x, spec.ys[0]) if c))
+        rows = [[fmt(r[c], spec.format) for c in cols] for _, r in d[cols].iterrows()]
+        return md_table(cols, rows)
+    if spec.x is None:  # plain listing of the y columns
+        cols = list(dict.fromkeys([c for c in (spec.facet, spec.hue) if c] + spec.columns + spec.ys))
+        rows = [[fmt(r[c], spec.format) for c in cols] for _, r in d[cols].iterrows()]
+        return md_table(cols, rows)
+    groups = []  # (hue, y, header)
+    for h in hues:
+        for y in spec.ys:
+            if h is None:
+                header = y
+            else:
+                header = label(h) if len(spec.ys) == 1 else f"{y} {label(h)}"
+            groups.append((h, y, header))
+    header = ([spec.facet] if spec.facet else []) + [spec.x]
+    paper_groups = []
+    for h, y, head in groups:
+        header.append(head)
+        g = h if h is not None else y
+        if any(same(g, k) for k in spec.paper):
+            header.append(f"{head} (paper)")
+            paper_groups.append(g)
+    extra = [k for k in spec.paper if not any(same(k, (h if h is not None else y)) for h, y, _ in groups)]
+    header += [f"{label(k)} (paper)" for k in extra]
+    rows = []
+    for f in facets:
+        df_f = d if f is None else d[[same(v, f) for v in d[spec.facet]]]
+        xs = sorted_x(list(df_f[spec.x]) + [x for k in spec.paper for x in spec.paper[k]]) if f is facets[0] \
+            else sorted_x(df_f[spec.x])
+        for x in xs:
+            r = ([label(f)] if spec.facet else []) + [label(x)]
+            for h, y, _ in groups:
+                keys = {spec.x: x}
+                if h is not None:
+                    keys[spec.hue] = h
+                v, n = cell(df_f, keys, y)
+                r.append(fmt(v, spec.format) + (f" (mean of {n})" if n > 1 else ""))
+                g = h if h is not None else y
+                if g in paper_groups:
+                    p = paper_value(spec, g, x)
+                    r.append("" if p is None else fmt(p, spec.format))
+            for k in extra:
+                p = paper_value(spec, k, x)
+                r.append("" if p is None else fmt(p, spec.format))
+            rows.append(r)
+    return md_table(header, rows)
+
+
+def powerlaw_table(spec, d, hues) -> tuple[list[str], list[dict]]:
+    """Fit y = c x^-alpha per (facet, hue) in log-log (least squares over the mean y at each x)."""
+    facets = unique(d[spec.facet]) if spec.facet else [None]
+    y = spec.ys[0]
+    rows, fits = [], []
+    for f in facets:
+        df_f = d if f is None else d[[same(v, f) for v in d[spec.facet]]]
+        for h in hues:
+            sub = df_f if h is None else df_f[[same(v, h) for v in df_f[spec.hue]]]
+            xs = [x for x in sorted_x(sub[spec.x])]
+            pts = [(float(x), cell(sub, {spec.x: x}, y)[0]) for x in xs]
+            pts = [(a, b) for a, b in pts if a > 0 and b > 0 and np.isfinite(b)]
+            if len(pts) < 2:
+                continue
+            lx, ly = np.log([p[0] for p in pts]), np.log([p[1] for p in pts])
+            slope, icpt = np.polyfit(lx, ly, 1)
+            pred = slope * lx + icpt
+            ss = float(np.sum((ly - ly.mean()) ** 2))
+            r2 = 1.0 - float(np.sum((ly - pred) ** 2)) / ss if ss > 0 else 1.0
+            fit = {"facet": f, "hue": h, "alpha": -float(slope), "r2": r2, "n": len(pts),
+                   "x_min": pts[0][0], "x_max": pts[-1][0]}
+            fits.append(fit)
+            paper = paper_value(spec, h if h is not None else y, "alpha") if spec.paper else None
+            rows.append(([label(f)] if spec.facet else []) + ([label(h)] if spec.hue else [])
+                        + [f"{fit['alpha']:.3f}", f"{r2:.3f}", str(len(pts)), f"{pts[0][0]:g}-{pts[-1][0]:g}"]
+                        + ([fmt(paper)] if spec.paper else []))
+    header = ([spec.facet] if spec.facet else []) + ([spec.hue] if spec.hue else []) + [
+        f"alpha ({y} ∝ {spec.x}^-alpha)", "R²", "points", f"{spec.x} range"] + (["paper alpha"] if spec.paper else [])
+    return md_table(header, rows), fits
+
+
+# ---- named tables --------------------------------------------------------------------------------
+
+TABLES: dict = {}
+
+
+def named_table(name: str):
+    """Register a page table fn(df, config) -> Markdown lines under ``name`` (for {{table:NAME}}). The escape
+    hatch: prefer `derived:` columns and `table` plots."""
+    def deco(fn):
+        TABLES[name] = fn
+        return fn
+
+    return deco
+
 
 SCENE_ORDER = ["bunny", "spot", "modern_hall", "mixed_sizes"]
 
@@ -23,7 +132,7 @@ def _scenes(df) -> list:
     return [s for s in SCENE_ORDER if s in present] + [s for s in present if s not in SCENE_ORDER]
 
 
-@derived_table("table2_culling")
+@named_table("table2_culling")
 def table2_culling(df, config) -> list[str]:
     """Culled share = 1 - tested / tested(no half-space test), per scene and R, beside the paper's."""
     df = _ok(df)
@@ -48,7 +157,7 @@ def table2_culling(df, config) -> list[str]:
     return md_table(["scene", "R", "row"] + [m[0] for m in modes], rows)
 
 
-@derived_table("fig15_trends")
+@named_table("fig15_trends")
 def fig15_trends(df, config) -> list[str]:
     """Is tile (2x2, and 1x1) the cheapest of the arbitrary-pattern algorithms at every CoC?"""
     df = _ok(df)
@@ -79,11 +188,9 @@ def fig15_trends(df, config) -> list[str]:
     return lines
 
 
-@derived_table("pareto_members")
+@named_table("pareto_members")
 def pareto_members(df, config) -> list[str]:
     """Which (sample-table kind, algorithm) pairs make up the RMSE Pareto front against each cost."""
-    from .plots import pareto_front
-
     df = _ok(df)
     costs = [c for c in ("ops.total", "raster.samples_tested", "time.wall_s", "timing.cycles") if c in df.columns]
     rows = []
@@ -109,7 +216,7 @@ def pareto_members(df, config) -> list[str]:
 PAPER_MULTIVIEW = {2: "+10%", 7: "+15%"}
 
 
-@derived_table("multiview_increase")
+@named_table("multiview_increase")
 def multiview_increase(df, config) -> list[str]:
     """Shader invocations (shading-cache misses) for V views relative to one view, per CoC."""
     df = _ok(df)

@@ -12,7 +12,7 @@ import sys
 import time
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 
 
 def scenes(quick: bool):
@@ -51,7 +51,7 @@ def main(argv=None) -> int:
 
     table = sim.SampleTable.stratified(spp=args.spp, seed=1)
     lines = [f"# bench_core: brute-force throughput", "",
-             f"`make bench` (`python experiments/bench_core.py`), {platform.processor() or platform.machine()}, "
+             f"`make bench` (`python -m experiments.bench.bench_core`), {platform.processor() or platform.machine()}, "
              f"{os.cpu_count()} hardware threads, {args.size}^2, {args.spp} spp, best of {args.repeats}.", "",
              "| scene | motion | CoC | threads | samples tested | Msamples/s | ns/test | class mix (2D/3D/4D/5D tests) |",
              "|---|---|---|---|---|---|---|---|"]
