@@ -1,6 +1,7 @@
 """Experiments: config schema errors (file:line), extends, overrides, sweep expansion with and without
-zip, the Parquet result store and its cache, failure isolation, Dask == local pool, plots and the
-report (--quick on a tiny config set)."""
+zip, the Parquet result store and its cache, failure isolation, Dask == local pool, the point kinds
+against direct sim calls, plots (heatmap and image grid included) and the report (--quick on a tiny
+config set)."""
 import os
 import signal
 import subprocess
@@ -278,6 +279,106 @@ def test_powerlaw_fit_recovers_known_exponents():
     res = figures.render_plot(spec, pd.DataFrame(rows), None)
     alphas = {f["hue"]: f["alpha"] for f in res["fits"]}
     assert alphas["random"] == pytest.approx(0.5) and alphas["sobol"] == pytest.approx(0.75)
+
+
+def test_heatmap_cells_and_table_match_the_frame(tmp_path):
+    df = _frame()
+    spec = xc.PlotSpec(kind="heatmap", x="camera.coc_px", row="pipeline.algorithm", y="ops.total", format="{:g}")
+    res = figures.render_plot(spec, df, tmp_path / "heat")
+    assert [p.suffix for p in res["files"]] == [".png", ".pdf"]
+    table = "\n".join(res["markdown"])
+    # independent pivot: ops.total = k x^2 with k = 1 (a), 2 (b)
+    assert "| pipeline.algorithm \\ camera.coc_px | 1 | 2 | 4 | 8 |" in table
+    assert "| a | 1 | 4 | 16 | 64 |" in table and "| b | 2 | 8 | 32 | 128 |" in table
+    with pytest.raises(ValueError, match="needs x and row"):
+        xc.PlotSpec(kind="heatmap", x="camera.coc_px", y="ops.total")
+
+
+def test_image_grid_places_each_points_image(tmp_path):
+    from PIL import Image
+
+    rows = []
+    for spp in (1, 4):
+        for coc in (0.0, 5.0):
+            path = tmp_path / f"img_{spp}_{coc:g}.png"
+            Image.new("RGB", (8, 8), (int(40 * spp), int(10 * coc), 0)).save(path)
+            rows.append({"samples.spp": spp, "camera.coc_px": coc, "metric.rmse": spp * 0.01 + coc,
+                         "image.path": str(path), "status": "ok"})
+    spec = xc.PlotSpec(kind="image_grid", x="camera.coc_px", row="samples.spp", y="metric.rmse", format="{:.2f}")
+    res = figures.render_plot(spec, pd.DataFrame(rows), tmp_path / "grid")
+    assert res["files"][0].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "| 4 | 0.04 | 5.04 |" in "\n".join(res["markdown"])
+    with pytest.raises(frames.PlotError, match="outputs.images"):
+        figures.render_plot(spec, pd.DataFrame(rows).drop(columns=["image.path"]), None)
+
+
+# ---- point kinds ---------------------------------------------------------------------------------
+
+def test_occlusion_query_point_is_sim_occlusion_query(tmp_path, store):
+    import models
+    import sim
+
+    text = ("scene: {name: quad, params: {size: 8, depth: 2}}\ncamera: {width: 24, height: 24, coc_px: 3}\n"
+            "samples: {spp: 4, seed: 1}\npipeline: {algorithm: tile}\n"
+            "point: {kind: occlusion_query, query: {name: quad, params: {size: 1, depth: 5}}}\n"
+            "sweep:\n  point.mode: [samples, intervals]\n  point.query:\n"
+            "    - {name: quad, params: {size: 1, depth: 5}}\n    - {name: quad, params: {size: 1, depth: 1}}\n")
+    df = runner.run_sweep(xc.load_config(write(tmp_path, "o.yaml", text)), workers=0, progress=False)
+    assert (df["status"] == "ok").all(), df["error"].tolist()
+    occ = models.named("quad", size=8, depth=2)
+    cam = sim.Camera(width=24, height=24, fov_y_deg=45.0, focus_distance=2.0, coc_px=3)
+    table = sim.SampleTable.create("stratified", spp=4, seed=1)
+    for _, row in df.iterrows():
+        q = models.named("quad", size=1, depth=row["point.query.params.depth"])
+        r = sim.occlusion_query(occ, q, cam, table, sim.PipelineConfig(algorithm="tile"), mode=row["point.mode"])
+        assert bool(row["query.visible"]) == r.visible
+        assert row["query.visible"] == (row["point.query.params.depth"] == 1)  # behind the occluder: hidden
+        for k in ("raster.samples_tested", "occlusion.pairs_tested", "depth.bytes_read"):
+            assert row[k] == r.work[k], k
+
+
+def test_conservative_point_is_sim_conservative_raster(tmp_path, store):
+    import models
+    import sim
+
+    text = BASE + "point: {kind: conservative}\n"
+    df = runner.run_sweep(xc.load_config(write(tmp_path, "c.yaml", text)), workers=0, progress=False)
+    assert (df["status"] == "ok").all(), df["error"].tolist()
+    scene = models.named("quad")
+    hint = scene.camera_hint
+    cam = sim.Camera(width=24, height=24, fov_y_deg=hint["fov_y_deg"], focus_distance=hint["focus_distance"],
+                     coc_px=4)
+    r = sim.conservative_raster(scene, cam, sim.PipelineConfig(algorithm="tile"), reduce="tz_box")
+    assert df["conservative.pixels_covered"].iloc[0] == int((r.count > 0).sum()) > 0
+    for k, v in r.flat_stats.items():
+        if isinstance(v, int) and not isinstance(v, bool):
+            assert df[k].iloc[0] == v, k
+
+
+def test_retime_point_is_timing_estimate_on_one_stored_render(tmp_path, store):
+    import models
+    import sim
+
+    text = (BASE.replace("quad}", "quad, params: {translation_t1: [0.2, 0, 0]}}") + "point: {kind: retime}\n"
+            "sweep:\n  point.hardware: [{}, {memory_bytes_per_clock: 4}, {sample_test: {throughput: 1}}]\n")
+    df = runner.run_sweep(xc.load_config(write(tmp_path, "r.yaml", text)), workers=2, progress=False)
+    assert (df["status"] == "ok").all(), df["error"].tolist()
+    assert len(list((store / "records").glob("*.npz"))) == 1  # one render for the three variants
+    scene = models.named("quad", translation_t1=[0.2, 0, 0])
+    hint = scene.camera_hint
+    cam = sim.Camera(width=24, height=24, fov_y_deg=hint["fov_y_deg"], focus_distance=hint["focus_distance"],
+                     coc_px=4)
+    res = sim.render(scene, cam, sim.SampleTable.create("stratified", spp=4, seed=1),
+                     sim.PipelineConfig(algorithm="tile"))
+    variants = [sim.HardwareConfig(), sim.HardwareConfig(memory_bytes_per_clock=4.0),
+                sim.HardwareConfig.from_dict({"sample_test": {"throughput": 1.0}})]
+    expected = [sim.timing.estimate(res.timing_records, hw)["timing.cycles"] for hw in variants]
+    assert df["timing.cycles"].tolist() == pytest.approx(expected)
+    assert expected[0] == pytest.approx(res.flat_stats["timing.cycles"])  # re-timing changes nothing by itself
+    assert expected[1] > expected[0] and expected[2] > expected[0]
+    assert df["raster.samples_tested"].tolist() == [res.flat_stats["raster.samples_tested"]] * 3
+    with pytest.raises(xc.ConfigError, match="point.hardware: only for kind 'retime'"):
+        xc.load_config(write(tmp_path, "bad.yaml", BASE + "point: {hardware: {cores: 2}}\n"))
 
 
 # ---- report --------------------------------------------------------------------------------------

@@ -30,7 +30,9 @@ class _Strict(BaseModel):
 class SceneSpec(_Strict):
     """Which workload to render (models/)."""
 
-    name: Optional[str] = Field(None, description="A named scene (models.scene_names()), e.g. 'spot_wall', 'bunny'")
+    name: Optional[str] = Field(None, description=(
+        "A named scene (models.scene_names(), or a workload of experiments/config/workloads.py), e.g. 'spot_wall', "
+        "'bunny'"))
     path: Optional[str] = Field(None, description="A scene YAML file or a mesh (OBJ/PLY), relative to the repository")
     params: dict[str, Any] = Field(default_factory=dict, description="Keyword parameters of the named scene")
 
@@ -139,7 +141,8 @@ class PlotSpec(_Strict):
         "their values with spaces ('tile 1')"))
     style: Optional[str] = Field(None, description="scatter only: column whose values get one marker shape each")
     facet: Optional[str] = Field(None, description="Column whose values get one panel each")
-    where: dict[str, Any] = Field(default_factory=dict, description="Equality filter {column: value or [values]}")
+    where: dict[str, Any] = Field(default_factory=dict, description=(
+        "Equality filter {column: value or [values]}; null matches a missing value"))
     logx: bool = Field(False, description="Logarithmic x axis")
     logy: bool = Field(False, description="Logarithmic y axis")
     title: Optional[str] = Field(None, description="Figure title")

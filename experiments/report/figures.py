@@ -11,8 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .frames import (PlotError, apply_where, cell, check_columns, label, missing, paper_number, paper_value, pareto_front,
-                     same, sorted_x, unique)
+from .frames import (PlotError, apply_where, cell, check_columns, fmt, label, missing, paper_number, paper_value,
+                     pareto_front, same, sorted_x, unique)
 from .tables import data_table, md_table, powerlaw_table
 
 # Okabe-Ito: distinguishable in colour-blind vision and in greyscale print.

@@ -36,11 +36,12 @@ def same(a, b) -> bool:
 
 
 def apply_where(df, where: dict):
+    """The rows whose column equals the value (or one of a list of values); null matches a missing value."""
     for col, want in where.items():
         if col not in df.columns:
             raise PlotError(f"where: unknown column {col!r}")
         wants = want if isinstance(want, list) else [want]
-        df = df[[any(same(v, w) for w in wants) for v in df[col]]]
+        df = df[[any(missing(v) if w is None else same(v, w) for w in wants) for v in df[col]]]
     return df
 
 

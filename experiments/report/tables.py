@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from .frames import cell, fmt, label, pareto_front, paper_value, same, sorted_x, unique
+from .frames import cell, fmt, label, missing, pareto_front, paper_value, same, sorted_x, unique
 
 
 def md_table(header: list, rows: list[list]) -> list[str]:
@@ -235,3 +235,102 @@ def multiview_increase(df, config) -> list[str]:
                          f"{100 * (inv / b - 1):+.1f}%", f"{hit:.3f}", PAPER_MULTIVIEW.get(int(views), "")])
     return md_table(["CoC [px] (whole lens)", "views", "spp (all views)", "shader invocations", "vs 1 view",
                      "cache hit rate", "paper"], rows)
+
+
+# 001 Table 3: quad shading requests / supersampled shades for OUR and INTERVAL.
+PAPER_T3 = {"tile": {0: 1, 10: 2, 20: 4, 30: 6, 50: 9}, "interval": {0: 10, 10: 12, 20: 14, 30: 16, 50: 19}}
+
+
+@named_table("table3_supersampling")
+def table3_supersampling(df, config) -> list[str]:
+    """Per CoC: quad requests of tile+msaa (OUR) and interval+msaa relative to the samples supersampling
+    shades (shade.lanes_live of the per_sample row) and to supersampling's own quad requests; OUR's
+    helper-lane share of its quads."""
+    df = _ok(df)
+    rows = []
+    for coc in sorted(df["camera.coc_px"].unique()):
+        sub = df[df["camera.coc_px"] == coc]
+
+        def one(algo, shading):
+            r = sub[(sub["pipeline.algorithm"] == algo) & (sub["pipeline.shading"] == shading)]
+            return r.iloc[0] if len(r) else None
+
+        ss, our, itv = one("tile", "per_sample"), one("tile", "msaa"), one("interval", "msaa")
+        if ss is None or our is None or itv is None:
+            continue
+        shades = float(ss["shade.lanes_live"])
+        rows.append([f"{coc:g}", f"{100 * our['shade.quad_requests'] / shades:.1f}%",
+                     f"{PAPER_T3['tile'].get(int(coc), '')}%", f"{100 * itv['shade.quad_requests'] / shades:.1f}%",
+                     f"{PAPER_T3['interval'].get(int(coc), '')}%",
+                     f"{our['shade.quad_requests'] / ss['shade.quad_requests']:.3f}",
+                     f"{itv['shade.quad_requests'] / ss['shade.quad_requests']:.3f}",
+                     f"{our['shade.lanes_helper'] / (4 * our['shade.quad_requests']):.2f}"])
+    return md_table(["CoC [px]", "OUR", "paper OUR", "INTERVAL", "paper INTERVAL", "OUR / SS quads",
+                     "INTERVAL / SS quads", "OUR helper lanes"], rows)
+
+
+@named_table("thrash_traffic")
+def thrash_traffic(df, config) -> list[str]:
+    """Per square edge and cache associativity: INTERLEAVE's hit rate, texture bytes per covered pixel of
+    INTERLEAVE and of tile (per sample and MSAA), their ratio, and INTERLEAVE's cold/capacity/conflict misses."""
+    df = _ok(df)
+    rows = []
+    for edge in sorted(df["scene.params.edge_px"].unique()):
+        line = [f"{edge:g}"]
+        for ways in sorted(df["hardware.tex_cache.ways"].unique()):
+            sub = df[(df["scene.params.edge_px"] == edge) & (df["hardware.tex_cache.ways"] == ways)]
+
+            def one(algo, shading):
+                return sub[(sub["pipeline.algorithm"] == algo) & (sub["pipeline.shading"] == shading)].iloc[0]
+
+            il, tl, tm = one("interleave", "per_sample"), one("tile", "per_sample"), one("tile", "msaa")
+            bpx = [st["tex.cache.bytes_fetched"] / (edge * edge) for st in (il, tl, tm)]
+            line += [f"{il['tex.cache.hits'] / il['tex.cache.accesses']:.4f}", *(f"{b:.1f}" for b in bpx),
+                     f"{bpx[0] / bpx[1]:.1f}x",
+                     f"{int(il['tex.cache.misses_cold'])}/{int(il['tex.cache.misses_capacity'])}/"
+                     f"{int(il['tex.cache.misses_conflict'])}"]
+        rows.append(line)
+    ways = [("FA" if w == 0 else f"{int(w)}-way") for w in sorted(df["hardware.tex_cache.ways"].unique())]
+    header = ["edge [px]"]
+    for w in ways:
+        header += [f"{w}: hit IL", "B/px IL", "B/px TILE SS", "B/px TILE MSAA", "IL / TILE SS", "IL misses c/cap/conf"]
+    return md_table(header, rows)
+
+
+@named_table("zcull_savings")
+def zcull_savings(df, config) -> list[str]:
+    """Per scene and CoC: HiZ off against on (pipeline.hiz.enabled), pairs culled by zmax and zmin, depth
+    bytes saved, HiZ traffic, and the sample tests saved."""
+    df = _ok(df)
+    keys = [c for c in ("scene.params.order", "scene.params.layers", "camera.coc_px", "scene.params.motion_px")
+            if c in df.columns]
+    rows = []
+    for _, on in df[df["pipeline.hiz.enabled"] == True].iterrows():  # noqa: E712 - a pandas column
+        match = df["pipeline.hiz.enabled"] == False  # noqa: E712
+        for k in keys:
+            match &= df[k].isna() if _missing(on[k]) else df[k] == on[k]
+        off = df[match]
+        if not len(off):
+            continue
+        off = off.iloc[0]
+        order = on.get("scene.params.order")
+        name = "front_to_back" if _missing(order) else str(order)
+        motion = on.get("scene.params.motion_px")
+        if on["camera.coc_px"] or not _missing(motion):
+            name += f", CoC {on['camera.coc_px']:g}, motion {0 if _missing(motion) else motion:g} px"
+        bytes_off = off["depth.bytes_read"] + off["depth.bytes_written"]
+        bytes_on = on["depth.bytes_read"] + on["depth.bytes_written"]
+        hiz = on["hiz.bytes_read"] + on["hiz.bytes_written"]
+        pairs = on["zcull.pairs"]
+        rows.append([name, f"{on['scene.params.layers']:g}", f"{int(pairs):,}",
+                     f"{100 * on['zcull.pairs_culled'] / pairs:.1f}", f"{100 * on['zcull.pairs_zmin'] / pairs:.1f}",
+                     f"{int(bytes_off):,}", f"{int(bytes_on):,}", f"{100 * (1 - bytes_on / bytes_off):.1f}",
+                     f"{int(hiz):,}", f"{100 * (1 - (bytes_on + hiz) / bytes_off):.1f}",
+                     f"{100 * (1 - on['raster.samples_tested'] / off['raster.samples_tested']):.1f}"])
+    return md_table(["order", "layers", "pairs", "zmax-culled %", "zmin (no reads) %", "depth bytes off",
+                     "depth bytes on", "depth bytes saved %", "HiZ bytes", "saved incl. HiZ %",
+                     "sample tests saved %"], rows)
+
+
+def _missing(v) -> bool:
+    return missing(v) or (isinstance(v, float) and math.isnan(v))

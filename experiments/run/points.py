@@ -154,19 +154,3 @@ def error_row(config_json: str, message: str) -> dict:
     row = config_columns(config)
     row.update(status="error", error=message, **{"engine.version": engine_id(), "engine.git_rev": git_rev()})
     return row
-
-
-def prepare_renders(configs, progress: bool = True) -> None:
-    """Render the distinct missing renders of retime points up front (their variants share one render)."""
-    todo = {}
-    for c in configs:
-        if c.point.kind == "retime":
-            todo.setdefault(config_hash(render_config(c)), c)
-    for i, c in enumerate(todo.values()):
-        t0 = time.perf_counter()
-        if cached_records(config_hash(render_config(c))) is not None:
-            continue
-        stored_render(c)
-        if progress:
-            print(f"render for retime {i + 1}/{len(todo)}: {c.scene.name or c.scene.path} "
-                  f"({time.perf_counter() - t0:.1f} s)")

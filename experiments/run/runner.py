@@ -8,7 +8,7 @@ from pathlib import Path
 
 from ..config import RenderConfig, config_hash, expand_sweep
 from .executors import dask, local
-from .points import prepare_renders
+from .points import render_config
 from .store import cached_row, results_dir, store_point, table_path, to_frame, write_parquet
 
 
@@ -45,8 +45,15 @@ def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "c
         from .references import prepare_references
 
         prepare_references([points[i][1] for i, _ in todo], progress=progress)
-    if config.point.kind == "retime" and todo:
-        prepare_renders([points[i][1] for i, _ in todo], progress=progress)
+    # retime points that re-time the same render: the first of each computes and stores the render, the
+    # others run after it and read its records.
+    phases = [todo]
+    if config.point.kind == "retime":
+        first: dict = {}
+        for key, args in todo:
+            first.setdefault(config_hash(render_config(points[key][1])), key)
+        lead = set(first.values())
+        phases = [[t for t in todo if t[0] in lead], [t for t in todo if t[0] not in lead]]
     bar = None
     if progress and todo:
         from tqdm import tqdm
@@ -68,10 +75,11 @@ def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "c
     t0 = time.perf_counter()
     interrupted = False
     try:
-        if scheduler is not None:
-            dask(todo, scheduler, finished)
-        else:
-            local(todo, workers, finished)
+        for phase in phases:
+            if scheduler is not None:
+                dask(phase, scheduler, finished)
+            else:
+                local(phase, workers, finished)
     except KeyboardInterrupt:
         interrupted = True
     finally:
