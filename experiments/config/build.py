@@ -8,6 +8,22 @@ import sim
 from .schema import REPO, ConfigError, RenderConfig, SceneSpec
 
 
+class WideLensCamera(sim.Camera):
+    """A camera whose lens is ``u_scale`` times wider in u than in v: V views on a camera line, each
+    with a full-size lens, the samples of view k in the k-th u-interval (002 §8, Fig. 16)."""
+
+    def __init__(self, u_scale: float, **kw):
+        super().__init__(**kw)
+        if not u_scale >= 1.0:
+            raise ConfigError(f"camera.u_scale: expected >= 1, got {u_scale!r}")
+        self.u_scale = float(u_scale)
+
+    def engine_params(self) -> dict:
+        p = super().engine_params()
+        p["coc_x_px"] *= self.u_scale
+        return p
+
+
 def build_scene(spec: SceneSpec):
     """The models.Scene of a scene section: a named scene (models/, then experiments/config/workloads.py)
     or a file relative to the repository."""
@@ -35,7 +51,8 @@ def build(config: RenderConfig):
     cam_args.update(given)
     if cam_args.get("shutter") is not None:
         cam_args["shutter"] = tuple(cam_args["shutter"])
-    camera = sim.Camera(**cam_args)
+    u_scale = cam_args.pop("u_scale", None)
+    camera = sim.Camera(**cam_args) if u_scale in (None, 1) else WideLensCamera(u_scale, **cam_args)
     t = config.samples
     params = dict(spp=t.spp, seed=t.seed, period=t.period, lens=t.lens, time=t.time)
     if t.kind == "interleaved":

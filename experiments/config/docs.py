@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import sys
 import typing
+from pathlib import Path
 
 from pydantic import BaseModel
 

@@ -61,6 +61,9 @@ class CameraSpec(_Strict):
     up: Optional[list[float]] = Field(None, description="Up direction; default +y")
     near: Optional[float] = Field(None, description="Near plane distance [world units]")
     shutter: Optional[list[float]] = Field(None, description="Shutter interval [open, close] within [0, 1]")
+    u_scale: Optional[float] = Field(None, description=(
+        "Lens extent in u relative to v (>= 1): V views side by side on a camera line, each a full-size lens "
+        "(samples.kind multiview with views V and u_scale V); default 1"))
 
 
 class SamplesSpec(_Strict):

@@ -334,3 +334,35 @@ def zcull_savings(df, config) -> list[str]:
 
 def _missing(v) -> bool:
     return missing(v) or (isinstance(v, float) and math.isnan(v))
+
+
+@named_table("multiview_wide")
+def multiview_wide(df, config) -> list[str]:
+    """Per CoC and number of views: shading-cache misses and lanes (with helpers) of `shading: cache`, its
+    hit rate, and the supersampled shades (`shading: per_sample`), each relative to one view."""
+    df = _ok(df)
+    rows = []
+    for coc in sorted(df["camera.coc_px"].unique(), reverse=True):
+        sub = df[df["camera.coc_px"] == coc]
+
+        def one(views, shading):
+            r = sub[(sub["samples.views"] == views) & (sub["pipeline.shading"] == shading)]
+            return r.iloc[0] if len(r) else None
+
+        base, base_ss = one(1, "cache"), one(1, "per_sample")
+        if base is None or base_ss is None:
+            continue
+        for views in sorted(sub["samples.views"].unique()):
+            c, ss = one(views, "cache"), one(views, "per_sample")
+            if c is None or ss is None:
+                continue
+            inv, lanes, shades = (float(c["shade.lanes_live"]), float(c["shade.invocations"]),
+                                  float(ss["shade.lanes_live"]))
+            hits, misses = float(c["shade.cache_hits"]), float(c["shade.cache_misses"])
+            rows.append([f"{coc:g}", str(int(views)), str(int(c["samples.spp"])), f"{inv:,.0f}",
+                         f"{100 * (inv / base['shade.lanes_live'] - 1):+.1f}%", f"{lanes:,.0f}",
+                         f"{100 * (lanes / base['shade.invocations'] - 1):+.1f}%", f"{hits / max(1.0, hits + misses):.3f}",
+                         f"{shades:,.0f}", f"{100 * (shades / base_ss['shade.lanes_live'] - 1):+.0f}%",
+                         PAPER_MULTIVIEW.get(int(views), "")])
+    return md_table(["CoC per view", "views", "spp", "invocations", "vs 1 view", "lanes incl. helpers", "vs 1 view",
+                     "cache hit rate", "supersampled shades", "vs 1 view", "paper"], rows)

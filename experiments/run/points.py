@@ -9,7 +9,7 @@ and the row it leaves in the result store.
   counters and `conservative.pixels_covered`.
 - retime: sim.timing.estimate on the stored work records of the point's render (store.records_path;
   rendered once on first use) with `point.hardware` merged over the hardware section; the render's
-  counters and the new `timing.*` figures.
+  counters and the re-timed `timing.*` figures.
 """
 from __future__ import annotations
 

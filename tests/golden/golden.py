@@ -170,11 +170,11 @@ def write(rows: dict[tuple, int], path: Path = GOLDEN) -> None:
             w.writerow(key + (rows[key],))
 
 
-def diff(old: dict[tuple, int], new: dict[tuple, int]) -> tuple[set, set, list]:
-    """(keys only in old, keys only in new, [(key, old, new)] for changed values)."""
-    removed = set(old) - set(new)
-    added = set(new) - set(old)
-    changed = [(k, old[k], new[k]) for k in sorted(set(old) & set(new)) if old[k] != new[k]]
+def diff(stored: dict[tuple, int], computed: dict[tuple, int]) -> tuple[set, set, list]:
+    """(keys only stored, keys only computed, [(key, stored, computed)] for changed values)."""
+    removed = set(stored) - set(computed)
+    added = set(computed) - set(stored)
+    changed = [(k, stored[k], computed[k]) for k in sorted(set(stored) & set(computed)) if stored[k] != computed[k]]
     return removed, added, changed
 
 
@@ -182,10 +182,10 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--check", action="store_true", help="only compare, do not rewrite")
     args = parser.parse_args(argv)
-    new = compute_all()
-    old = read() if GOLDEN.exists() else {}
-    removed, added, changed = diff(old, new)
-    print(f"{GOLDEN.relative_to(REPO)}: {len(new)} values; {len(added)} added, {len(removed)} removed, "
+    computed = compute_all()
+    stored = read() if GOLDEN.exists() else {}
+    removed, added, changed = diff(stored, computed)
+    print(f"{GOLDEN.relative_to(REPO)}: {len(computed)} values; {len(added)} added, {len(removed)} removed, "
           f"{len(changed)} changed")
     by_counter: dict[str, list] = {}
     for key, a, b in changed:
@@ -195,7 +195,7 @@ def main(argv=None) -> int:
         rel = (worst[2] - worst[1]) / max(abs(worst[1]), 1)
         print(f"  {counter}: {len(items)} cases changed, largest {rel:+.2%} at {worst[0][:-1]} ({worst[1]} -> {worst[2]})")
     if not args.check:
-        write(new)
+        write(computed)
         print("rewritten; review `git diff tests/golden/ops.csv` and explain the change in the commit")
     return 1 if (args.check and (removed or added or changed)) else 0
 
