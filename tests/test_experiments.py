@@ -381,6 +381,14 @@ def test_retime_point_is_timing_estimate_on_one_stored_render(tmp_path, store):
         xc.load_config(write(tmp_path, "bad.yaml", BASE + "point: {hardware: {cores: 2}}\n"))
 
 
+def test_textured_square_workload_covers_its_edge_squared(tmp_path, store):
+    text = ("scene: {name: textured_square, params: {edge_px: 20, width: 64, height: 64}}\n"
+            "camera: {coc_px: 0}\nsamples: {spp: 4, seed: 1}\npipeline: {algorithm: tile}\n")
+    df = runner.run_sweep(xc.load_config(write(tmp_path, "t.yaml", text)), workers=0, progress=False)
+    covered = df["raster.samples_hit"].iloc[0] / 4  # pixels (in focus: a pixel's samples all hit or miss)
+    assert covered == pytest.approx(20 * 20, rel=0.1)
+
+
 # ---- report --------------------------------------------------------------------------------------
 
 PAGE = BASE + """\
@@ -441,7 +449,7 @@ def test_experiments_load_names_known_tables(store):
         experiments.load("nothing")
 
 
-def test_every_paper_config_is_valid():
+def test_every_report_config_is_valid():
     paths = pages.report_configs()
     assert paths
     for p in paths:
@@ -453,7 +461,7 @@ def test_every_paper_config_is_valid():
 
 @pytest.mark.slow
 def test_full_quick_report(tmp_path):
-    """`rast5d report --quick` over every configs/paper config (about 9 minutes on 2 busy cores)."""
+    """`rast5d report --quick` over every report config (about 9 minutes on 2 busy cores)."""
     env = {**os.environ, "RAST5D_RESULTS": str(tmp_path / "results")}
     r = subprocess.run([sys.executable, "-m", "experiments.cli", "report", "--quick"], capture_output=True, text=True,
                        env=env)
@@ -462,8 +470,11 @@ def test_full_quick_report(tmp_path):
 
     index = (REPORTS / "quick" / "README.md").read_text()
     for p in pages.report_configs():
-        page = xc.load_config(p).outputs.page
-        assert f"[{page}](paper/{page}.md)" in index
+        outputs = xc.load_config(p).outputs
+        if outputs.folder == "paper":
+            assert f"[{outputs.page}](paper/{outputs.page}.md)" in index
+        else:
+            assert (REPORTS / "quick" / outputs.folder / f"{outputs.page}.md").exists()
 
 
 def test_the_documented_spec_example_is_valid():
