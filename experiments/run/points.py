@@ -31,17 +31,35 @@ def config_columns(config: RenderConfig, camera=None) -> dict:
     except Exception:  # noqa: BLE001 - validated on load; keep the row even if not
         pass
     if camera is not None:
-        for k in ("width", "height", "fov_y_deg", "focus_distance", "coc_px", "aperture_radius", "lens", "near"):
-            if hasattr(camera, k):
-                v = getattr(camera, k)
-                row[f"camera.{k}"] = v if isinstance(v, (int, float, str)) else json.dumps(v)
+        row.update(camera_columns(camera))
     row["config_hash"] = config_hash(config)
     return row
 
 
-def _render(config, scene, camera, table, pipeline, row, image_path):
+def camera_columns(camera) -> dict:
+    """The resolved camera of a point (fields the scene's hint filled in included)."""
+    out = {}
+    for k in ("width", "height", "fov_y_deg", "focus_distance", "coc_px", "aperture_radius", "lens", "near"):
+        if hasattr(camera, k):
+            v = getattr(camera, k)
+            out[f"camera.{k}"] = v if isinstance(v, (int, float, str)) else json.dumps(v)
+    return out
+
+
+def _build(config: RenderConfig, row: dict, threads: int | None):
+    """(scene, camera, table, pipeline) of a point; adds the resolved camera and the scene size to row."""
+    scene, camera, table, pipeline = build(config)
+    if threads is not None and config.pipeline.threads == 0:
+        pipeline = pipeline.replace(threads=threads)
+    row.update(camera_columns(camera))
+    row["scene.triangles"] = scene.n_triangles
+    return scene, camera, table, pipeline
+
+
+def _render(config, row, image_path, threads):
     import sim
 
+    scene, camera, table, pipeline = _build(config, row, threads)
     result = sim.render(scene, camera, table, pipeline, hardware=config.hardware_config())
     row["resolved.lens_grid"] = result.config.get("lens_grid")
     row.update(result.flat_stats)
@@ -55,9 +73,10 @@ def _render(config, scene, camera, table, pipeline, row, image_path):
     return result
 
 
-def _occlusion_query(config, scene, camera, table, pipeline, row, image_path):
+def _occlusion_query(config, row, image_path, threads):
     import sim
 
+    scene, camera, table, pipeline = _build(config, row, threads)
     t0 = time.perf_counter()
     r = sim.occlusion_query(scene, build_scene(config.point.query), camera, table, pipeline, mode=config.point.mode)
     row.update(r.work)
@@ -66,9 +85,10 @@ def _occlusion_query(config, scene, camera, table, pipeline, row, image_path):
     return r
 
 
-def _conservative(config, scene, camera, table, pipeline, row, image_path):
+def _conservative(config, row, image_path, threads):
     import sim
 
+    scene, camera, _, pipeline = _build(config, row, threads)
     t0 = time.perf_counter()
     r = sim.conservative_raster(scene, camera, pipeline, reduce="tz_box")
     row.update(r.flat_stats)
@@ -82,7 +102,8 @@ def render_config(config: RenderConfig) -> RenderConfig:
 
 
 def stored_render(config: RenderConfig, threads: int | None = None):
-    """(timing records, flat counters) of ``config``'s render, from the store or rendered and stored."""
+    """(timing records, flat counters with the resolved camera and scene size) of ``config``'s render, from
+    the store or rendered and stored."""
     import sim
 
     base = render_config(config)
@@ -90,16 +111,15 @@ def stored_render(config: RenderConfig, threads: int | None = None):
     cached = cached_records(h)
     if cached is not None:
         return cached
-    scene, camera, table, pipeline = build(base)
-    if threads is not None and base.pipeline.threads == 0:
-        pipeline = pipeline.replace(threads=threads)
+    stats: dict = {}
+    scene, camera, table, pipeline = _build(base, stats, threads)
     result = sim.render(scene, camera, table, pipeline, hardware=base.hardware_config())
-    stats = {**result.flat_stats, "scene.triangles": scene.n_triangles}
+    stats.update(result.flat_stats)
     store_records(h, result.timing_records, stats)
     return result.timing_records, stats
 
 
-def _retime(config, scene, camera, table, pipeline, row, image_path, threads=None):
+def _retime(config, row, image_path, threads):
     import sim
 
     records, stats = stored_render(config, threads)
@@ -121,16 +141,8 @@ def render_point(config: RenderConfig, image_path: str | Path | None = None, thr
     kind = config.point.kind
     if image_path is not None and kind != "render":
         raise ValueError(f"outputs.images: only render points have images, got point kind {kind!r}")
-    if kind == "retime":  # the render comes from the record store: build nothing else
-        row = config_columns(config)
-        result = _retime(config, None, None, None, None, row, None, threads)
-    else:
-        scene, camera, table, pipeline = build(config)
-        if threads is not None and config.pipeline.threads == 0 and kind != "occlusion_query":
-            pipeline = pipeline.replace(threads=threads)
-        row = config_columns(config, camera)
-        row["scene.triangles"] = scene.n_triangles
-        result = POINT_KINDS[kind](config, scene, camera, table, pipeline, row, image_path)
+    row = config_columns(config)
+    result = POINT_KINDS[kind](config, row, image_path, threads)
     row.update(status="ok", error="", **{"engine.version": engine_id(), "engine.git_rev": git_rev()})
     return row, result
 
