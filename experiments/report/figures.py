@@ -162,6 +162,18 @@ def _scatter_legend(spec, hues, styles):
     return handles
 
 
+def _save(fig, out_base: Path | None, dpi: int | None = None) -> list[Path]:
+    """Write the figure as out_base.png and out_base.pdf (no creation date: reproducible PDFs)."""
+    files = []
+    if out_base is not None:
+        out_base.parent.mkdir(parents=True, exist_ok=True)
+        for ext in ("png", "pdf"):
+            p = out_base.with_suffix(f".{ext}")
+            fig.savefig(p, **({"dpi": dpi} if dpi else {}), metadata={"CreationDate": None} if ext == "pdf" else None)
+            files.append(p)
+    return files
+
+
 def _short(col: str) -> str:
     return col.removesuffix(".name").split(".")[-1]
 
@@ -209,7 +221,6 @@ def image_grid(spec, d, out_base: Path | None) -> dict:
     import matplotlib
 
     xs, rs = sorted_x(d[spec.x]), sorted_x(d[spec.row])
-    files = []
     with matplotlib.rc_context(STYLE):
         fig, axes = plt.subplots(len(rs), len(xs), figsize=(1.9 * len(xs), 1.9 * len(rs)), squeeze=False)
         for i, r in enumerate(rs):
@@ -224,12 +235,7 @@ def image_grid(spec, d, out_base: Path | None) -> dict:
                 ax.set_axis_off()
         if spec.title:
             fig.suptitle(spec.title, fontsize=9)
-        if out_base is not None:
-            out_base.parent.mkdir(parents=True, exist_ok=True)
-            for ext in ("png", "pdf"):
-                p = out_base.with_suffix(f".{ext}")
-                fig.savefig(p, dpi=150, metadata={"CreationDate": None} if ext == "pdf" else None)
-                files.append(p)
+        files = _save(fig, out_base, dpi=150)
         plt.close(fig)
     return {"files": files, "markdown": grid_table(spec, d), "fits": []}
 
@@ -317,13 +323,7 @@ def render_plot(spec, df, out_base: Path | None) -> dict:
                 fig.legend(handles=handles, loc="outside right upper")
         if spec.title:
             fig.suptitle(spec.title, fontsize=9)
-        files = []
-        if out_base is not None:
-            out_base.parent.mkdir(parents=True, exist_ok=True)
-            for ext in ("png", "pdf"):
-                p = out_base.with_suffix(f".{ext}")
-                fig.savefig(p, metadata={"CreationDate": None} if ext == "pdf" else None)
-                files.append(p)
+        files = _save(fig, out_base)
         plt.close(fig)
     return {"files": files, "markdown": grid_table(spec, d) if spec.kind == "heatmap" else data_table(spec, d, hues),
             "fits": []}

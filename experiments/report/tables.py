@@ -127,6 +127,13 @@ def _ok(df):
     return df[df["status"] == "ok"] if "status" in df.columns else df
 
 
+def _first(df, keys: dict):
+    """The first row whose columns equal keys, or None."""
+    for k, v in keys.items():
+        df = df[df[k] == v]
+    return df.iloc[0] if len(df) else None
+
+
 def _scenes(df) -> list:
     present = list(dict.fromkeys(df["scene.name"]))
     return [s for s in SCENE_ORDER if s in present] + [s for s in present if s not in SCENE_ORDER]
@@ -251,11 +258,8 @@ def table3_supersampling(df, config) -> list[str]:
     for coc in sorted(df["camera.coc_px"].unique()):
         sub = df[df["camera.coc_px"] == coc]
 
-        def one(algo, shading):
-            r = sub[(sub["pipeline.algorithm"] == algo) & (sub["pipeline.shading"] == shading)]
-            return r.iloc[0] if len(r) else None
-
-        ss, our, itv = one("tile", "per_sample"), one("tile", "msaa"), one("interval", "msaa")
+        ss, our, itv = (_first(sub, {"pipeline.algorithm": a, "pipeline.shading": sh})
+                        for a, sh in (("tile", "per_sample"), ("tile", "msaa"), ("interval", "msaa")))
         if ss is None or our is None or itv is None:
             continue
         shades = float(ss["shade.lanes_live"])
@@ -280,10 +284,8 @@ def thrash_traffic(df, config) -> list[str]:
         for ways in sorted(df["hardware.tex_cache.ways"].unique()):
             sub = df[(df["scene.params.edge_px"] == edge) & (df["hardware.tex_cache.ways"] == ways)]
 
-            def one(algo, shading):
-                return sub[(sub["pipeline.algorithm"] == algo) & (sub["pipeline.shading"] == shading)].iloc[0]
-
-            il, tl, tm = one("interleave", "per_sample"), one("tile", "per_sample"), one("tile", "msaa")
+            il, tl, tm = (_first(sub, {"pipeline.algorithm": a, "pipeline.shading": sh})
+                          for a, sh in (("interleave", "per_sample"), ("tile", "per_sample"), ("tile", "msaa")))
             bpx = [st["tex.cache.bytes_fetched"] / (edge * edge) for st in (il, tl, tm)]
             line += [f"{il['tex.cache.hits'] / il['tex.cache.accesses']:.4f}", *(f"{b:.1f}" for b in bpx),
                      f"{bpx[0] / bpx[1]:.1f}x",
@@ -346,8 +348,7 @@ def multiview_wide(df, config) -> list[str]:
         sub = df[df["camera.coc_px"] == coc]
 
         def one(views, shading):
-            r = sub[(sub["samples.views"] == views) & (sub["pipeline.shading"] == shading)]
-            return r.iloc[0] if len(r) else None
+            return _first(sub, {"samples.views": views, "pipeline.shading": shading})
 
         base, base_ss = one(1, "cache"), one(1, "per_sample")
         if base is None or base_ss is None:
