@@ -9,6 +9,7 @@ from .schema import (REPO, CameraSpec, ConfigError, ExecutorSpec, HardwareSpec, 
 from .sweep import RESULT_EXCLUDE, config_hash, expand_sweep, flatten, point_columns, set_dotted, sweep_points
 
 __all__ = ["REPO", "ConfigError", "RenderConfig", "SceneSpec", "CameraSpec", "SamplesSpec", "PipelineSpec",
-           "HardwareSpec", "PlotSpec", "MetricsSpec", "OutputsSpec", "ExecutorSpec", "PointSpec", "build", "build_scene",
+           "HardwareSpec", "PlotSpec", "MetricsSpec", "OutputsSpec", "ExecutorSpec", "PointSpec", "build",
+           "build_scene",
            "load_config", "load_dict", "parse_override", "validate", "deep_merge", "expand_sweep", "sweep_points",
            "set_dotted", "config_hash", "flatten", "point_columns", "RESULT_EXCLUDE"]

@@ -362,7 +362,8 @@ def multiview_wide(df, config) -> list[str]:
             hits, misses = float(c["shade.cache_hits"]), float(c["shade.cache_misses"])
             rows.append([f"{coc:g}", str(int(views)), str(int(c["samples.spp"])), f"{inv:,.0f}",
                          f"{100 * (inv / base['shade.lanes_live'] - 1):+.1f}%", f"{lanes:,.0f}",
-                         f"{100 * (lanes / base['shade.invocations'] - 1):+.1f}%", f"{hits / max(1.0, hits + misses):.3f}",
+                         f"{100 * (lanes / base['shade.invocations'] - 1):+.1f}%",
+                         f"{hits / max(1.0, hits + misses):.3f}",
                          f"{shades:,.0f}", f"{100 * (shades / base_ss['shade.lanes_live'] - 1):+.0f}%",
                          PAPER_MULTIVIEW.get(int(views), "")])
     return md_table(["CoC per view", "views", "spp", "invocations", "vs 1 view", "lanes incl. helpers", "vs 1 view",
