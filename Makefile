@@ -22,7 +22,7 @@ $(STAMPS)/install: $(STAMPS)/venv $(SOURCES)
 	@mkdir -p $(STAMPS) && touch $@
 
 run: install
-	$(PY) -m experiments.quickstart
+	$(VENV)/bin/rast5d report --only quickstart
 
 test: install
 	$(PY) -m pytest -q
@@ -31,10 +31,10 @@ test-all: install
 	$(PY) -m pytest -q -m "not bench"
 
 bench: install
-	$(PY) experiments/bench_core.py
+	$(PY) -m experiments.bench.bench_core
 
 golden: install
-	$(PY) -m experiments.golden
+	$(PY) -m tests.golden.golden
 
 report: install
 	$(VENV)/bin/rast5d report

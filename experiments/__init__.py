@@ -1,9 +1,10 @@
-"""Experiments: YAML configs (config.py), sweeps on a local pool or Dask (runner.py), the Parquet
-result store, declarative report pages (plots.py, report.py), image-error metrics (metrics.py)."""
+"""Experiments: YAML configs (config/), sweeps on a local pool or Dask into the Parquet result store
+(run/), declarative report pages with figures, tables and image-error metrics (report/), the
+`rast5d` command line (cli.py), an example application (examples/) and benchmarks (bench/)."""
 
 
 def load(name: str):
     """The result table of experiment ``name`` (results/<name>.parquet) as a pandas DataFrame."""
-    from .runner import load as _load
+    from .run.store import load as _load
 
     return _load(name)

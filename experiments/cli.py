@@ -25,7 +25,7 @@ def _json_safe(x):
 
 def cmd_render(args) -> int:
     from .config import load_config
-    from .runner import render_point
+    from .run import render_point
 
     config = load_config(args.config, args.set or [])
     if config.sweep:
@@ -50,8 +50,8 @@ def cmd_render(args) -> int:
 
 def cmd_run(args) -> int:
     from .config import load_dict, validate
-    from .report import write_config_page
-    from .runner import run_sweep
+    from .report.pages import write_config_page
+    from .run import run_sweep
 
     data, lines = load_dict(args.config, args.set or [])
     config = validate(data, str(args.config), lines)
@@ -64,7 +64,7 @@ def cmd_run(args) -> int:
 
 
 def cmd_report(args) -> int:
-    from .report import main as report_main
+    from .report.pages import main as report_main
 
     return report_main(only=args.only, workers=args.workers, scheduler=args.scheduler, force=args.force,
                        quick=args.quick)
@@ -92,7 +92,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--no-report", action="store_true", help="do not write the config's report page")
     p.set_defaults(func=cmd_run)
 
-    p = sub.add_parser("report", help="run configs/paper/ (cached) and regenerate reports/")
+    p = sub.add_parser("report", help="run the report configs of configs/ (cached) and regenerate reports/")
     p.add_argument("--only", action="append", metavar="NAME", help="only these configs or pages (repeatable)")
     p.add_argument("--quick", action="store_true",
                    help="small-resolution variant into reports/quick/ with its own result store (results/quick/)")

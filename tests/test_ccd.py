@@ -1,10 +1,10 @@
-"""Continuous collision detection example (experiments/ccd.py, 002 §3): tests that know the answer."""
+"""Continuous collision detection example (experiments/examples/ccd.py, 002 §3): tests that know the answer."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from experiments import ccd
+from experiments.examples import ccd
 
 pytestmark = pytest.mark.invariants
 

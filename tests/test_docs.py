@@ -5,7 +5,7 @@ import sys
 
 import pytest
 
-from experiments import docs
+from experiments.config import docs
 
 pytestmark = pytest.mark.smoke
 
@@ -13,7 +13,7 @@ pytestmark = pytest.mark.smoke
 @pytest.mark.parametrize("path", list(docs.targets()), ids=lambda p: p.name)
 def test_generated_docs_are_current(path):
     expected = docs.targets()[path]
-    assert path.exists() and path.read_text() == expected, f"{path} is stale: run `python -m experiments.docs`"
+    assert path.exists() and path.read_text() == expected, f"{path} is stale: run `python -m experiments.config.docs`"
 
 
 def test_every_counter_is_documented_once():

@@ -1,6 +1,7 @@
 """Experiments: config schema errors (file:line), extends, overrides, sweep expansion with and without
-zip, the Parquet result store and its cache, failure isolation, Dask == local pool, plots and the
-report (--quick on a tiny config set)."""
+zip, the Parquet result store and its cache, failure isolation, Dask == local pool, the point kinds
+against direct sim calls, plots (heatmap and image grid included) and the report (--quick on a tiny
+config set)."""
 import os
 import signal
 import subprocess
@@ -12,7 +13,8 @@ import pandas as pd
 import pytest
 
 from experiments import config as xc
-from experiments import plots, report, runner
+from experiments.report import figures, frames, pages
+from experiments.run import points, runner, store as result_store
 
 pytestmark = pytest.mark.smoke
 
@@ -157,7 +159,7 @@ def test_second_run_computes_zero_points_and_force_recomputes(tmp_path, store):
     df2 = runner.run_sweep(c, workers=2, progress=False)
     assert df2.attrs["summary"] == {**df2.attrs["summary"], "rendered": 0, "cached": 4}
     assert df2["raster.samples_tested"].tolist() == df1["raster.samples_tested"].tolist()
-    loaded = runner.load("s")
+    loaded = result_store.load("s")
     assert len(loaded) == 4 and list(loaded["pipeline.algorithm"]) == ["bruteforce", "tile"] * 2
     for col in ("camera.coc_px", "camera.width", "samples.kind", "hardware.tex_cache.size_bytes", "ops.total",
                 "time.wall_s", "engine.version", "engine.git_rev", "config_hash"):
@@ -233,17 +235,17 @@ def _frame():
 
 
 def test_derived_columns_accept_dotted_names():
-    df = plots.apply_derived(_frame(), {"per_hit": "ops.total / raster.samples_hit", "twice": "2 * per_hit"})
+    df = frames.apply_derived(_frame(), {"per_hit": "ops.total / raster.samples_hit", "twice": "2 * per_hit"})
     np.testing.assert_allclose(df["twice"], 2 * df["ops.total"] / df["raster.samples_hit"])
-    with pytest.raises(plots.PlotError, match="derived 'bad'.*no_such"):
-        plots.apply_derived(_frame(), {"bad": "no_such.column + 1"})
+    with pytest.raises(frames.PlotError, match="derived 'bad'.*no_such"):
+        frames.apply_derived(_frame(), {"bad": "no_such.column + 1"})
 
 
 def test_plot_kinds_write_png_pdf_and_tables_with_paper_values(tmp_path):
     df = _frame()
     spec = xc.PlotSpec(kind="line", x="camera.coc_px", y="ops.total", hue="pipeline.algorithm", logy=True,
                        paper={"b": {1: 2.5, 8: "130"}})
-    res = plots.render_plot(spec, df, tmp_path / "line")
+    res = figures.render_plot(spec, df, tmp_path / "line")
     assert [p.suffix for p in res["files"]] == [".png", ".pdf"]
     assert res["files"][0].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and res["files"][1].read_bytes()[:4] == b"%PDF"
     table = "\n".join(res["markdown"])
@@ -251,20 +253,20 @@ def test_plot_kinds_write_png_pdf_and_tables_with_paper_values(tmp_path):
     assert "| 8 | 64 | 128 | 130 |" in table and "| 1 | 1 | 2 | 2.5 |" in table
     for kind in ("bar", "scatter"):
         spec = xc.PlotSpec(kind=kind, x="camera.coc_px", y="ops.total", hue="pipeline.algorithm", pareto=kind == "scatter")
-        assert plots.render_plot(spec, df, tmp_path / kind)["files"][0].exists()
+        assert figures.render_plot(spec, df, tmp_path / kind)["files"][0].exists()
     spec = xc.PlotSpec(kind="bar", x="pipeline.algorithm", y=["ops.total", "raster.samples_hit"], stacked=True,
                        where={"camera.coc_px": 2})
-    assert plots.render_plot(spec, df, tmp_path / "stacked")["files"]
+    assert figures.render_plot(spec, df, tmp_path / "stacked")["files"]
     spec = xc.PlotSpec(kind="table", x="camera.coc_px", y="ops.total", where={"pipeline.algorithm": ["b"]})
-    assert "| 4 | 32 |" in "\n".join(plots.render_plot(spec, df, None)["markdown"])
-    with pytest.raises(plots.PlotError, match="unknown column 'ops.totl'"):
-        plots.render_plot(xc.PlotSpec(kind="line", x="camera.coc_px", y="ops.totl"), df, None)
+    assert "| 4 | 32 |" in "\n".join(figures.render_plot(spec, df, None)["markdown"])
+    with pytest.raises(frames.PlotError, match="unknown column 'ops.totl'"):
+        figures.render_plot(xc.PlotSpec(kind="line", x="camera.coc_px", y="ops.totl"), df, None)
 
 
 def test_pareto_front_against_brute_force():
     rng = np.random.default_rng(3)
     x, y = rng.random(60), rng.random(60)
-    front = set(plots.pareto_front(x, y).tolist())
+    front = set(frames.pareto_front(x, y).tolist())
     brute = {i for i in range(60) if not any((x[j] <= x[i] and y[j] < y[i]) or (x[j] < x[i] and y[j] <= y[i])
                                              for j in range(60))}
     assert front == brute
@@ -274,9 +276,117 @@ def test_powerlaw_fit_recovers_known_exponents():
     rows = [{"samples.spp": s, "metric.rmse": 0.3 * s ** -a, "samples.kind": k}
             for k, a in (("random", 0.5), ("sobol", 0.75)) for s in (1, 2, 4, 8, 16)]
     spec = xc.PlotSpec(kind="table", x="samples.spp", y="metric.rmse", hue="samples.kind", fit="powerlaw")
-    res = plots.render_plot(spec, pd.DataFrame(rows), None)
+    res = figures.render_plot(spec, pd.DataFrame(rows), None)
     alphas = {f["hue"]: f["alpha"] for f in res["fits"]}
     assert alphas["random"] == pytest.approx(0.5) and alphas["sobol"] == pytest.approx(0.75)
+
+
+def test_heatmap_cells_and_table_match_the_frame(tmp_path):
+    df = _frame()
+    spec = xc.PlotSpec(kind="heatmap", x="camera.coc_px", row="pipeline.algorithm", y="ops.total", format="{:g}")
+    res = figures.render_plot(spec, df, tmp_path / "heat")
+    assert [p.suffix for p in res["files"]] == [".png", ".pdf"]
+    table = "\n".join(res["markdown"])
+    # independent pivot: ops.total = k x^2 with k = 1 (a), 2 (b)
+    assert "| pipeline.algorithm \\ camera.coc_px | 1 | 2 | 4 | 8 |" in table
+    assert "| a | 1 | 4 | 16 | 64 |" in table and "| b | 2 | 8 | 32 | 128 |" in table
+    with pytest.raises(ValueError, match="needs x and row"):
+        xc.PlotSpec(kind="heatmap", x="camera.coc_px", y="ops.total")
+
+
+def test_image_grid_places_each_points_image(tmp_path):
+    from PIL import Image
+
+    rows = []
+    for spp in (1, 4):
+        for coc in (0.0, 5.0):
+            path = tmp_path / f"img_{spp}_{coc:g}.png"
+            Image.new("RGB", (8, 8), (int(40 * spp), int(10 * coc), 0)).save(path)
+            rows.append({"samples.spp": spp, "camera.coc_px": coc, "metric.rmse": spp * 0.01 + coc,
+                         "image.path": str(path), "status": "ok"})
+    spec = xc.PlotSpec(kind="image_grid", x="camera.coc_px", row="samples.spp", y="metric.rmse", format="{:.2f}")
+    res = figures.render_plot(spec, pd.DataFrame(rows), tmp_path / "grid")
+    assert res["files"][0].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "| 4 | 0.04 | 5.04 |" in "\n".join(res["markdown"])
+    with pytest.raises(frames.PlotError, match="outputs.images"):
+        figures.render_plot(spec, pd.DataFrame(rows).drop(columns=["image.path"]), None)
+
+
+# ---- point kinds ---------------------------------------------------------------------------------
+
+def test_occlusion_query_point_is_sim_occlusion_query(tmp_path, store):
+    import models
+    import sim
+
+    text = ("scene: {name: quad, params: {size: 8, depth: 2}}\ncamera: {width: 24, height: 24, coc_px: 3}\n"
+            "samples: {spp: 4, seed: 1}\npipeline: {algorithm: tile}\n"
+            "point: {kind: occlusion_query, query: {name: quad, params: {size: 1, depth: 5}}}\n"
+            "sweep:\n  point.mode: [samples, intervals]\n  point.query:\n"
+            "    - {name: quad, params: {size: 1, depth: 5}}\n    - {name: quad, params: {size: 1, depth: 1}}\n")
+    df = runner.run_sweep(xc.load_config(write(tmp_path, "o.yaml", text)), workers=0, progress=False)
+    assert (df["status"] == "ok").all(), df["error"].tolist()
+    occ = models.named("quad", size=8, depth=2)
+    cam = sim.Camera(width=24, height=24, fov_y_deg=45.0, focus_distance=2.0, coc_px=3)
+    table = sim.SampleTable.create("stratified", spp=4, seed=1)
+    for _, row in df.iterrows():
+        q = models.named("quad", size=1, depth=row["point.query.params.depth"])
+        r = sim.occlusion_query(occ, q, cam, table, sim.PipelineConfig(algorithm="tile"), mode=row["point.mode"])
+        assert bool(row["query.visible"]) == r.visible
+        assert row["query.visible"] == (row["point.query.params.depth"] == 1)  # behind the occluder: hidden
+        for k in ("raster.samples_tested", "occlusion.pairs_tested", "depth.bytes_read"):
+            assert row[k] == r.work[k], k
+
+
+def test_conservative_point_is_sim_conservative_raster(tmp_path, store):
+    import models
+    import sim
+
+    text = BASE + "point: {kind: conservative}\n"
+    df = runner.run_sweep(xc.load_config(write(tmp_path, "c.yaml", text)), workers=0, progress=False)
+    assert (df["status"] == "ok").all(), df["error"].tolist()
+    scene = models.named("quad")
+    hint = scene.camera_hint
+    cam = sim.Camera(width=24, height=24, fov_y_deg=hint["fov_y_deg"], focus_distance=hint["focus_distance"],
+                     coc_px=4)
+    r = sim.conservative_raster(scene, cam, sim.PipelineConfig(algorithm="tile"), reduce="tz_box")
+    assert df["conservative.pixels_covered"].iloc[0] == int((r.count > 0).sum()) > 0
+    for k, v in r.flat_stats.items():
+        if isinstance(v, int) and not isinstance(v, bool):
+            assert df[k].iloc[0] == v, k
+
+
+def test_retime_point_is_timing_estimate_on_one_stored_render(tmp_path, store):
+    import models
+    import sim
+
+    text = (BASE.replace("quad}", "quad, params: {translation_t1: [0.2, 0, 0]}}") + "point: {kind: retime}\n"
+            "sweep:\n  point.hardware: [{}, {memory_bytes_per_clock: 4}, {sample_test: {throughput: 1}}]\n")
+    df = runner.run_sweep(xc.load_config(write(tmp_path, "r.yaml", text)), workers=2, progress=False)
+    assert (df["status"] == "ok").all(), df["error"].tolist()
+    assert len(list((store / "records").glob("*.npz"))) == 1  # one render for the three variants
+    scene = models.named("quad", translation_t1=[0.2, 0, 0])
+    hint = scene.camera_hint
+    cam = sim.Camera(width=24, height=24, fov_y_deg=hint["fov_y_deg"], focus_distance=hint["focus_distance"],
+                     coc_px=4)
+    res = sim.render(scene, cam, sim.SampleTable.create("stratified", spp=4, seed=1),
+                     sim.PipelineConfig(algorithm="tile"))
+    variants = [sim.HardwareConfig(), sim.HardwareConfig(memory_bytes_per_clock=4.0),
+                sim.HardwareConfig.from_dict({"sample_test": {"throughput": 1.0}})]
+    expected = [sim.timing.estimate(res.timing_records, hw)["timing.cycles"] for hw in variants]
+    assert df["timing.cycles"].tolist() == pytest.approx(expected)
+    assert expected[0] == pytest.approx(res.flat_stats["timing.cycles"])  # re-timing changes nothing by itself
+    assert expected[1] > expected[0] and expected[2] > expected[0]
+    assert df["raster.samples_tested"].tolist() == [res.flat_stats["raster.samples_tested"]] * 3
+    with pytest.raises(xc.ConfigError, match="point.hardware: only for kind 'retime'"):
+        xc.load_config(write(tmp_path, "bad.yaml", BASE + "point: {hardware: {cores: 2}}\n"))
+
+
+def test_textured_square_workload_covers_its_edge_squared(tmp_path, store):
+    text = ("scene: {name: textured_square, params: {edge_px: 20, width: 64, height: 64}}\n"
+            "camera: {coc_px: 0}\nsamples: {spp: 4, seed: 1}\npipeline: {algorithm: tile}\n")
+    df = runner.run_sweep(xc.load_config(write(tmp_path, "t.yaml", text)), workers=0, progress=False)
+    covered = df["raster.samples_hit"].iloc[0] / 4  # pixels (in focus: a pixel's samples all hit or miss)
+    assert covered == pytest.approx(20 * 20, rel=0.1)
 
 
 # ---- report --------------------------------------------------------------------------------------
@@ -303,7 +413,7 @@ def test_report_quick_writes_pages_figures_and_index(tmp_path, store):
     write(cdir, "tiny2.yaml", "extends: _base.yaml\noutputs: {page: tiny, title: Second, order: -1, "
                               "plots: [{kind: bar, x: pipeline.algorithm, y: ops.total}]}\n")
     write(cdir, "_base.yaml", PAGE)
-    rc = report.main(configs_dir=cdir, reports_dir=tmp_path / "reports", quick=True, workers=2)
+    rc = pages.main(configs_dir=cdir, reports_dir=tmp_path / "reports", quick=True, workers=2)
     assert rc == 0
     page = (tmp_path / "reports" / "quick" / "paper" / "tiny.md").read_text()
     assert page.index("## Second") < page.index("## Tiny: samples tested against CoC")  # order
@@ -318,7 +428,7 @@ def test_report_quick_writes_pages_figures_and_index(tmp_path, store):
     assert df["camera.width"].tolist() == [64] * 4
     # --only one config of a shared page rewrites the whole page (the other section from the store)
     (tmp_path / "reports" / "quick" / "paper" / "tiny.md").unlink()
-    assert report.main(only=["tiny2"], configs_dir=cdir, reports_dir=tmp_path / "reports", quick=True, workers=0) == 0
+    assert pages.main(only=["tiny2"], configs_dir=cdir, reports_dir=tmp_path / "reports", quick=True, workers=0) == 0
     again = (tmp_path / "reports" / "quick" / "paper" / "tiny.md").read_text()
     assert "## Second" in again and "## Tiny: samples tested against CoC" in again
 
@@ -339,29 +449,32 @@ def test_experiments_load_names_known_tables(store):
         experiments.load("nothing")
 
 
-def test_every_paper_config_is_valid():
-    paths = report.paper_configs()
+def test_every_report_config_is_valid():
+    paths = pages.report_configs()
     assert paths
     for p in paths:
         c = xc.load_config(p)
         assert c.outputs.page and c.outputs.plots, f"{p.name}: no report spec"
-        data, _ = xc.load_dict(p, report.quick_overrides(xc.load_dict(p)[0]))
+        data, _ = xc.load_dict(p, pages.quick_overrides(xc.load_dict(p)[0]))
         xc.expand_sweep(xc.validate(data, str(p)))
 
 
 @pytest.mark.slow
 def test_full_quick_report(tmp_path):
-    """`rast5d report --quick` over every configs/paper config (about 9 minutes on 2 busy cores)."""
+    """`rast5d report --quick` over every report config (about 9 minutes on 2 busy cores)."""
     env = {**os.environ, "RAST5D_RESULTS": str(tmp_path / "results")}
     r = subprocess.run([sys.executable, "-m", "experiments.cli", "report", "--quick"], capture_output=True, text=True,
                        env=env)
     assert r.returncode == 0, r.stderr[-2000:]
-    from experiments.report import REPORTS
+    from experiments.report.pages import REPORTS
 
     index = (REPORTS / "quick" / "README.md").read_text()
-    for p in report.paper_configs():
-        page = xc.load_config(p).outputs.page
-        assert f"[{page}](paper/{page}.md)" in index
+    for p in pages.report_configs():
+        outputs = xc.load_config(p).outputs
+        if outputs.folder == "paper":
+            assert f"[{outputs.page}](paper/{outputs.page}.md)" in index
+        else:
+            assert (REPORTS / "quick" / outputs.folder / f"{outputs.page}.md").exists()
 
 
 def test_the_documented_spec_example_is_valid():
@@ -380,14 +493,14 @@ def test_the_documented_spec_example_is_valid():
 
 def test_a_point_that_kills_its_worker_fails_alone(tmp_path, store, monkeypatch):
     """A crash in native code takes the worker process down; only that point is an error."""
-    real = runner.render_point
+    real = points.render_point
 
     def crashing(config, *args, **kwargs):
         if config.samples.spp == 8:
             os._exit(3)  # as a segfault would: no exception, the process is gone
         return real(config, *args, **kwargs)
 
-    monkeypatch.setattr(runner, "render_point", crashing)  # inherited by the forked workers
+    monkeypatch.setattr(points, "render_point", crashing)  # inherited by the forked workers
     c = xc.load_config(write(tmp_path, "k.yaml", BASE + "sweep:\n  samples.spp: [4, 8, 16, 2]\n"))
     df = runner.run_sweep(c, workers=2, progress=False)
     assert df["status"].tolist() == ["ok", "error", "ok", "ok"]

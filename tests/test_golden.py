@@ -1,7 +1,7 @@
 """Golden operation counts (tests/golden/ops.csv): key sets first, then values; `make golden` regenerates."""
 import pytest
 
-from experiments import golden
+from tests.golden import golden
 
 pytestmark = pytest.mark.golden
 

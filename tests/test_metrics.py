@@ -1,10 +1,11 @@
-"""Image error metrics against closed forms and known values (experiments/metrics.py)."""
+"""Image error metrics against closed forms and known values (experiments/report/metrics.py) and the
+reference images they compare against (experiments/run/references.py)."""
 import math
 
 import numpy as np
 import pytest
 
-from experiments import metrics
+from experiments.report import metrics
 
 pytestmark = pytest.mark.smoke
 
@@ -66,7 +67,7 @@ def test_metrics_clip_to_the_unit_range_and_check_shapes():
 def test_reference_is_cached_and_points_get_metric_columns(tmp_path, monkeypatch):
     monkeypatch.setenv("RAST5D_RESULTS", str(tmp_path))
     from experiments import config as xc
-    from experiments import runner
+    from experiments import run as runner
 
     p = tmp_path / "m.yaml"
     p.write_text("scene: {name: quad}\ncamera: {width: 24, height: 24, coc_px: 6}\nsamples: {spp: 4, seed: 1}\n"

@@ -1,0 +1,106 @@
+"""Sweep expansion (cartesian product and `zip:` groups), the per-point validation, and the identity
+of a point in the result store (config_hash, flatten)."""
+from __future__ import annotations
+
+import copy
+import hashlib
+import itertools
+import json
+
+from .schema import ConfigError, RenderConfig, validate
+
+
+def set_dotted(d: dict, dotted: str, value, source: str):
+    parts = dotted.split(".")
+    node = d
+    for p in parts[:-1]:
+        child = node.setdefault(p, {})
+        if not isinstance(child, dict):
+            raise ConfigError(f"{source}: cannot set {dotted!r}: {p!r} is not a section")
+        node = child
+    node[parts[-1]] = value
+
+
+
+def sweep_points(sweep: dict) -> list[dict]:
+    """[{dotted key: value}] for a sweep: the cartesian product over the axes, where each `zip` group
+    is one axis whose values are taken together (item i of every key in the group)."""
+    if not sweep:
+        return [{}]
+    groups = [list(g) for g in sweep.get("zip", [])]
+    in_group = {k for g in groups for k in g}
+    axes: list[list[dict]] = []
+    for k, values in sweep.items():
+        if k == "zip" or k in in_group:
+            continue
+        axes.append([{k: v} for v in values])
+    for g in groups:
+        axes.append([{k: sweep[k][i] for k in g} for i in range(len(sweep[g[0]]))])
+    # Keep the axis order of the file (first axis varies slowest).
+    order = [k for k in sweep if k != "zip"]
+    axes.sort(key=lambda ax: min(order.index(k) for k in ax[0]))
+    points = []
+    for combo in itertools.product(*axes):
+        p = {}
+        for part in combo:
+            p.update(part)
+        points.append(p)
+    return points
+
+
+def expand_sweep(config: RenderConfig, source: str = "config", lines: dict | None = None
+                 ) -> list[tuple[dict, RenderConfig]]:
+    """[(point, config)] for every point of config.sweep (one point without a sweep). Each point is
+    validated on its own; ConfigError names the point."""
+    if not config.sweep:
+        return [({}, config)]
+    base = config.model_dump(exclude={"sweep"})
+    points = []
+    for point in sweep_points(config.sweep):
+        d = copy.deepcopy(base)
+        for k, v in point.items():
+            set_dotted(d, k, v, f"{source} sweep")
+        points.append((point, validate(d, f"{source} (sweep point {point})")))
+    return points
+
+
+RESULT_EXCLUDE = {"name", "description", "extends", "sweep", "outputs", "executor", "point"}
+
+
+def point_columns(config: RenderConfig) -> dict:
+    """The point section as result columns (none for a plain render, so render rows stay as they are)."""
+    if config.point.kind == "render":
+        return {}
+    d = config.point.model_dump()
+    if config.point.kind != "occlusion_query":
+        d.pop("query")
+        d.pop("mode")
+    return flatten({"point": d})
+
+
+def config_hash(config: RenderConfig) -> str:
+    """Stable hash of everything that determines a point's result row: scene, camera, samples,
+    pipeline (not the thread count: results are identical for any), hardware, and the metrics spec."""
+    d = config.model_dump(exclude=RESULT_EXCLUDE)
+    d["pipeline"].pop("threads", None)
+    d["metrics"] = config.outputs.metrics.model_dump() if config.outputs.metrics else None
+    if config.point.kind != "render":
+        d["point"] = config.point.model_dump()
+    blob = json.dumps(d, sort_keys=True, default=str).encode()
+    return hashlib.sha256(blob).hexdigest()[:16]
+
+
+def flatten(d: dict, prefix: str = "") -> dict:
+    """{'camera': {'coc_px': 10}} -> {'camera.coc_px': 10}; lists become JSON text (one cell)."""
+    out = {}
+    for k, v in d.items():
+        key = f"{prefix}{k}"
+        if isinstance(v, dict) and v:
+            out.update(flatten(v, key + "."))
+        elif isinstance(v, dict):
+            continue
+        elif isinstance(v, (list, tuple)):
+            out[key] = json.dumps(v)
+        else:
+            out[key] = v
+    return out

@@ -1,0 +1,1 @@
+"""Example applications of the engine beyond image rendering."""

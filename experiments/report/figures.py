@@ -1,0 +1,329 @@
+"""Figures of a report page: an `outputs.plots` spec (experiments.config.PlotSpec, docs/reports.md)
+and a result frame become a matplotlib figure (PNG + PDF) in one paper-like style, with the data
+table beside it. Kinds: line, bar, scatter, heatmap (one coloured cell per (row, x)), image_grid (the
+images of the points, one per (row, x)); tables (kind table) are in tables.py. There are no
+per-figure plotting scripts.
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from .frames import (PlotError, apply_where, cell, check_columns, fmt, label, missing, paper_number, paper_value,
+                     pareto_front, same, sorted_x, unique)
+from .tables import data_table, md_table, powerlaw_table
+
+# Okabe-Ito: distinguishable in colour-blind vision and in greyscale print.
+COLORS = ["#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#F0E442", "#000000"]
+MARKERS = ["o", "s", "^", "D", "v", "P", "X", "*"]
+STYLE = {
+    "font.family": "serif", "font.size": 8, "axes.titlesize": 9, "axes.labelsize": 8, "legend.fontsize": 7,
+    "xtick.labelsize": 7, "ytick.labelsize": 7, "axes.grid": True, "grid.alpha": 0.3, "grid.linewidth": 0.5,
+    "axes.spines.top": False, "axes.spines.right": False, "lines.linewidth": 1.2, "lines.markersize": 4,
+    "legend.frameon": False, "savefig.bbox": "tight", "savefig.dpi": 200, "pdf.fonttype": 42,
+    "figure.constrained_layout.use": True,
+}
+PANEL_INCHES = (3.3, 2.5)
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _panels(plt, n: int):
+    cols = min(n, 3)
+    rows = math.ceil(n / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(PANEL_INCHES[0] * cols, PANEL_INCHES[1] * rows), squeeze=False)
+    flat = [a for row in axes for a in row]
+    for a in flat[n:]:
+        a.set_visible(False)
+    return fig, flat[:n]
+
+
+def _series(spec, hues) -> list[tuple]:
+    """[(hue value or None, y column, label)] for every line/bar series."""
+    out = []
+    for h in hues:
+        for y in spec.ys:
+            if h is None:
+                name = y if len(spec.ys) > 1 else (spec.ylabel or y)
+            else:
+                name = label(h) if len(spec.ys) == 1 else f"{label(h)}: {y}"
+            out.append((h, y, name))
+    return out
+
+
+def _draw_line(ax, spec, d, hues):
+    series = _series(spec, hues)
+    xs_all = sorted_x(d[spec.x])
+    numeric = all(paper_number(x) is not None for x in xs_all)
+    pos = {i: x for i, x in enumerate(xs_all)}
+    for i, (h, y, name) in enumerate(series):
+        sub = d if h is None else d[[same(v, h) for v in d[spec.hue]]]
+        xs = sorted_x(sub[spec.x])
+        ys = [cell(sub, {spec.x: x}, y)[0] for x in xs]
+        px = [float(x) for x in xs] if numeric else [xs_all.index(x) for x in xs]
+        ax.plot(px, ys, marker=MARKERS[i % len(MARKERS)], color=COLORS[i % len(COLORS)], label=name)
+        group = h if h is not None else y
+        paper = [(x, paper_number(paper_value(spec, group, x))) for x in (paper_x(spec, group) or [])]
+        paper = [(x, v) for x, v in paper if v is not None]
+        if paper:
+            ppx = [float(x) if numeric else (xs_all.index(x) if x in xs_all else None) for x, _ in paper]
+            keep = [(a, v) for a, (_, v) in zip(ppx, paper) if a is not None]
+            ax.plot([a for a, _ in keep], [v for _, v in keep], linestyle="--", marker="x", color=COLORS[i % len(COLORS)],
+                    alpha=0.8, label=f"{label(group)} (paper)")
+    if not numeric:
+        ax.set_xticks(list(pos), [label(x) for x in pos.values()])
+
+
+def paper_x(spec, group) -> list | None:
+    for g, by_x in spec.paper.items():
+        if same(g, group):
+            return sorted_x(list(by_x))
+    return None
+
+
+def _draw_bar(ax, spec, d, hues):
+    xs = unique(d[spec.x])
+    if spec.stacked:
+        cats = [(x, h) for x in xs for h in hues
+                if any(same(a, x) and (h is None or same(b, h))
+                       for a, b in zip(d[spec.x], d[spec.hue] if spec.hue else [None] * len(d)))]
+        bottom = np.zeros(len(cats))
+        for j, y in enumerate(spec.ys):
+            vals = np.array([cell(d, {spec.x: x, **({} if h is None else {spec.hue: h})}, y)[0] for x, h in cats],
+                            dtype=float)
+            ax.bar(range(len(cats)), np.nan_to_num(vals), bottom=bottom, color=COLORS[j % len(COLORS)], label=y,
+                   width=0.7)
+            bottom += np.nan_to_num(vals)
+        ax.set_xticks(range(len(cats)), [label(x) if h is None else f"{label(x)}\n{label(h)}" for x, h in cats],
+                      rotation=0 if len(cats) < 6 else 30)
+        return
+    series = _series(spec, hues)
+    width = 0.8 / max(len(series), 1)
+    for i, (h, y, name) in enumerate(series):
+        sub = d if h is None else d[[same(v, h) for v in d[spec.hue]]]
+        vals = [cell(sub, {spec.x: x}, y)[0] for x in xs]
+        offs = [k - 0.4 + width * (i + 0.5) for k in range(len(xs))]
+        ax.bar(offs, vals, width=width * 0.95, color=COLORS[i % len(COLORS)], label=name)
+        group = h if h is not None else y
+        pts = [(o, paper_number(paper_value(spec, group, x))) for o, x in zip(offs, xs)]
+        pts = [(o, v) for o, v in pts if v is not None]
+        if pts:
+            ax.scatter([o for o, _ in pts], [v for _, v in pts], marker="_", s=120, color="black", zorder=3,
+                       label="paper" if i == 0 else None)
+    ax.set_xticks(range(len(xs)), [label(x) for x in xs])
+
+
+def _draw_scatter(ax, spec, d, hues, styles=None):
+    """Colour by hue, marker by style; the figure legend shows the two separately (proxies)."""
+    y = spec.ys[0]
+    styles = styles or [None]
+    for i, h in enumerate(hues):
+        for j, s in enumerate(styles):
+            sub = d
+            if h is not None:
+                sub = sub[[same(v, h) for v in sub[spec.hue]]]
+            if s is not None:
+                sub = sub[[same(v, s) for v in sub[spec.style]]]
+            if not len(sub):
+                continue
+            ax.scatter(sub[spec.x].astype(float), sub[y].astype(float), s=14, color=COLORS[i % len(COLORS)],
+                       marker=MARKERS[j % len(MARKERS)], alpha=0.8, linewidths=0)
+    if spec.pareto:
+        ok = d[[spec.x, y]].astype(float).dropna()
+        idx = pareto_front(ok[spec.x].to_numpy(), ok[y].to_numpy())
+        fx, fy = ok[spec.x].to_numpy()[idx], ok[y].to_numpy()[idx]
+        ax.step(fx, fy, where="post", color="black", linewidth=0.8, zorder=1)
+        ax.scatter(fx, fy, s=40, facecolors="none", edgecolors="black", linewidths=0.8, zorder=3)
+
+
+def _scatter_legend(spec, hues, styles):
+    from matplotlib.lines import Line2D
+
+    handles = []
+    for i, h in enumerate(hues):
+        if h is not None:
+            handles.append(Line2D([], [], linestyle="", marker="o", color=COLORS[i % len(COLORS)], label=label(h)))
+    for j, s in enumerate(styles):
+        if s is not None:
+            handles.append(Line2D([], [], linestyle="", marker=MARKERS[j % len(MARKERS)], color="0.4",
+                                  label=label(s)))
+    if spec.pareto:
+        handles.append(Line2D([], [], color="black", marker="o", markerfacecolor="none", linewidth=0.8,
+                              label="Pareto front"))
+    return handles
+
+
+def _save(fig, out_base: Path | None, dpi: int | None = None) -> list[Path]:
+    """Write the figure as out_base.png and out_base.pdf (no creation date: reproducible PDFs)."""
+    files = []
+    if out_base is not None:
+        out_base.parent.mkdir(parents=True, exist_ok=True)
+        for ext in ("png", "pdf"):
+            p = out_base.with_suffix(f".{ext}")
+            fig.savefig(p, **({"dpi": dpi} if dpi else {}), metadata={"CreationDate": None} if ext == "pdf" else None)
+            files.append(p)
+    return files
+
+
+def _short(col: str) -> str:
+    return col.removesuffix(".name").split(".")[-1]
+
+
+def grid_table(spec, d) -> list[str]:
+    """heatmap and image_grid: one row per (facet, row value), one column per x value."""
+    facets = unique(d[spec.facet]) if spec.facet else [None]
+    xs = sorted_x(d[spec.x])
+    rows = []
+    for f in facets:
+        df_f = d if f is None else d[[same(v, f) for v in d[spec.facet]]]
+        for r in sorted_x(df_f[spec.row]):
+            vals = [cell(df_f, {spec.row: r, spec.x: x}, spec.ys[0])[0] for x in xs]
+            rows.append(([label(f)] if spec.facet else []) + [label(r)] + [fmt(v, spec.format) for v in vals])
+    header = ([spec.facet] if spec.facet else []) + [f"{spec.row} \\ {spec.x}"] + [label(x) for x in xs]
+    return md_table(header, rows)
+
+
+def _draw_heatmap(ax, fig, spec, d):
+    xs, rs = sorted_x(d[spec.x]), sorted_x(d[spec.row])
+    grid = np.array([[cell(d, {spec.row: r, spec.x: x}, spec.ys[0])[0] for x in xs] for r in rs], dtype=float)
+    im = ax.imshow(grid, cmap="viridis", aspect="auto", origin="lower")
+    fig.colorbar(im, ax=ax, label=spec.ylabel or spec.ys[0])
+    lo, hi = np.nanmin(grid), np.nanmax(grid)
+    for i in range(len(rs)):
+        for j in range(len(xs)):
+            if np.isfinite(grid[i, j]):
+                bright = hi > lo and (grid[i, j] - lo) / (hi - lo) > 0.6
+                ax.text(j, i, fmt(float(grid[i, j]), spec.format), ha="center", va="center", fontsize=6,
+                        color="black" if bright else "white")
+    ax.set_xticks(range(len(xs)), [label(x) for x in xs])
+    ax.set_yticks(range(len(rs)), [label(r) for r in rs])
+    ax.grid(False)
+
+
+def image_grid(spec, d, out_base: Path | None) -> dict:
+    """The images of the points (column image.path), one per (row value, x value), captioned with y."""
+    from PIL import Image
+
+    if "image.path" not in d.columns:
+        raise PlotError(f"plot {spec.title or spec.kind!r}: image_grid needs the points' images (outputs.images: true)")
+    if spec.facet:
+        raise PlotError(f"plot {spec.title or spec.kind!r}: image_grid has no facets (use where:)")
+    plt = _plt()
+    import matplotlib
+
+    xs, rs = sorted_x(d[spec.x]), sorted_x(d[spec.row])
+    with matplotlib.rc_context(STYLE):
+        fig, axes = plt.subplots(len(rs), len(xs), figsize=(1.9 * len(xs), 1.9 * len(rs)), squeeze=False)
+        for i, r in enumerate(rs):
+            for j, x in enumerate(xs):
+                ax = axes[i][j]
+                sub = d[[same(a, r) and same(b, x) for a, b in zip(d[spec.row], d[spec.x])]]
+                if len(sub) and Path(sub["image.path"].iloc[0]).exists():
+                    ax.imshow(Image.open(sub["image.path"].iloc[0]))
+                    v = cell(sub, {}, spec.ys[0])[0]
+                    ax.set_title(f"{_short(spec.x)} {label(x)}, {_short(spec.row)} {label(r)}\n"
+                                 f"{spec.ylabel or _short(spec.ys[0])} {fmt(v, spec.format or '{:.3f}')}", fontsize=7)
+                ax.set_axis_off()
+        if spec.title:
+            fig.suptitle(spec.title, fontsize=9)
+        files = _save(fig, out_base, dpi=150)
+        plt.close(fig)
+    return {"files": files, "markdown": grid_table(spec, d), "fits": []}
+
+
+# ---- entry point ---------------------------------------------------------------------------------
+
+def render_plot(spec, df, out_base: Path | None) -> dict:
+    """Draw one plot spec. Returns {"files": [png, pdf], "markdown": [table lines], "fits": [...]}.
+    ``df`` already carries the derived columns; failed rows (status != ok) are left out."""
+    if "status" in df.columns:
+        df = df[df["status"] == "ok"]
+    for col, names in spec.labels.items():  # display names replace the values (before where: and paper:)
+        if col not in df.columns:
+            raise PlotError(f"plot {spec.title or spec.kind!r}: labels: unknown column {col!r}")
+        df = df.assign(**{col: [next((n for k, n in names.items() if same(v, k)), v) for v in df[col]]})
+    if isinstance(spec.hue, list):  # several hue columns: one combined label column
+        for col in spec.hue:
+            if col not in df.columns:
+                raise PlotError(f"plot {spec.title or spec.kind!r}: unknown hue column {col!r}")
+        name = " / ".join(spec.hue)
+        df = df.assign(**{name: [" ".join(label(v) for v in vals if not missing(v))
+                                 for vals in zip(*(df[c] for c in spec.hue))]})
+        spec = spec.model_copy(update={"hue": name})
+    if spec.optional and any(c is not None and c not in df.columns
+                             for c in [spec.x, spec.facet, spec.style, *spec.ys, *spec.where]):
+        return {"files": [], "markdown": [], "fits": [], "skipped": True}
+    check_columns(df, spec)
+    d = apply_where(df, spec.where)
+    if not len(d):
+        return {"files": [], "markdown": [f"*No data for this plot (where: {spec.where}).*"], "fits": []}
+    hues = unique(d[spec.hue]) if spec.hue else [None]
+    if spec.kind == "image_grid":
+        return image_grid(spec, d, out_base)
+    if spec.kind == "table":
+        if spec.fit == "powerlaw":
+            lines, fits = powerlaw_table(spec, d, hues)
+            return {"files": [], "markdown": lines, "fits": fits}
+        return {"files": [], "markdown": data_table(spec, d, hues), "fits": []}
+    plt = _plt()
+    import matplotlib
+
+    with matplotlib.rc_context(STYLE):
+        from matplotlib.ticker import NullFormatter
+
+        facets = unique(d[spec.facet]) if spec.facet else [None]
+        styles = unique(d[spec.style]) if spec.style else [None]
+        fig, axes = _panels(plt, len(facets))
+        for ax, f in zip(axes, facets):
+            sub = d if f is None else d[[same(v, f) for v in d[spec.facet]]]
+            if spec.kind == "scatter":
+                _draw_scatter(ax, spec, sub, hues, styles)
+            elif spec.kind == "heatmap":
+                _draw_heatmap(ax, fig, spec, sub)
+            else:
+                {"line": _draw_line, "bar": _draw_bar}[spec.kind](ax, spec, sub, hues)
+            if spec.logx:
+                ax.set_xscale("log", base=2 if spec.x and "spp" in spec.x else 10)
+                ax.xaxis.set_minor_formatter(NullFormatter())
+            if spec.logy:
+                ax.set_yscale("log")
+                ax.yaxis.set_minor_formatter(NullFormatter())
+            ax.set_xlabel(spec.xlabel or spec.x)
+            if spec.kind == "heatmap":
+                ax.set_ylabel(spec.row)
+            else:
+                ax.set_ylabel(spec.ylabel or (spec.ys[0] if len(spec.ys) == 1 else "value"))
+            if f is not None:
+                name = spec.facet.removesuffix(".name").split(".")[-1]
+                ax.set_title(f"{name} = {label(f)}")
+        # One legend for the figure (every panel uses the same colours), outside the panels when long.
+        if spec.kind == "scatter":
+            handles = _scatter_legend(spec, hues, styles)
+        else:
+            seen = {}
+            for ax in axes:
+                for hnd, lab in zip(*ax.get_legend_handles_labels()):
+                    seen.setdefault(lab, hnd)
+            handles = [h.__class__ and h for h in seen.values()]
+            for hnd, lab in zip(handles, seen):
+                hnd.set_label(lab)
+        if len(handles) > 1 or (handles and spec.hue):
+            if len(axes) == 1 and len(handles) <= 6:
+                axes[0].legend(handles=handles)
+            else:
+                fig.legend(handles=handles, loc="outside right upper")
+        if spec.title:
+            fig.suptitle(spec.title, fontsize=9)
+        files = _save(fig, out_base)
+        plt.close(fig)
+    return {"files": files, "markdown": grid_table(spec, d) if spec.kind == "heatmap" else data_table(spec, d, hues),
+            "fits": []}

@@ -1,0 +1,223 @@
+"""`rast5d report`: run every report config (configs/paper/*.yaml, and each configs/*.yaml that names
+an `outputs.page`) through the result store's cache and write one Markdown page per `outputs.page`
+into reports/<outputs.folder>/ (figures as PNG + PDF, our numbers, the paper's published numbers
+beside them, the exact command and config), plus the index reports/README.md. `--quick` renders a
+small-resolution variant into reports/quick/ with its own result store (results/quick/), so it never
+clobbers the full report.
+
+Configs whose file name starts with `_` are bases for `extends:` and are not run.
+"""
+from __future__ import annotations
+
+import os
+import shlex
+import sys
+import time
+from collections import defaultdict
+from pathlib import Path
+
+from ..config import REPO, ConfigError, RenderConfig, load_dict, validate
+from ..run import results_dir, run_sweep
+from .figures import render_plot
+from .frames import PlotError, apply_derived
+from .tables import TABLES, md_table
+
+CONFIGS = REPO / "configs"
+REPORTS = REPO / "reports"
+# --quick: every point at most QUICK_SIZE pixels on a side (aspect kept when the config gives both),
+# the same samples per pixel, sweeps and pages.
+QUICK_SIZE = 64
+
+
+def quick_overrides(data: dict) -> list[str]:
+    cam = data.get("camera") or {}
+    w, h = cam.get("width"), cam.get("height")
+    if w and h:
+        s = min(1.0, QUICK_SIZE / max(w, h))
+        return [f"camera.width={max(8, round(w * s))}", f"camera.height={max(8, round(h * s))}"]
+    return [f"camera.width={QUICK_SIZE}", f"camera.height={QUICK_SIZE}"]
+
+
+def _command(name: str, quick: bool) -> str:
+    return f"rast5d report --only {name}" + (" --quick" if quick else "")
+
+
+def section_markdown(config: RenderConfig, config_path: Path, df, out_dir: Path, command: str,
+                     overrides: list[str] = (), elapsed: float | None = None) -> list[str]:
+    """The Markdown of one config's section: title, text, figures, tables, provenance."""
+    o = config.outputs
+    lines = [f"## {o.title or config.name}", ""]
+    if o.text:
+        text = o.text.strip()
+        for key, fn in TABLES.items():
+            marker = "{{table:" + key + "}}"
+            if marker in text:
+                text = text.replace(marker, "\n".join(fn(df, config)))
+        lines += [text, ""]
+    try:
+        dfd = apply_derived(df, o.derived)
+    except PlotError as e:
+        return lines + [f"**Error:** {e}", ""]
+    if o.images and "config_hash" in dfd.columns:  # the points' images, for image_grid plots
+        dfd = dfd.assign(**{"image.path": [str(images_dir(config) / f"{h}.png") for h in dfd["config_hash"]]})
+    for i, spec in enumerate(o.plots):
+        base = out_dir / f"{config.name}_{i + 1}" if len(o.plots) > 1 else out_dir / config.name
+        try:
+            res = render_plot(spec, dfd, base)
+        except PlotError as e:
+            lines += [f"**Plot error:** {e}", ""]
+            continue
+        if res.get("skipped"):
+            continue
+        if spec.title and spec.kind == "table":
+            lines += [f"**{spec.title}**", ""]
+        if spec.echo:
+            print("\n".join(([spec.title, ""] if spec.title else []) + res["markdown"]))
+        if res["files"]:
+            png = res["files"][0]
+            lines += [f"![{spec.title or config.name}]({png.name})", "",
+                      f"[PDF]({png.with_suffix('.pdf').name})", ""]
+            lines += ["<details><summary>data</summary>", ""] + res["markdown"] + ["", "</details>", ""]
+        else:
+            lines += res["markdown"] + [""]
+    ok = df[df["status"] == "ok"] if "status" in df.columns else df
+    bad = df[df["status"] != "ok"] if "status" in df.columns else df.iloc[0:0]
+    if len(bad):
+        lines += ["**Failed points** (kept out of the figures and tables):", ""]
+        for _, r in bad.iterrows():
+            lines.append(f"- {r.get('scene.name')} {r.get('pipeline.algorithm')} CoC {r.get('camera.coc_px')} "
+                         f"spp {r.get('samples.spp')}: {r.get('error')}")
+        lines.append("")
+    wall = float(ok["time.wall_s"].sum()) if "time.wall_s" in ok.columns and len(ok) else 0.0
+    rel = config_path.resolve().relative_to(REPO) if config_path.resolve().is_relative_to(REPO) else config_path
+    engine = ok["engine.version"].iloc[0] if "engine.version" in ok.columns and len(ok) else "n/a"
+    rev = ok["engine.git_rev"].iloc[0] if "engine.git_rev" in ok.columns and len(ok) else "n/a"
+    lines += [f"Made by `{command}` from [`{rel}`]({os.path.relpath(REPO / rel, out_dir) if not Path(rel).is_absolute() else rel})"
+              + (f" with `{' '.join('--set ' + shlex.quote(s) for s in overrides)}`" if overrides else "")
+              + f": {len(df)} points ({len(bad)} failed), {wall:.0f} s of render time"
+              + (f", {elapsed:.0f} s this run" if elapsed is not None else "")
+              + f"; engine {engine}, revision {rev}. Results: `experiments.load({config.name!r})`.", ""]
+    try:
+        lines += ["<details><summary>config</summary>", "", "```yaml", config_path.read_text().rstrip(), "```", "",
+                  "</details>", ""]
+    except OSError:
+        pass
+    return lines
+
+
+def images_dir(config: RenderConfig) -> Path:
+    """Where a sweep with outputs.images keeps the images of its points."""
+    return results_dir() / "images" / config.name
+
+
+def write_config_page(config: RenderConfig, config_path, df, overrides=()) -> Path:
+    """`rast5d run`: the config's own page, results/pages/<name>/<name>.md (not committed)."""
+    out_dir = results_dir() / "pages" / config.name
+    out_dir.mkdir(parents=True, exist_ok=True)
+    cmd = "rast5d run " + str(config_path) + "".join(f" --set {shlex.quote(s)}" for s in overrides)
+    lines = [f"# {config.outputs.page or config.name}", ""]
+    lines += section_markdown(config, Path(config_path), df, out_dir, cmd, overrides)
+    page = out_dir / f"{config.name}.md"
+    page.write_text("\n".join(lines) + "\n")
+    return page
+
+
+def report_configs(configs_dir: Path | None = None) -> list[Path]:
+    """The report configs: configs/paper/*.yaml and each configs/*.yaml that names an outputs.page, or
+    every config of ``configs_dir`` (files starting with _ are bases for `extends:`)."""
+    def run(paths):
+        return [p for p in sorted(paths) if not p.name.startswith("_")]
+
+    if configs_dir is not None:
+        return run(Path(configs_dir).glob("*.yaml"))
+    top = [p for p in run(CONFIGS.glob("*.yaml")) if (load_dict(p)[0].get("outputs") or {}).get("page")]
+    return run((CONFIGS / "paper").glob("*.yaml")) + top
+
+
+def main(only=None, workers=None, scheduler=None, force=False, quick=False, configs_dir: Path | None = None,
+         reports_dir: Path | None = None) -> int:
+    out_root = (reports_dir or REPORTS) / ("quick" if quick else "")
+    if quick:
+        os.environ["RAST5D_RESULTS"] = str(results_dir() / "quick")
+    paths = report_configs(configs_dir)
+    loaded = []
+    for p in paths:
+        data, lines = load_dict(p)
+        overrides = quick_overrides(data) if quick else []
+        if overrides:
+            data, lines = load_dict(p, overrides)
+        config = validate(data, str(p), lines)
+        loaded.append((p, config, overrides, lines))
+    if only:
+        known = {c.name for _, c, _, _ in loaded} | {c.outputs.page for _, c, _, _ in loaded if c.outputs.page}
+        unknown = [n for n in only if n not in known]
+        if unknown:
+            print(f"report: unknown {unknown} (configs and pages: {', '.join(sorted(known))})", file=sys.stderr)
+            return 2
+        chosen = {c.name for _, c, _, _ in loaded if c.name in only or c.outputs.page in only}
+        # A page is written whole: the other configs on a chosen config's page come along (from the
+        # result store; --force re-renders only the chosen ones).
+        pages = {c.outputs.page or c.name for _, c, _, _ in loaded if c.name in chosen}
+        loaded = [x for x in loaded if (x[1].outputs.page or x[1].name) in pages]
+    else:
+        chosen = {c.name for _, c, _, _ in loaded}
+    sections: dict[tuple[str, str], list] = defaultdict(list)
+    failures = 0
+    counts = {"rendered": 0, "cached": 0}
+    t_all = time.perf_counter()
+    for p, config, overrides, lines in loaded:
+        t0 = time.perf_counter()
+        df = run_sweep(config, source=str(p.relative_to(REPO) if p.is_relative_to(REPO) else p), workers=workers,
+                       scheduler=scheduler, force=force and config.name in chosen, lines=lines)
+        failures += int((df["status"] != "ok").sum()) if "status" in df.columns else 0
+        for k in counts:
+            counts[k] += df.attrs.get("summary", {}).get(k, 0)
+        page = config.outputs.page or config.name
+        page_dir = out_root / config.outputs.folder
+        page_dir.mkdir(parents=True, exist_ok=True)
+        md = section_markdown(config, p, df, page_dir, _command(config.name, quick), overrides,
+                              time.perf_counter() - t0)
+        sections[config.outputs.folder, page].append((config.outputs.order, config.name, md, config))
+    for (folder, page), parts in sections.items():
+        page_dir = out_root / folder
+        parts.sort(key=lambda t: (t[0], t[1]))
+        text = [f"# {page}", "", f"Regenerate with `{_command(page, quick)}` (this page) or "
+                f"`rast5d report{' --quick' if quick else ''}` (all pages)."
+                + (f" **Quick variant**: at most {QUICK_SIZE} px on a side; numbers are not comparable to the "
+                   "paper's." if quick else ""), ""]
+        for _, _, md, _ in parts:
+            text += md
+        (page_dir / f"{page}.md").write_text("\n".join(text) + "\n")
+        print(f"wrote {(page_dir / f'{page}.md').relative_to(out_root.parent if quick else REPORTS.parent)}")
+    if not only:
+        write_index(out_root, out_root / "paper", quick, time.perf_counter() - t_all, counts)
+    return 1 if failures else 0
+
+
+def write_index(out_root: Path, page_dir: Path, quick: bool, elapsed: float, counts: dict):
+    """reports/README.md (or reports/quick/README.md): every page, with the title of its sections."""
+    import re
+
+    rows = []
+    for md in sorted(page_dir.glob("*.md")):
+        if md.name == "README.md":
+            continue
+        titles = re.findall(r"^## (.+)$", md.read_text(), flags=re.M)
+        rows.append([f"[{md.stem}]({md.relative_to(out_root)})", "; ".join(titles)])
+    lines = ["# Reports" + (" (quick variant)" if quick else ""), "",
+             f"Generated by `rast5d report{' --quick' if quick else ''}` from the report configs in `configs/` "
+             "(`configs/paper/` and `configs/quickstart.yaml`; results cached in `results/`, or `results/quick/` for "
+             "--quick; `--force` re-renders). Each page shows our numbers beside the paper's published numbers where "
+             "they exist, and the command and config that made it.", ""]
+    lines += [f"Last run: {elapsed:.0f} s on this machine ({counts['rendered']} points rendered, "
+              f"{counts['cached']} from the result store).", ""]
+    lines += md_table(["page", "sections"], rows) + [""]
+    other = [p for p in (REPORTS / "quickstart" / "quickstart.md", REPORTS / "bench" / "bench_core.md",
+                         REPORTS / "ccd" / "README.md") if p.exists()]
+    if other and not quick:
+        lines += ["Other reports: " + ", ".join(f"[{p.relative_to(REPORTS)}]({p.relative_to(REPORTS)})"
+                                                 for p in other), ""]
+    (out_root / "README.md").write_text("\n".join(lines) + "\n")
+
+
+__all__ = ["main", "write_config_page", "section_markdown", "report_configs", "ConfigError"]

@@ -1,0 +1,370 @@
+"""Tables of a report page: the data table of a plot spec (our numbers, the paper's beside them),
+the power-law fit table, and the named tables that no plot spec can express because each needs a
+baseline row from elsewhere in the sweep (docs/reports.md §Named tables), placed with {{table:NAME}}
+in a config's outputs.text. TABLES is a plain registry filled here; nothing imports back."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .frames import cell, fmt, label, missing, pareto_front, paper_value, same, sorted_x, unique
+
+
+def md_table(header: list, rows: list[list]) -> list[str]:
+    """A Markdown table; cells are formatted with str()."""
+    return (["| " + " | ".join(map(str, header)) + " |", "|" + "---|" * len(header)]
+            + ["| " + " | ".join(map(str, r)) + " |" for r in rows])
+
+
+def data_table(spec, d, hues) -> list[str]:
+    """Our numbers, one row per (facet, x) and one column per (y, hue), paper columns beside them."""
+    facets = unique(d[spec.facet]) if spec.facet else [None]
+    if spec.kind == "scatter":
+        cols = list(dict.fromkeys(c for c in (spec.facet, spec.hue, spec.style, *spec.columns, spec.x, spec.ys[0]) if c))
+        rows = [[fmt(r[c], spec.format) for c in cols] for _, r in d[cols].iterrows()]
+        return md_table(cols, rows)
+    if spec.x is None:  # plain listing of the y columns
+        cols = list(dict.fromkeys([c for c in (spec.facet, spec.hue) if c] + spec.columns + spec.ys))
+        rows = [[fmt(r[c], spec.format) for c in cols] for _, r in d[cols].iterrows()]
+        return md_table(cols, rows)
+    groups = []  # (hue, y, header)
+    for h in hues:
+        for y in spec.ys:
+            if h is None:
+                header = y
+            else:
+                header = label(h) if len(spec.ys) == 1 else f"{y} {label(h)}"
+            groups.append((h, y, header))
+    header = ([spec.facet] if spec.facet else []) + [spec.x]
+    paper_groups = []
+    for h, y, head in groups:
+        header.append(head)
+        g = h if h is not None else y
+        if any(same(g, k) for k in spec.paper):
+            header.append(f"{head} (paper)")
+            paper_groups.append(g)
+    extra = [k for k in spec.paper if not any(same(k, (h if h is not None else y)) for h, y, _ in groups)]
+    header += [f"{label(k)} (paper)" for k in extra]
+    rows = []
+    for f in facets:
+        df_f = d if f is None else d[[same(v, f) for v in d[spec.facet]]]
+        xs = sorted_x(list(df_f[spec.x]) + [x for k in spec.paper for x in spec.paper[k]]) if f is facets[0] \
+            else sorted_x(df_f[spec.x])
+        for x in xs:
+            r = ([label(f)] if spec.facet else []) + [label(x)]
+            for h, y, _ in groups:
+                keys = {spec.x: x}
+                if h is not None:
+                    keys[spec.hue] = h
+                v, n = cell(df_f, keys, y)
+                r.append(fmt(v, spec.format) + (f" (mean of {n})" if n > 1 else ""))
+                g = h if h is not None else y
+                if g in paper_groups:
+                    p = paper_value(spec, g, x)
+                    r.append("" if p is None else fmt(p, spec.format))
+            for k in extra:
+                p = paper_value(spec, k, x)
+                r.append("" if p is None else fmt(p, spec.format))
+            rows.append(r)
+    return md_table(header, rows)
+
+
+def powerlaw_table(spec, d, hues) -> tuple[list[str], list[dict]]:
+    """Fit y = c x^-alpha per (facet, hue) in log-log (least squares over the mean y at each x)."""
+    facets = unique(d[spec.facet]) if spec.facet else [None]
+    y = spec.ys[0]
+    rows, fits = [], []
+    for f in facets:
+        df_f = d if f is None else d[[same(v, f) for v in d[spec.facet]]]
+        for h in hues:
+            sub = df_f if h is None else df_f[[same(v, h) for v in df_f[spec.hue]]]
+            xs = [x for x in sorted_x(sub[spec.x])]
+            pts = [(float(x), cell(sub, {spec.x: x}, y)[0]) for x in xs]
+            pts = [(a, b) for a, b in pts if a > 0 and b > 0 and np.isfinite(b)]
+            if len(pts) < 2:
+                continue
+            lx, ly = np.log([p[0] for p in pts]), np.log([p[1] for p in pts])
+            slope, icpt = np.polyfit(lx, ly, 1)
+            pred = slope * lx + icpt
+            ss = float(np.sum((ly - ly.mean()) ** 2))
+            r2 = 1.0 - float(np.sum((ly - pred) ** 2)) / ss if ss > 0 else 1.0
+            fit = {"facet": f, "hue": h, "alpha": -float(slope), "r2": r2, "n": len(pts),
+                   "x_min": pts[0][0], "x_max": pts[-1][0]}
+            fits.append(fit)
+            paper = paper_value(spec, h if h is not None else y, "alpha") if spec.paper else None
+            rows.append(([label(f)] if spec.facet else []) + ([label(h)] if spec.hue else [])
+                        + [f"{fit['alpha']:.3f}", f"{r2:.3f}", str(len(pts)), f"{pts[0][0]:g}-{pts[-1][0]:g}"]
+                        + ([fmt(paper)] if spec.paper else []))
+    header = ([spec.facet] if spec.facet else []) + ([spec.hue] if spec.hue else []) + [
+        f"alpha ({y} ∝ {spec.x}^-alpha)", "R²", "points", f"{spec.x} range"] + (["paper alpha"] if spec.paper else [])
+    return md_table(header, rows), fits
+
+
+# ---- named tables --------------------------------------------------------------------------------
+
+TABLES: dict = {}
+
+
+def named_table(name: str):
+    """Register a page table fn(df, config) -> Markdown lines under ``name`` (for {{table:NAME}}). The escape
+    hatch: prefer `derived:` columns and `table` plots."""
+    def deco(fn):
+        TABLES[name] = fn
+        return fn
+
+    return deco
+
+
+SCENE_ORDER = ["bunny", "spot", "modern_hall", "mixed_sizes"]
+
+# 001 Table 2, StoneGiant: culled share and Gops for none / h_i / H_j / both / INTERVAL.
+PAPER_T2 = {10: (["0%", "30%", "62%", "65%", "27%"], ["23", "19", "10", "10", "17"]),
+            50: (["0%", "79%", "72%", "86%", "66%"], ["83", "24", "26", "18", "29"])}
+
+
+def _ok(df):
+    return df[df["status"] == "ok"] if "status" in df.columns else df
+
+
+def _first(df, keys: dict):
+    """The first row whose columns equal keys, or None."""
+    for k, v in keys.items():
+        df = df[df[k] == v]
+    return df.iloc[0] if len(df) else None
+
+
+def _scenes(df) -> list:
+    present = list(dict.fromkeys(df["scene.name"]))
+    return [s for s in SCENE_ORDER if s in present] + [s for s in present if s not in SCENE_ORDER]
+
+
+@named_table("table2_culling")
+def table2_culling(df, config) -> list[str]:
+    """Culled share = 1 - tested / tested(no half-space test), per scene and R, beside the paper's."""
+    df = _ok(df)
+    modes = [("none", "tile", False, False), ("h_i", "tile", True, False), ("H_j", "tile", False, True),
+             ("h_i+H_j", "tile", True, True), ("INTERVAL", "interval", True, True)]
+    rows = []
+    for s in _scenes(df):
+        for coc in sorted(df["camera.coc_px"].unique()):
+            sub = df[(df["scene.name"] == s) & (df["camera.coc_px"] == coc)]
+            tested, gops = {}, {}
+            for name, algo, h, H in modes:
+                r = sub[(sub["pipeline.algorithm"] == algo) & (sub["pipeline.halfspace.h"] == h)
+                        & (sub["pipeline.halfspace.H"] == H)]
+                tested[name] = float(r["raster.samples_tested"].iloc[0]) if len(r) else math.nan
+                gops[name] = float(r["ops.total"].iloc[0]) / 1e9 if len(r) else math.nan
+            base = tested["none"]
+            rows.append([s, f"{coc:g}", "culled"] + [f"{100 * (1 - tested[m[0]] / base):.0f}%" for m in modes])
+            rows.append([s, f"{coc:g}", "Gops"] + [f"{gops[m[0]]:.2f}" for m in modes])
+    for coc, (cull, g) in PAPER_T2.items():
+        rows.append(["**paper: StoneGiant**", str(coc), "culled"] + cull)
+        rows.append(["**paper: StoneGiant**", str(coc), "Gops"] + g)
+    return md_table(["scene", "R", "row"] + [m[0] for m in modes], rows)
+
+
+@named_table("fig15_trends")
+def fig15_trends(df, config) -> list[str]:
+    """Is tile (2x2, and 1x1) the cheapest of the arbitrary-pattern algorithms at every CoC?"""
+    df = _ok(df)
+    lines = ["Trend checks (001 §6.2: OUR is the cheapest at every CoC):", ""]
+    for s in _scenes(df):
+        sub = df[df["scene.name"] == s]
+        others = sub[sub["pipeline.algorithm"].isin(["bruteforce", "interval"])]
+
+        def cheapest(tile_size):
+            fails = []
+            for c in sorted(sub["camera.coc_px"].unique()):
+                mine = sub[(sub["camera.coc_px"] == c) & (sub["pipeline.algorithm"] == "tile")
+                           & (sub["pipeline.tile_size"] == tile_size)]["ops.total"]
+                best = others[others["camera.coc_px"] == c]["ops.total"].min()
+                if len(mine) and not mine.iloc[0] <= best:
+                    fails.append(f"CoC {c:g}: {mine.iloc[0] / best:.2f}x the best other")
+            return "yes" if not fails else "no (" + "; ".join(fails) + ")"
+
+        bf = sub[sub["pipeline.algorithm"] == "bruteforce"].sort_values("camera.coc_px")["ops.total"]
+        growth = bf.iloc[-1] / bf.iloc[0] if len(bf) > 1 else math.nan
+        lines.append(f"- {s}: `tile` 2x2 cheaper than bruteforce and interval at every CoC: **{cheapest(2)}**; "
+                     f"`tile` 1x1: **{cheapest(1)}**; bruteforce ops grow {growth:.1f}x from the smallest to "
+                     "the largest CoC.")
+    lines += ["", "Where `tile` with 2x2 tiles loses to `interval` (micro-triangle workloads such as the bunny, "
+              "close to the focus plane), the 2x2 tile is coarser than the triangles: the exact active region of a "
+              "2x2 tile holds more samples than INTERVAL's per-pixel bounds for a lens cell. With 1x1 tiles `tile` "
+              "competes again; the best tile size depends on the triangle-size distribution."]
+    return lines
+
+
+@named_table("pareto_members")
+def pareto_members(df, config) -> list[str]:
+    """Which (sample-table kind, algorithm) pairs make up the RMSE Pareto front against each cost."""
+    df = _ok(df)
+    costs = [c for c in ("ops.total", "raster.samples_tested", "time.wall_s", "timing.cycles") if c in df.columns]
+    rows = []
+    for s in _scenes(df):
+        sub = df[df["scene.name"] == s].dropna(subset=["metric.rmse"])
+        for c in costs:
+            sub_c = sub.dropna(subset=[c])
+            idx = pareto_front(sub_c[c].to_numpy(float), sub_c["metric.rmse"].to_numpy(float))
+            front = sub_c.iloc[idx]
+            kinds = [f"{k}{'' if n != n or n is None else f' {int(n)}'}" for k, n in
+                     zip(front["samples.kind"], front["samples.n_lens"])]
+            members = {}
+            for k, a, spp in zip(kinds, front["pipeline.algorithm"], front["samples.spp"]):
+                members.setdefault(f"{k} / {a}", []).append(int(spp))
+            text = "; ".join(f"{m} (spp {', '.join(map(str, v))})"
+                             for m, v in sorted(members.items(), key=lambda kv: -len(kv[1])))
+            rows.append([s, c, str(len(front)), text])
+    return (["Pareto-front members (sample-table kind / algorithm, with the spp of each front point):", ""]
+            + md_table(["scene", "cost", "front points", "members"], rows))
+
+
+# 002 §8: shader-invocation increase with a 1024-entry shading cache, against one view.
+PAPER_MULTIVIEW = {2: "+10%", 7: "+15%"}
+
+
+@named_table("multiview_increase")
+def multiview_increase(df, config) -> list[str]:
+    """Shader invocations (shading-cache misses) for V views relative to one view, per CoC."""
+    df = _ok(df)
+    rows = []
+    for coc in sorted(df["camera.coc_px"].unique()):
+        sub = df[df["camera.coc_px"] == coc]
+        base = sub[sub["samples.views"] == 1]
+        if not len(base):
+            continue
+        b = float(base["shade.lanes_live"].iloc[0])
+        for views in sorted(sub["samples.views"].unique()):
+            r = sub[sub["samples.views"] == views]
+            inv = float(r["shade.lanes_live"].iloc[0])
+            hit = float(r["shade.cache_hit_rate"].iloc[0]) if "shade.cache_hit_rate" in r else math.nan
+            rows.append([f"{coc:g}", str(int(views)), str(int(r["samples.spp"].iloc[0])), f"{inv:.0f}",
+                         f"{100 * (inv / b - 1):+.1f}%", f"{hit:.3f}", PAPER_MULTIVIEW.get(int(views), "")])
+    return md_table(["CoC [px] (whole lens)", "views", "spp (all views)", "shader invocations", "vs 1 view",
+                     "cache hit rate", "paper"], rows)
+
+
+# 001 Table 3: quad shading requests / supersampled shades for OUR and INTERVAL.
+PAPER_T3 = {"tile": {0: 1, 10: 2, 20: 4, 30: 6, 50: 9}, "interval": {0: 10, 10: 12, 20: 14, 30: 16, 50: 19}}
+
+
+@named_table("table3_supersampling")
+def table3_supersampling(df, config) -> list[str]:
+    """Per CoC: quad requests of tile+msaa (OUR) and interval+msaa relative to the samples supersampling
+    shades (shade.lanes_live of the per_sample row) and to supersampling's own quad requests; OUR's
+    helper-lane share of its quads."""
+    df = _ok(df)
+    rows = []
+    for coc in sorted(df["camera.coc_px"].unique()):
+        sub = df[df["camera.coc_px"] == coc]
+
+        ss, our, itv = (_first(sub, {"pipeline.algorithm": a, "pipeline.shading": sh})
+                        for a, sh in (("tile", "per_sample"), ("tile", "msaa"), ("interval", "msaa")))
+        if ss is None or our is None or itv is None:
+            continue
+        shades = float(ss["shade.lanes_live"])
+        rows.append([f"{coc:g}", f"{100 * our['shade.quad_requests'] / shades:.1f}%",
+                     f"{PAPER_T3['tile'].get(int(coc), '')}%", f"{100 * itv['shade.quad_requests'] / shades:.1f}%",
+                     f"{PAPER_T3['interval'].get(int(coc), '')}%",
+                     f"{our['shade.quad_requests'] / ss['shade.quad_requests']:.3f}",
+                     f"{itv['shade.quad_requests'] / ss['shade.quad_requests']:.3f}",
+                     f"{our['shade.lanes_helper'] / (4 * our['shade.quad_requests']):.2f}"])
+    return md_table(["CoC [px]", "OUR", "paper OUR", "INTERVAL", "paper INTERVAL", "OUR / SS quads",
+                     "INTERVAL / SS quads", "OUR helper lanes"], rows)
+
+
+@named_table("thrash_traffic")
+def thrash_traffic(df, config) -> list[str]:
+    """Per square edge and cache associativity: INTERLEAVE's hit rate, texture bytes per covered pixel of
+    INTERLEAVE and of tile (per sample and MSAA), their ratio, and INTERLEAVE's cold/capacity/conflict misses."""
+    df = _ok(df)
+    rows = []
+    for edge in sorted(df["scene.params.edge_px"].unique()):
+        line = [f"{edge:g}"]
+        for ways in sorted(df["hardware.tex_cache.ways"].unique()):
+            sub = df[(df["scene.params.edge_px"] == edge) & (df["hardware.tex_cache.ways"] == ways)]
+
+            il, tl, tm = (_first(sub, {"pipeline.algorithm": a, "pipeline.shading": sh})
+                          for a, sh in (("interleave", "per_sample"), ("tile", "per_sample"), ("tile", "msaa")))
+            bpx = [st["tex.cache.bytes_fetched"] / (edge * edge) for st in (il, tl, tm)]
+            line += [f"{il['tex.cache.hits'] / il['tex.cache.accesses']:.4f}", *(f"{b:.1f}" for b in bpx),
+                     f"{bpx[0] / bpx[1]:.1f}x",
+                     f"{int(il['tex.cache.misses_cold'])}/{int(il['tex.cache.misses_capacity'])}/"
+                     f"{int(il['tex.cache.misses_conflict'])}"]
+        rows.append(line)
+    ways = [("FA" if w == 0 else f"{int(w)}-way") for w in sorted(df["hardware.tex_cache.ways"].unique())]
+    header = ["edge [px]"]
+    for w in ways:
+        header += [f"{w}: hit IL", "B/px IL", "B/px TILE SS", "B/px TILE MSAA", "IL / TILE SS", "IL misses c/cap/conf"]
+    return md_table(header, rows)
+
+
+@named_table("zcull_savings")
+def zcull_savings(df, config) -> list[str]:
+    """Per scene and CoC: HiZ off against on (pipeline.hiz.enabled), pairs culled by zmax and zmin, depth
+    bytes saved, HiZ traffic, and the sample tests saved."""
+    df = _ok(df)
+    keys = [c for c in ("scene.params.order", "scene.params.layers", "camera.coc_px", "scene.params.motion_px")
+            if c in df.columns]
+    rows = []
+    for _, on in df[df["pipeline.hiz.enabled"] == True].iterrows():  # noqa: E712 - a pandas column
+        match = df["pipeline.hiz.enabled"] == False  # noqa: E712
+        for k in keys:
+            match &= df[k].isna() if _missing(on[k]) else df[k] == on[k]
+        off = df[match]
+        if not len(off):
+            continue
+        off = off.iloc[0]
+        order = on.get("scene.params.order")
+        name = "front_to_back" if _missing(order) else str(order)
+        motion = on.get("scene.params.motion_px")
+        if on["camera.coc_px"] or not _missing(motion):
+            name += f", CoC {on['camera.coc_px']:g}, motion {0 if _missing(motion) else motion:g} px"
+        bytes_off = off["depth.bytes_read"] + off["depth.bytes_written"]
+        bytes_on = on["depth.bytes_read"] + on["depth.bytes_written"]
+        hiz = on["hiz.bytes_read"] + on["hiz.bytes_written"]
+        pairs = on["zcull.pairs"]
+        rows.append([name, f"{on['scene.params.layers']:g}", f"{int(pairs):,}",
+                     f"{100 * on['zcull.pairs_culled'] / pairs:.1f}", f"{100 * on['zcull.pairs_zmin'] / pairs:.1f}",
+                     f"{int(bytes_off):,}", f"{int(bytes_on):,}", f"{100 * (1 - bytes_on / bytes_off):.1f}",
+                     f"{int(hiz):,}", f"{100 * (1 - (bytes_on + hiz) / bytes_off):.1f}",
+                     f"{100 * (1 - on['raster.samples_tested'] / off['raster.samples_tested']):.1f}"])
+    return md_table(["order", "layers", "pairs", "zmax-culled %", "zmin (no reads) %", "depth bytes off",
+                     "depth bytes on", "depth bytes saved %", "HiZ bytes", "saved incl. HiZ %",
+                     "sample tests saved %"], rows)
+
+
+def _missing(v) -> bool:
+    return missing(v) or (isinstance(v, float) and math.isnan(v))
+
+
+@named_table("multiview_wide")
+def multiview_wide(df, config) -> list[str]:
+    """Per CoC and number of views: shading-cache misses and lanes (with helpers) of `shading: cache`, its
+    hit rate, and the supersampled shades (`shading: per_sample`), each relative to one view."""
+    df = _ok(df)
+    rows = []
+    for coc in sorted(df["camera.coc_px"].unique(), reverse=True):
+        sub = df[df["camera.coc_px"] == coc]
+
+        def one(views, shading):
+            return _first(sub, {"samples.views": views, "pipeline.shading": shading})
+
+        base, base_ss = one(1, "cache"), one(1, "per_sample")
+        if base is None or base_ss is None:
+            continue
+        for views in sorted(sub["samples.views"].unique()):
+            c, ss = one(views, "cache"), one(views, "per_sample")
+            if c is None or ss is None:
+                continue
+            inv, lanes, shades = (float(c["shade.lanes_live"]), float(c["shade.invocations"]),
+                                  float(ss["shade.lanes_live"]))
+            hits, misses = float(c["shade.cache_hits"]), float(c["shade.cache_misses"])
+            rows.append([f"{coc:g}", str(int(views)), str(int(c["samples.spp"])), f"{inv:,.0f}",
+                         f"{100 * (inv / base['shade.lanes_live'] - 1):+.1f}%", f"{lanes:,.0f}",
+                         f"{100 * (lanes / base['shade.invocations'] - 1):+.1f}%",
+                         f"{hits / max(1.0, hits + misses):.3f}",
+                         f"{shades:,.0f}", f"{100 * (shades / base_ss['shade.lanes_live'] - 1):+.0f}%",
+                         PAPER_MULTIVIEW.get(int(views), "")])
+    return md_table(["CoC per view", "views", "spp", "invocations", "vs 1 view", "lanes incl. helpers", "vs 1 view",
+                     "cache hit rate", "supersampled shades", "vs 1 view", "paper"], rows)

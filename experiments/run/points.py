@@ -1,0 +1,168 @@
+"""Point kinds: what one point of a sweep computes (config key `point:`, docs/reports.md §Point kinds),
+and the row it leaves in the result store.
+
+- render (default): sim.render of the point; its counters, derived figures and timing estimate.
+- occlusion_query: sim.occlusion_query of `point.query` behind the point's scene; the query's own
+  work (the render with the query minus the occluders alone) and `query.visible`,
+  `query.samples_passed`.
+- conservative: sim.conservative_raster of the scene (1 x 1 tiles, per-pixel t-z boxes); its
+  counters and `conservative.pixels_covered`.
+- retime: sim.timing.estimate on the stored work records of the point's render (store.records_path;
+  rendered once on first use) with `point.hardware` merged over the hardware section; the render's
+  counters and the re-timed `timing.*` figures.
+"""
+from __future__ import annotations
+
+import json
+import time
+import traceback
+from pathlib import Path
+
+from ..config import RESULT_EXCLUDE, RenderConfig, build, build_scene, config_hash, flatten, point_columns
+from .store import cached_records, engine_id, git_rev, store_records
+
+
+def config_columns(config: RenderConfig, camera=None) -> dict:
+    """The flattened resolved config of a point (hardware fully resolved; camera from the built camera)."""
+    row = flatten(config.model_dump(exclude=RESULT_EXCLUDE | {"hardware"}))
+    row.update(point_columns(config))
+    try:
+        row.update(flatten({"hardware": config.hardware_config().describe()}))
+    except Exception:  # noqa: BLE001 - validated on load; keep the row even if not
+        pass
+    if camera is not None:
+        row.update(camera_columns(camera))
+    row["config_hash"] = config_hash(config)
+    return row
+
+
+def camera_columns(camera) -> dict:
+    """The resolved camera of a point (fields the scene's hint filled in included)."""
+    out = {}
+    for k in ("width", "height", "fov_y_deg", "focus_distance", "coc_px", "aperture_radius", "lens", "near"):
+        if hasattr(camera, k):
+            v = getattr(camera, k)
+            out[f"camera.{k}"] = v if isinstance(v, (int, float, str)) else json.dumps(v)
+    return out
+
+
+def _build(config: RenderConfig, row: dict, threads: int | None):
+    """(scene, camera, table, pipeline) of a point; adds the resolved camera and the scene size to row."""
+    scene, camera, table, pipeline = build(config)
+    if threads is not None and config.pipeline.threads == 0:
+        pipeline = pipeline.replace(threads=threads)
+    row.update(camera_columns(camera))
+    row["scene.triangles"] = scene.n_triangles
+    return scene, camera, table, pipeline
+
+
+def _render(config, row, image_path, threads):
+    import sim
+
+    scene, camera, table, pipeline = _build(config, row, threads)
+    result = sim.render(scene, camera, table, pipeline, hardware=config.hardware_config())
+    row["resolved.lens_grid"] = result.config.get("lens_grid")
+    row.update(result.flat_stats)
+    if config.outputs.metrics is not None:
+        from .references import point_metrics
+
+        row.update(point_metrics(config, result.image))
+    if image_path is not None:
+        Path(image_path).parent.mkdir(parents=True, exist_ok=True)
+        result.save_png(image_path)
+    return result
+
+
+def _occlusion_query(config, row, image_path, threads):
+    import sim
+
+    scene, camera, table, pipeline = _build(config, row, threads)
+    t0 = time.perf_counter()
+    r = sim.occlusion_query(scene, build_scene(config.point.query), camera, table, pipeline, mode=config.point.mode)
+    row.update(r.work)
+    row.update({"query.visible": bool(r.visible), "query.samples_passed": int(r.samples_passed),
+                "time.wall_s": time.perf_counter() - t0})
+    return r
+
+
+def _conservative(config, row, image_path, threads):
+    import sim
+
+    scene, camera, _, pipeline = _build(config, row, threads)
+    t0 = time.perf_counter()
+    r = sim.conservative_raster(scene, camera, pipeline, reduce="tz_box")
+    row.update(r.flat_stats)
+    row.update({"conservative.pixels_covered": int((r.count > 0).sum()), "time.wall_s": time.perf_counter() - t0})
+    return r
+
+
+def render_config(config: RenderConfig) -> RenderConfig:
+    """The render whose work records a retime point re-times (the same config without the point section)."""
+    return config.model_copy(update={"point": type(config.point)()})
+
+
+def stored_render(config: RenderConfig, threads: int | None = None):
+    """(timing records, flat counters with the resolved camera and scene size) of ``config``'s render, from
+    the store or rendered and stored."""
+    import sim
+
+    base = render_config(config)
+    h = config_hash(base)
+    cached = cached_records(h)
+    if cached is not None:
+        return cached
+    stats: dict = {}
+    scene, camera, table, pipeline = _build(base, stats, threads)
+    result = sim.render(scene, camera, table, pipeline, hardware=base.hardware_config())
+    stats.update(result.flat_stats)
+    store_records(h, result.timing_records, stats)
+    return result.timing_records, stats
+
+
+def _retime(config, row, image_path, threads):
+    import sim
+
+    records, stats = stored_render(config, threads)
+    t0 = time.perf_counter()
+    timing = sim.timing.estimate(records, config.retime_hardware())
+    row.update({k: v for k, v in stats.items() if not k.startswith("timing.")})
+    row.update(timing)
+    row["time.wall_s"] = time.perf_counter() - t0
+    return timing
+
+
+POINT_KINDS = {"render": _render, "occlusion_query": _occlusion_query, "conservative": _conservative,
+               "retime": _retime}
+
+
+def render_point(config: RenderConfig, image_path: str | Path | None = None, threads: int | None = None
+                 ) -> tuple[dict, object]:
+    """Compute one (non-swept) point: (row, the sim result of its kind)."""
+    kind = config.point.kind
+    if image_path is not None and kind != "render":
+        raise ValueError(f"outputs.images: only render points have images, got point kind {kind!r}")
+    row = config_columns(config)
+    result = POINT_KINDS[kind](config, row, image_path, threads)
+    row.update(status="ok", error="", **{"engine.version": engine_id(), "engine.git_rev": git_rev()})
+    return row, result
+
+
+def run_point(config_json: str, image_path: str | None = None, threads: int | None = None) -> dict:
+    """One point, isolated: any exception becomes a row with status 'error' (never raised)."""
+    config = RenderConfig.model_validate_json(config_json)
+    t0 = time.perf_counter()
+    try:
+        row, _ = render_point(config, image_path, threads)
+    except Exception as e:  # noqa: BLE001 - a failing point must not stop the sweep
+        row = config_columns(config)
+        row.update(status="error", error=f"{type(e).__name__}: {e}", traceback=traceback.format_exc(limit=4),
+                   **{"engine.version": engine_id(), "engine.git_rev": git_rev(),
+                      "time.wall_s": time.perf_counter() - t0})
+    return row
+
+
+def error_row(config_json: str, message: str) -> dict:
+    config = RenderConfig.model_validate_json(config_json)
+    row = config_columns(config)
+    row.update(status="error", error=message, **{"engine.version": engine_id(), "engine.git_rev": git_rev()})
+    return row

@@ -1,0 +1,1 @@
+"""Golden operation counts (ops.csv) and their generator (golden.py, `make golden`)."""
