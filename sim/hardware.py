@@ -1,6 +1,6 @@
 """HardwareConfig: the modelled hardware (units of the timing model, caches, memory), validated on
 construction. Every parameter is declared once here, with a unit and a description; the YAML
-``hardware:`` section (experiments/config.py) and docs/config.md are generated from it.
+``hardware:`` section (experiments/config/schema.py) and docs/config.md are generated from it.
 
 Throughputs are work items per clock in each unit's own currency (triangles, tile tests, sample
 tests, depth tests, quads, texel fetches); latencies are in clocks; FIFO depths in entries.
