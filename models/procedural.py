@@ -264,3 +264,31 @@ def moving_quads(
     return Scene.concat(*parts, name="moving_quads").with_camera_hint(
         **_hint(width, height, fov_y_deg, focus_distance)
     )
+
+
+@register_scene("textured_square")
+def textured_square(
+    *,
+    edge_px: float = 64.0,
+    width: int = 320,
+    height: int = 320,
+    fov_y_deg: float = 45.0,
+    depth: float = 10.0,
+    focus_distance: float = 5.0,
+    texture_size: int = 512,
+    texture_seed: int = 7,
+) -> Scene:
+    """A fronto-parallel square (two triangles) covering edge_px x edge_px pixels at ``depth``, with uvs
+    0..edge_px/texture_size so that the procedural texture maps about one texel per pixel (level of
+    detail about 0): the texture-cache workload of Hakura & Gupta's pinhole comparison."""
+    from sim.texturing import procedural_texture
+
+    _positive("edge_px", edge_px)
+    _positive("depth", depth)
+    s_y = 1.0 / np.tan(np.radians(fov_y_deg) / 2.0)
+    half = edge_px / (s_y * height / depth)
+    k = edge_px / texture_size
+    uvs = np.array([[[0, 0], [k, 0], [k, k]], [[0, 0], [k, k], [0, k]]], np.float32)
+    scene = Scene.from_arrays(quad_triangles((0.0, 0.0, -depth), 2 * half, 2 * half), uvs=uvs,
+                              texture=procedural_texture(texture_size, texture_seed))
+    return scene.with_camera_hint(**_hint(width, height, fov_y_deg, focus_distance))

@@ -25,15 +25,11 @@ class WideLensCamera(sim.Camera):
 
 
 def build_scene(spec: SceneSpec):
-    """The models.Scene of a scene section: a named scene (models/, then experiments/config/workloads.py)
-    or a file relative to the repository."""
+    """The models.Scene of a scene section: a named scene (models.scene_names()) or a file relative
+    to the repository."""
     import models
 
-    from .workloads import WORKLOADS
-
     if spec.name is not None:
-        if spec.name in WORKLOADS and spec.name not in models.scene_names():
-            return WORKLOADS[spec.name](**spec.params)
         return models.named(spec.name, **spec.params)
     p = Path(spec.path)
     return models.load(str(p if p.is_absolute() else REPO / p))

@@ -31,7 +31,7 @@ class SceneSpec(_Strict):
     """Which workload to render (models/)."""
 
     name: Optional[str] = Field(None, description=(
-        "A named scene (models.scene_names(), or a workload of experiments/config/workloads.py), e.g. 'spot_wall', "
+        "A named scene (models.scene_names()), e.g. 'spot_wall', "
         "'bunny'"))
     path: Optional[str] = Field(None, description="A scene YAML file or a mesh (OBJ/PLY), relative to the repository")
     params: dict[str, Any] = Field(default_factory=dict, description="Keyword parameters of the named scene")
