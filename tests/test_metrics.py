@@ -1,11 +1,11 @@
-"""Image error metrics against closed forms and known values (experiments/report/metrics.py) and the
+"""Image error metrics against closed forms and known values (experiments/run/metrics.py) and the
 reference images they compare against (experiments/run/references.py)."""
 import math
 
 import numpy as np
 import pytest
 
-from experiments.report import metrics
+from experiments.run import metrics
 
 pytestmark = pytest.mark.smoke
 

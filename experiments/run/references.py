@@ -1,4 +1,4 @@
-"""Reference images of the image-error metrics (experiments/report/metrics.py), cached in the store.
+"""Reference images of the image-error metrics (experiments/run/metrics.py), cached in the store.
 
 The reference of a point is the same scene, camera, pipeline and hardware rendered with
 ``outputs.metrics.reference_spp`` samples per pixel (>= 1024 in the reports) of a fixed-seed table
@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from ..config import RenderConfig, build, config_hash
-from ..report import metrics
+from . import metrics
 from .store import engine_id, results_dir
 
 REFERENCE_SEED = 2012  # fixed, and different from the seeds of the tables under test
