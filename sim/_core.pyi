@@ -1,5 +1,6 @@
 """Type stub for the rast5d engine (sim/bindings/*.cpp; one section per binding file). Use the
-Python face (sim.render, sim.Camera, sim.SampleTable, sim.PipelineConfig) rather than calling these directly."""
+Python face (sim.render, sim.Camera, sim.SampleTable, sim.PipelineConfig) rather than calling these
+directly."""
 from typing import Any
 
 import numpy as np
