@@ -11,7 +11,8 @@ from . import _core
 
 from .errors import ConfigError, SceneInputError
 from .hardware import HardwareConfig, TextureCacheConfig, UnitConfig
-from .pipeline import PipelineConfig, algorithm_docs, algorithm_names
+from .pipeline import (PipelineConfig, algorithm_docs, algorithm_names, shading_modes, texture_filters,
+                       texture_layouts)
 from .png import linear_to_srgb8, write_png
 
 from .camera import Camera
@@ -41,6 +42,9 @@ __all__ = [
     "linear_to_srgb8",
     "memory_estimate",
     "render",
+    "shading_modes",
+    "texture_filters",
+    "texture_layouts",
     "timing",
     "write_png",
 ]

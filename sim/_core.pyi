@@ -1,73 +1,84 @@
-"""Type stub for the rast5d engine (sim/bindings/module.cpp). Use the Python face (sim.render,
-sim.Camera, sim.SampleTable, sim.PipelineConfig) rather than calling these directly."""
+"""Type stub for the rast5d engine (sim/bindings/*.cpp; one section per binding file). Use the
+Python face (sim.render, sim.Camera, sim.SampleTable, sim.PipelineConfig) rather than calling these
+directly."""
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
+# ---- params.cpp: the render parameters (core/params.def) and the registries by name ----
 class LensShape:
     square: LensShape
     disk: LensShape
     hexagon: LensShape
 
 class RenderParams:
-    """Engine parameters; see sim/include/rast5d/params.h. Vertices are pixel-homogeneous:
-    X_h = (x_clip + w) * width / 2, Y_h = (w - y_clip) * height / 2, W = w."""
-    width: int
-    height: int
-    coc_x_px: float  # shear coefficient for u in pixels (the CoC radius at infinity)
-    coc_y_px: float  # shear coefficient for v (negative: rows grow downwards)
-    focus_w: float
-    near_w: float
-    lens_shape: LensShape
-    algorithm: str
-    tile_size: int
-    lens_grid: int
-    hinterleave_tile: int
-    threads: int
-    bin_size: int
-    halfspace_h: bool
-    halfspace_H: bool
-    selective_H: bool
-    oracle_full: bool
-    c_sample: float  # < 0: the documented 4D sample-test cost
-    c_tile: float  # < 0: the documented cost of one edge's H_j lines against one tile
-    backface_cull: bool
-    exact_ops: bool
-    count_optimal: bool
-    table_has_lens: bool
-    table_has_time: bool
-    record_timing: bool  # record timing work records (Result.timing_records); docs/timing.md
-    # shading, texturing, texture cache (issue 6; docs/shading.md)
-    shading_mode: int  # 0 per_sample, 1 msaa, 2 per_lens_cell, 3 cache, 4 none
-    shading_cache_entries: int
-    shading_grid: int
-    tex_count: int
-    tex_filter: int  # 0 bilinear, 1 trilinear
-    tex_layout: int  # 0 linear, 1 blocked 4x4, 2 Morton 4x4 blocks
-    tex_sample_dist: int  # texture index of the sample-distribution texture, or -1
-    tex_cache_bytes: int
-    tex_cache_line_bytes: int
-    tex_cache_ways: int  # 0 = fully associative
-    tex_cache_count: int
-    # issue 5 (docs/intervals.md)
-    time_splits: int
-    time_strata: int
-    motion_intervals: bool
-    clip_u_lo: float
-    clip_u_hi: float
-    clip_v_lo: float
-    clip_v_hi: float
-    clip_t_lo: float
-    clip_t_hi: float
-    zhat_planes: bool
-    zhat_stats: bool
-    hiz_enabled: bool
-    hiz_tile: int
-    query_first: int
-    query_mode: int  # 0 none, 1 sample-based, 2 interval-based occlusion query
+    """Engine parameters, declared in sim/engine/core/params.def; set them through sim.render.
+    A choice parameter reads and writes its name (ValueError for an unknown one)."""
+    # ---- generated from params.def by `python -m sim.gen_stub`: do not edit ----
+    # camera: set from sim.Camera
+    width: int  # Image width [px]; default 0
+    height: int  # Image height [px]; default 0
+    coc_x_px: float  # Shear coefficient for u: the circle-of-confusion radius at infinity [px]; default 0.0
+    coc_y_px: float  # Shear coefficient for v (negative: image rows grow downwards, lens v points up) [px]; default 0.0
+    focus_w: float  # F: view depth of the focus plane; default 1.0
+    near_w: float  # Near plane: samples whose hit point has W < near_w are rejected; default 0.01
+    lens_shape: LensShape  # Lens aperture shape; default 'disk'
+    # pipeline: from sim.PipelineConfig
+    algorithm: str  # Traversal algorithm: one of sim.algorithm_names(); default 'bruteforce'
+    threads: int  # Worker threads; 0 = all hardware threads (results are identical for any count); default 0
+    tile_size: int  # Screen tile edge for tile-based algorithms: 1, 2, 4 or 8 [px]; default 2
+    lens_grid: int  # G of the G x G lens-grid cells (1, 2, 4, 8, 16) or 'auto' (4; 8 at >= 256 spp); default 4
+    halfspace_h: bool  # Use the h_i half-space lines; default True
+    halfspace_H: bool  # Use the H_j half-space lines; default True
+    selective_H: bool  # 001 Appendix A oracle: disable H_j lines on edges where they are not expected to pay; default True
+    oracle: str  # Oracle estimate: 'simplified' (001 Eq. 15, the paper's) or 'full' (Eq. 11-12) (oracle_modes: simplified, full); default 'simplified'
+    c_sample: float  # Oracle C_sample; null = the documented 4D sample-test cost [ops]; default -1.0
+    c_tile: float  # Oracle C_tile (one edge's H_j lines vs one tile); null = documented [ops]; default -1.0
+    backface_cull: bool  # Cull back-facing triangles; default False
+    op_count: str  # 'documented' (charge each kernel's documented cost) or 'exact' (counting scalar type) (op_counts: documented, exact); default 'documented'
+    count_optimal: bool  # Instrument tile.samples_optimal (exact lens region per tile; 001 Table 1); default True
+    hinterleave_tile: int  # HINTERLEAVE tile edge: 4, 8 or 16 [px]; default 8
+    bin_size: int  # Screen bin edge for threading (multiple of 8 and of hinterleave_tile) [px]; default 64
+    shading: str  # What costs a shader lane: 'per_sample' (supersampling), 'msaa' (one per pixel per visit), 'per_lens_cell' (one per pixel and lens-grid cell per visit), 'cache' (memoising shading cache, 002 §2) or 'none' (not modelled: no shade.*/tex.* counts, fastest); the image is the same in every mode (shading_modes: per_sample, msaa, per_lens_cell, cache, none); default 'none'
+    shading_cache_entries: int  # Shading cache (shading: cache): LRU entries, key (triangle, shading-grid point) [entries]; default 1024
+    shading_grid: int  # Shading cache: shading-grid points per pixel edge (1 = pixel grid, 2 = 2x2 per pixel, ...) [points/px]; default 1
+    texture_count: int  # Textures read per shader lane, 0..4 (0: untextured, the vertex colour) [textures]; default 0
+    texture_filter: str  # 'bilinear' (nearest mip level) or 'trilinear'; level of detail from analytic per-triangle derivatives (texture_filters: bilinear, trilinear); default 'trilinear'
+    texture_layout: str  # Texel layout in memory: 'linear' (row-major), 'blocked' (4x4 texel blocks) or 'morton' (4x4 blocks in Morton order) (texture_layouts: linear, blocked, morton); default 'blocked'
+    motion_test: str  # tile, moving triangles: 'intervals' (t̂ and lens sets per time sub-interval, samples indexed by time stratum) or 'bounds' (h_i lines over the shutter ends, no t̂) (motion_tests: intervals, bounds); default 'intervals'
+    time_splits: int  # Time sub-intervals S per shutter (1, 2, 4, 8, 16): tile computes t̂ (and 5D lens sets) per sub-interval; default 1
+    time_strata: int  # Time strata per lens cell in the sample-table index (1..64, a multiple of time_splits): tile walks only the strata that overlap t̂; default 8
+    clip_u: list[float]  # Lens u range kept; default [-1.0, 1.0]
+    clip_v: list[float]  # Lens v range kept; default [-1.0, 1.0]
+    clip_t: list[float]  # Shutter time range kept; default [0.0, 1.0]
+    zhat: str  # Depth interval per (triangle, tile): 'planes' (moving box + moving planes, 002 App. A) or 'vertex' (vertex min/max) (zhat_modes: planes, vertex); default 'planes'
+    zhat_stats: bool  # tile: compute the depth interval of every accepted pair and count its width (zcull.width_zhat, zcull.width_vertex); default False
+    hiz_enabled: bool  # zmax/zmin culling against per-tile HiZ; default False
+    hiz_tile_size: int  # HiZ tile edge (>= tile_size) [px]; default 8
+    # hardware: from sim.HardwareConfig
+    tex_cache_size_bytes: int  # Capacity of one texture cache [bytes]; default 16384
+    tex_cache_line_bytes: int  # Texture-cache line size [bytes]; default 64
+    tex_cache_ways: int  # Associativity; 0 = fully associative; default 4
+    tex_cache_count: int  # Texture caches; bin b uses cache b mod count; default 1
+    # frame: set by sim.render for this render
+    texture_sample_distribution_index: int  # Texture index of the sample-distribution texture (texture_sample_distribution), or -1; default -1
+    table_has_lens: bool  # The sample table has lens coordinates (else u = v = 0 is exact); default True
+    table_has_time: bool  # The sample table has time coordinates (else t = 0 is exact); default True
+    record_timing: bool  # Record one timing work record per (triangle, bin) visit (docs/timing.md); default True
+    query_first: int  # Occlusion query: triangles from this index are the query (no writes); -1 none; default -1
+    query_mode: int  # Occlusion query: 0 none, 1 sample-based, 2 interval-based (ẑ vs HiZ, abort); default 0
+    # ---- end of the generated fields ----
     def __init__(self) -> None: ...
 
+def param_specs() -> list[dict[str, Any]]:
+    """The parameter declaration (params.def), one dict per row in order: kind ('engine',
+    'python' or 'group'), layer, name (user path), engine (RenderParams field or None), group,
+    type, default, unit, domain, doc, choices; group rows: kind, layer, name, keys, doc."""
+def choices() -> dict[str, list[tuple[str, str]]]:
+    """Registries by name: {'shading_modes': [(name, description)], 'texture_filters': ..., ...}."""
+
+# ---- render.cpp: the render, the sample-table buckets and the registries of the engine ----
 def render(
     params: RenderParams,
     v0: npt.NDArray[np.float32],  # (N, 3, 3) pixel-homogeneous vertices at t = 0
@@ -77,7 +88,7 @@ def render(
     lens_index: npt.NDArray[np.int32],  # (P, P, spp) or empty
     lens_uv: npt.NDArray[np.float32],  # (N_lens, 2) or empty
     export_samples: bool = False,
-    uvs: npt.NDArray[np.float32] | None = None,  # (N, 3, 2) texture coordinates (issue 6)
+    uvs: npt.NDArray[np.float32] | None = None,  # (N, 3, 2) texture coordinates
     tex_slots: npt.NDArray[np.int32] | None = None,  # (N, 4) texture index per slot, -1 unused
     textures: list[npt.NDArray[np.float32]] = ...,  # (H, W, 1..4) linear images
 ) -> dict[str, Any]:
@@ -91,25 +102,10 @@ def lens_grid_buckets(
 ) -> tuple[npt.NDArray[np.int32], npt.NDArray[np.int32], npt.NDArray[np.int32]]:
     """(order (P,P,spp), counts (P,P,G*G), offsets (P,P,G*G)) of 001 Fig. 10."""
 
-def probe(
-    params: RenderParams,
-    v0: npt.NDArray[np.float32],  # (3, 3) one triangle at t = 0
-    v1: npt.NDArray[np.float32],  # (3, 3) at t = 1
-    points: npt.NDArray[np.float32],  # (M, 5): absolute pixel x, y, then u, v, t
-    force_general: bool = False,
-) -> dict[str, Any]:
-    """Exact sample test at arbitrary points: {'dim_class': int (0..3 = 2D, 3D, 4D, 5D; -1 culled
-    near), 'covered', 'hit': bool (M,), 'depth': float32 (M,) z = 1 - near / w, 'w_hit': float32}."""
-
 def counter_docs() -> dict[str, tuple[str, str]]: ...
 def algorithms() -> list[tuple[str, str, bool]]: ...
-def measure_kernel_costs(trials: int = 100, seed: int = 1) -> dict[str, tuple[int, int, int]]:
-    """{kernel: (documented cost, min counted, max counted)} over random inputs."""
-def measure_tile_kernel_costs(trials: int = 200, seed: int = 1) -> dict[str, tuple[int, int, int, int]]:
-    """Tile-test kernels whose cost depends on the configuration: {name: (runs, mismatches between
-    counted and documented, min documented, max documented)}."""
 
-# ---- timing model (docs/timing.md) ----
+# ---- timing.cpp: the timing model (docs/timing.md) ----
 def timing_record_dtype() -> np.dtype:
     """numpy structured dtype of one work record: bin (int32), triangles (uint32), tile_tests,
     sample_tests, depth_tests, quads, texel_fetches, tex_misses, memory_bytes (uint64)."""
@@ -128,7 +124,34 @@ def timing_estimate(
 ) -> dict[str, float]:
     """Flat {'timing.cycles', 'timing.records', 'timing.cores', 'timing.<unit>.work',
     'timing.<unit>.busy_cycles', '...blocked_cycles', '...starved_cycles'}. ValueError for a bad config."""
-# ---- issue 6: texture cache and texture unit (docs/shading.md) ----
+
+# ---- conservative.cpp: conservative rasterization ----
+def conservative_raster(
+    params: RenderParams,
+    v0: npt.NDArray[np.float32],  # (N, 3, 3) engine vertices at t = 0
+    v1: npt.NDArray[np.float32],  # (N, 3, 3) at t = 1
+    reduce: bool,
+    max_records: int,
+) -> dict[str, Any]:
+    """Conservative rasterization (002 Fig. 2): {'counters', 'records': uint8 bytes of (x, y, triangle,
+    u_lo, u_hi, v_lo, v_hi, t_lo, t_hi, z_lo, z_hi) records, 'record_bytes'} or, with reduce,
+    {'counters', 'tz_box': float32 (H, W, 4), 'count': int32 (H, W)}. ValueError past max_records."""
+
+# ---- selftest.cpp: probes and unit checks for the tests ----
+def probe(
+    params: RenderParams,
+    v0: npt.NDArray[np.float32],  # (3, 3) one triangle at t = 0
+    v1: npt.NDArray[np.float32],  # (3, 3) at t = 1
+    points: npt.NDArray[np.float32],  # (M, 5): absolute pixel x, y, then u, v, t
+    force_general: bool = False,
+) -> dict[str, Any]:
+    """Exact sample test at arbitrary points: {'dim_class': int (0..3 = 2D, 3D, 4D, 5D; -1 culled
+    near), 'covered', 'hit': bool (M,), 'depth': float32 (M,) z = 1 - near / w, 'w_hit': float32}."""
+def measure_kernel_costs(trials: int = 100, seed: int = 1) -> dict[str, tuple[int, int, int]]:
+    """{kernel: (documented cost, min counted, max counted)} over random inputs."""
+def measure_tile_kernel_costs(trials: int = 200, seed: int = 1) -> dict[str, tuple[int, int, int, int]]:
+    """Tile-test kernels whose cost depends on the configuration: {name: (runs, mismatches between
+    counted and documented, min documented, max documented)}."""
 def simulate_cache(lines: npt.NDArray[np.uint64], n_lines: int, ways: int) -> dict[str, Any]:
     """One set-associative LRU cache (ways 0 = fully associative) over a stream of line indices:
     {'accesses', 'hits', 'misses', 'cold', 'capacity', 'conflict': int, 'hit': bool (M,)}."""
@@ -138,13 +161,3 @@ def triangle_lod(v0: npt.NDArray[np.float32], uvs: npt.NDArray[np.float32], tex_
     projected through the lens centre at shutter open."""
 def texel_address(height: int, width: int, layout: int, level: int, x: int, y: int) -> int:
     """Byte address of a texel of a lone texture (layout 0 linear, 1 blocked 4x4, 2 Morton blocks)."""
-def conservative_raster(
-    params: RenderParams,
-    v0: npt.NDArray[np.float32],  # (N, 3, 3) engine vertices at t = 0
-    v1: npt.NDArray[np.float32],  # (N, 3, 3) at t = 1
-    reduce: bool,
-    max_records: int,
-) -> dict[str, Any]:
-    """Conservative rasterization (issue 5): {'counters', 'records': uint8 bytes of (x, y, triangle,
-    u_lo, u_hi, v_lo, v_hi, t_lo, t_hi, z_lo, z_hi) records, 'record_bytes'} or, with reduce,
-    {'counters', 'tz_box': float32 (H, W, 4), 'count': int32 (H, W)}. ValueError past max_records."""

@@ -11,7 +11,8 @@ from . import _core
 from .camera import Camera
 from .errors import ConfigError, SceneInputError
 from .hardware import HardwareConfig
-from .pipeline import SHADING_MODES, TEXTURE_FILTERS, TEXTURE_LAYOUTS, PipelineConfig
+from . import params as _params
+from .pipeline import PipelineConfig
 from .texturing import texture_inputs
 from .timing import estimate as timing_estimate
 from .stats import flat_stats, nest
@@ -117,18 +118,19 @@ def _camera_params(camera: Camera):
     return params
 
 
+def _pipeline_params(params, config: PipelineConfig) -> None:
+    """Every pipeline parameter the engine reads, under its one name (params.def); lens_grid
+    'auto' keeps the engine default and is resolved by the caller."""
+    _params.set_layer(params, "pipeline", config)
+
+
+_INTERVAL_PARAMS = ("motion_test", "time_splits", "time_strata", "clip", "zhat", "zhat_stats", "hiz")
+
+
 def _interval_params(params, config: PipelineConfig) -> None:
-    """Time/lens intervals, clip box, depth intervals and HiZ (docs/intervals.md)."""
-    params.motion_intervals = config.motion_test == "intervals"
-    params.time_splits = config.time_splits
-    params.time_strata = config.time_strata
-    for axis, (lo, hi) in config.clip.items():
-        setattr(params, f"clip_{axis}_lo", float(lo))
-        setattr(params, f"clip_{axis}_hi", float(hi))
-    params.zhat_planes = config.zhat == "planes"
-    params.zhat_stats = config.zhat_stats
-    params.hiz_enabled = config.hiz["enabled"]
-    params.hiz_tile = config.hiz["tile_size"]
+    """The pipeline parameters the conservative mode reads: time/lens intervals, clip box, depth
+    intervals and HiZ (docs/intervals.md)."""
+    _params.set_layer(params, "pipeline", config, only=_INTERVAL_PARAMS)
 
 
 def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *,
@@ -166,22 +168,8 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
         t = int(np.argwhere(~np.isfinite(v0) | ~np.isfinite(v1))[0][0])
         raise SceneInputError(f"scene.positions: triangle {t} overflows float32 after projection: {p0[t].tolist()}")
     params = _camera_params(camera)
-    params.algorithm = config.algorithm
-    params.tile_size = config.tile_size
+    _pipeline_params(params, config)
     params.lens_grid = grid
-    params.hinterleave_tile = config.hinterleave_tile
-    params.threads = config.threads
-    params.bin_size = config.bin_size
-    params.halfspace_h = config.halfspace["h"]
-    params.halfspace_H = config.halfspace["H"]
-    params.selective_H = config.selective_H
-    params.oracle_full = config.oracle == "full"
-    params.c_sample = -1.0 if config.c_sample is None else float(config.c_sample)
-    params.c_tile = -1.0 if config.c_tile is None else float(config.c_tile)
-    params.backface_cull = config.backface_cull
-    params.exact_ops = config.op_count == "exact"
-    params.count_optimal = config.count_optimal
-    _interval_params(params, config)
     if query is not None:  # (first query triangle, mode): set by sim.occlusion_query only
         params.query_first, params.query_mode = int(query[0]), int(query[1])
     # The engine skips a dimension only where skipping is exact: every sample has u = v = 0 (no
@@ -195,18 +183,9 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     else:
         lens_index = np.zeros((0,), np.int32)
         lens_uv = np.zeros((0, 2), np.float32)
-    # Shading, texturing and the texture cache (docs/shading.md).
-    params.shading_mode = SHADING_MODES.index(config.shading)
-    params.shading_cache_entries = config.shading_cache_entries
-    params.shading_grid = config.shading_grid
-    params.tex_count = config.texture_count
-    params.tex_filter = TEXTURE_FILTERS.index(config.texture_filter)
-    params.tex_layout = TEXTURE_LAYOUTS.index(config.texture_layout)
-    tc = hardware.tex_cache
-    params.tex_cache_bytes, params.tex_cache_line_bytes = tc.size_bytes, tc.line_bytes
-    params.tex_cache_ways, params.tex_cache_count = tc.ways, tc.count
+    _params.set_layer(params, "hardware", hardware.describe())
     uvs, slots, textures, sample_dist, col = texture_inputs(scene, p0, col, config, samples)
-    params.tex_sample_dist = sample_dist
+    params.texture_sample_distribution_index = sample_dist
     col32 = col.astype(np.float32)
     t0 = time.perf_counter()
     try:

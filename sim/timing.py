@@ -1,6 +1,6 @@
 """The cycle-approximate timing model (docs/timing.md), on the engine's work records or on synthetic
-ones. The model itself is C++ (sim/src/timing.cpp); this module maps a HardwareConfig onto it,
-declares the derived timing figures and documents every figure.
+ones. The model itself is C++ (sim/engine/timing/timing.cpp); this module maps a HardwareConfig
+onto it, declares the derived timing figures and documents every figure.
 
     recs = sim.timing.records(3)                 # zeroed structured array, RECORD_DTYPE
     recs["sample_tests"] = [64, 128, 0]

@@ -60,7 +60,7 @@ inline py::dict counters_to_dict(const Counters& c) {
 }
 
 
-void register_params(py::module_& m);        // params.cpp: RenderParams and its enums
+void register_params(py::module_& m);        // params.cpp: RenderParams, param_specs, choices
 void register_render(py::module_& m);        // render.cpp: render, sample-table buckets, registries
 void register_timing(py::module_& m);        // timing.cpp: timing records and the timing model
 void register_conservative(py::module_& m);  // conservative.cpp: conservative rasterization mode

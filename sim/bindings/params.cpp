@@ -1,71 +1,171 @@
-// RenderParams: the frame parameters every engine entry point takes.
+// Render parameters: RenderParams, its declaration and the registries by name. Everything here is
+// generated from core/params.def: the attributes of _core.RenderParams (a choice parameter reads
+// and writes its name, resolved through its registry), _core.param_specs() (the declaration
+// itself, from which sim.PipelineConfig, the stub and docs/config.md are built) and
+// _core.choices() (every registry of names but the algorithms, which _core.algorithms() lists).
 #include "bindings.h"
 
+#include <pybind11/stl.h>
+
+#include <array>
+#include <string>
+#include <type_traits>
+
+#include "backend/shading.h"
+#include "backend/texture.h"
 #include "core/params.h"
+#include "traversal/render.h"
 
 namespace rast5d::bindings {
+
+namespace {
+
+template <class T, class = void>
+struct IsChoice : std::false_type {};
+template <class T>
+struct IsChoice<T, std::void_t<decltype(ChoiceTraits<T>::table)>> : std::true_type {};
+
+template <class T>
+const char* param_type() {
+  if constexpr (IsChoice<T>::value || std::is_same_v<T, std::string>) return "str";
+  else if constexpr (std::is_same_v<T, bool>) return "bool";
+  else if constexpr (std::is_integral_v<T>) return "int";
+  else if constexpr (std::is_floating_point_v<T>) return "float";
+  else if constexpr (std::is_same_v<T, CoordRange>) return "range";
+  else if constexpr (std::is_same_v<T, LensShape>) return "LensShape";
+}
+
+template <class T>
+py::object param_value(const T& v) {
+  if constexpr (IsChoice<T>::value) return py::str(std::string(ChoiceTraits<T>::table[static_cast<int>(v)].name));
+  else if constexpr (std::is_same_v<T, LensShape>)
+    return py::str(v == LensShape::kSquare ? "square" : v == LensShape::kDisk ? "disk" : "hexagon");
+  else return py::cast(v);
+}
+
+template <class T>
+void bind_param(py::class_<RenderParams>& c, const char* name, T RenderParams::*member) {
+  if constexpr (IsChoice<T>::value) {
+    c.def_property(
+        name,
+        [member](const RenderParams& p) {
+          return std::string(ChoiceTraits<T>::table[static_cast<int>(p.*member)].name);
+        },
+        [member, name](RenderParams& p, const std::string& v) {
+          p.*member = static_cast<T>(choice_index(ChoiceTraits<T>::table, v, name));
+        });
+  } else {
+    c.def_readwrite(name, member);
+  }
+}
+
+template <std::size_t N>
+py::list choice_list(const std::array<ChoiceInfo, N>& table) {
+  py::list l;
+  for (const auto& c : table) l.append(py::make_tuple(std::string(c.name), std::string(c.description)));
+  return l;
+}
+
+template <class T>
+void add_choices(py::dict& d) {
+  if constexpr (IsChoice<T>::value)
+    d[py::str(std::string(ChoiceTraits<T>::registry))] = choice_list(ChoiceTraits<T>::table);
+}
+
+// The backend's registries (resolved by name at render entry), then those of the enum parameters.
+py::dict choices() {
+  py::dict d;
+  d["shading_modes"] = choice_list(kShadingModes);
+  d["texture_filters"] = choice_list(kTexFilters);
+  d["texture_layouts"] = choice_list(kTexLayouts);
+#define RAST5D_PARAM(layer, group, key, type, def, unit, domain, doc) add_choices<type>(d);
+#define RAST5D_PY_PARAM(layer, group, key, type, def, unit, domain, doc)
+#define RAST5D_PARAM_GROUP(layer, name, keys, doc)
+#include "core/params.def"
+#undef RAST5D_PARAM
+#undef RAST5D_PY_PARAM
+#undef RAST5D_PARAM_GROUP
+  return d;
+}
+
+// One row of param_specs(); choices are resolved from the registry a "@name" domain names.
+py::dict param_spec(const char* kind, const char* layer, std::string group, const char* key, const char* type,
+                    py::object def, const char* unit, const std::string& domain, const char* doc) {
+  py::dict d;
+  if (!group.empty()) group.pop_back();  // "hiz_" -> "hiz"
+  d["kind"] = kind;
+  d["layer"] = layer;
+  d["name"] = group.empty() ? std::string(key) : group + "." + key;
+  const std::string engine = group.empty() ? std::string(key) : group + "_" + key;
+  d["engine"] = std::string(kind) == "engine" ? py::object(py::str(engine)) : py::object(py::none());
+  d["group"] = group.empty() ? py::object(py::none()) : py::object(py::str(group));
+  d["type"] = type;
+  d["default"] = def;
+  d["unit"] = unit;
+  d["domain"] = domain;
+  d["doc"] = doc;
+  py::object names = py::none();
+  if (!domain.empty() && domain[0] == '@') {
+    const std::string reg = domain.substr(1, domain.find(' ') - 1);
+    py::list l;
+    if (reg == "algorithms") {
+      for (const auto& a : algorithms()) l.append(a.name);
+    } else {
+      const py::dict registries = choices();
+      for (auto item : registries[py::str(reg)]) l.append(item.cast<py::tuple>()[0]);
+    }
+    names = l;
+  }
+  d["choices"] = names;
+  return d;
+}
+
+py::list param_specs() {
+  const RenderParams defaults;
+  py::list l;
+#define RAST5D_PARAM(layer, group, key, type, def, unit, domain, doc)                                        \
+  l.append(param_spec("engine", #layer, #group, #key, param_type<type>(), param_value(defaults.group##key), \
+                      unit, domain, doc));
+#define RAST5D_PY_PARAM(layer, group, key, type, def, unit, domain, doc)                                       \
+  l.append(param_spec("python", #layer, #group, #key, param_type<type>(), param_value(type(def)), unit, domain, \
+                      doc));
+#define RAST5D_PARAM_GROUP(layer, name, keys, doc)                                   \
+  {                                                                                  \
+    py::dict g;                                                                      \
+    g["kind"] = "group", g["layer"] = #layer, g["name"] = #name, g["keys"] = #keys; \
+    g["doc"] = doc;                                                                  \
+    l.append(g);                                                                     \
+  }
+#include "core/params.def"
+#undef RAST5D_PARAM
+#undef RAST5D_PY_PARAM
+#undef RAST5D_PARAM_GROUP
+  return l;
+}
+
+}  // namespace
 
 void register_params(py::module_& m) {
   py::enum_<LensShape>(m, "LensShape")
       .value("square", LensShape::kSquare)
       .value("disk", LensShape::kDisk)
       .value("hexagon", LensShape::kHexagon);
-
-
-  py::class_<RenderParams>(m, "RenderParams")
-      .def(py::init<>())
-      .def_readwrite("width", &RenderParams::width)
-      .def_readwrite("height", &RenderParams::height)
-      .def_readwrite("coc_x_px", &RenderParams::coc_x_px)
-      .def_readwrite("coc_y_px", &RenderParams::coc_y_px)
-      .def_readwrite("focus_w", &RenderParams::focus_w)
-      .def_readwrite("near_w", &RenderParams::near_w)
-      .def_readwrite("lens_shape", &RenderParams::lens_shape)
-      .def_readwrite("algorithm", &RenderParams::algorithm)
-      .def_readwrite("tile_size", &RenderParams::tile_size)
-      .def_readwrite("lens_grid", &RenderParams::lens_grid)
-      .def_readwrite("hinterleave_tile", &RenderParams::hinterleave_tile)
-      .def_readwrite("threads", &RenderParams::threads)
-      .def_readwrite("bin_size", &RenderParams::bin_size)
-      .def_readwrite("halfspace_h", &RenderParams::halfspace_h)
-      .def_readwrite("halfspace_H", &RenderParams::halfspace_H)
-      .def_readwrite("selective_H", &RenderParams::selective_H)
-      .def_readwrite("oracle_full", &RenderParams::oracle_full)
-      .def_readwrite("c_sample", &RenderParams::c_sample)
-      .def_readwrite("c_tile", &RenderParams::c_tile)
-      .def_readwrite("backface_cull", &RenderParams::backface_cull)
-      .def_readwrite("exact_ops", &RenderParams::exact_ops)
-      .def_readwrite("count_optimal", &RenderParams::count_optimal)
-      .def_readwrite("table_has_lens", &RenderParams::table_has_lens)
-      .def_readwrite("table_has_time", &RenderParams::table_has_time)
-      .def_readwrite("record_timing", &RenderParams::record_timing)
-      .def_readwrite("shading_mode", &RenderParams::shading_mode)
-      .def_readwrite("shading_cache_entries", &RenderParams::shading_cache_entries)
-      .def_readwrite("shading_grid", &RenderParams::shading_grid)
-      .def_readwrite("tex_count", &RenderParams::tex_count)
-      .def_readwrite("tex_filter", &RenderParams::tex_filter)
-      .def_readwrite("tex_layout", &RenderParams::tex_layout)
-      .def_readwrite("tex_sample_dist", &RenderParams::tex_sample_dist)
-      .def_readwrite("tex_cache_bytes", &RenderParams::tex_cache_bytes)
-      .def_readwrite("tex_cache_line_bytes", &RenderParams::tex_cache_line_bytes)
-      .def_readwrite("tex_cache_ways", &RenderParams::tex_cache_ways)
-      .def_readwrite("tex_cache_count", &RenderParams::tex_cache_count)
-      // issue 5
-      .def_readwrite("time_splits", &RenderParams::time_splits)
-      .def_readwrite("time_strata", &RenderParams::time_strata)
-      .def_readwrite("motion_intervals", &RenderParams::motion_intervals)
-      .def_readwrite("clip_u_lo", &RenderParams::clip_u_lo)
-      .def_readwrite("clip_u_hi", &RenderParams::clip_u_hi)
-      .def_readwrite("clip_v_lo", &RenderParams::clip_v_lo)
-      .def_readwrite("clip_v_hi", &RenderParams::clip_v_hi)
-      .def_readwrite("clip_t_lo", &RenderParams::clip_t_lo)
-      .def_readwrite("clip_t_hi", &RenderParams::clip_t_hi)
-      .def_readwrite("zhat_planes", &RenderParams::zhat_planes)
-      .def_readwrite("zhat_stats", &RenderParams::zhat_stats)
-      .def_readwrite("hiz_enabled", &RenderParams::hiz_enabled)
-      .def_readwrite("hiz_tile", &RenderParams::hiz_tile)
-      .def_readwrite("query_first", &RenderParams::query_first)
-      .def_readwrite("query_mode", &RenderParams::query_mode);
+  py::class_<RenderParams> c(m, "RenderParams");
+  c.def(py::init<>());
+#define RAST5D_PARAM(layer, group, key, type, def, unit, domain, doc) \
+  bind_param(c, #group #key, &RenderParams::group##key);
+#define RAST5D_PY_PARAM(layer, group, key, type, def, unit, domain, doc)
+#define RAST5D_PARAM_GROUP(layer, name, keys, doc)
+#include "core/params.def"
+#undef RAST5D_PARAM
+#undef RAST5D_PY_PARAM
+#undef RAST5D_PARAM_GROUP
+  m.def("param_specs", &param_specs,
+        "The parameter declaration (params.def), one dict per row in order: kind ('engine', 'python' or "
+        "'group'), layer, name (user path, 'hiz.tile_size'), engine (RenderParams field or None), group, "
+        "type, default, unit, domain, doc, choices (names for a registry domain, else None); group rows: "
+        "kind, layer, name, keys ('all' or 'any'), doc.");
+  m.def("choices", &choices, "Registries by name: {registry: [(name, description)]} in engine order.");
 }
 
 }  // namespace rast5d::bindings

@@ -32,7 +32,7 @@ class DepthCull {
 
  public:
   DepthCull(const Frame& f, Counters& c, BinBuffers& buf, Pipeline& pipe) : f_(f), c_(c), buf_(buf), pipe_(pipe) {
-    if (f.p.hiz_enabled || f.p.query_mode == 2) buf_.hiz().set_tile(f.p.hiz_tile);
+    if (f.p.hiz_enabled || f.p.query_mode == 2) buf_.hiz().set_tile(f.p.hiz_tile_size);
   }
 
   // Per triangle, in every bin: query state and the moving planes of ẑ (charged in the first bin).
@@ -41,7 +41,7 @@ class DepthCull {
     query_ = p.query_first >= 0 && tri.index >= static_cast<std::uint32_t>(p.query_first) && p.query_mode > 0;
     set_mode(false);
     need_z_ = p.hiz_enabled || p.zhat_stats || (query_ && p.query_mode == 2);
-    if (need_z_ && p.zhat_planes) {
+    if (need_z_ && p.zhat == ZhatMode::kPlanes) {
       std::uint64_t ops = 0;
       iv::moving_planes<A>(tri, planes_, ops);
       if (charge_setup) c_[Counter::ops_zhat] += ops;
@@ -64,8 +64,8 @@ class DepthCull {
     const RenderParams& p = f_.p;
     if (!need_z_) return true;
     const bool query_iv = query_ && p.query_mode == 2;
-    const iv::ZHat z = iv::zhat<A>(tri, p.zhat_planes ? &planes_ : nullptr, f_.fc, lens, x0, x1, y0, y1, u0, u1,
-                                   v0, v1, ta, tb, c_[Counter::ops_zhat]);
+    const iv::ZHat z = iv::zhat<A>(tri, p.zhat == ZhatMode::kPlanes ? &planes_ : nullptr, f_.fc, lens, x0, x1, y0,
+                                   y1, u0, u1, v0, v1, ta, tb, c_[Counter::ops_zhat]);
     ++c_[Counter::zcull_pairs];
     const double nr = f_.fc.near_d;
     auto width = [nr](double lo, double hi) {

@@ -87,8 +87,9 @@ ConservativeResult conservative_raster(const RenderParams& p, const SceneArrays&
           u0 = std::max(-1.0, clip.u_lo), u1 = std::min(1.0, clip.u_hi);
           w0 = std::max(-1.0, clip.v_lo), w1 = std::min(1.0, clip.v_hi);
         }
-        const iv::ZHat z = iv::zhat<A>(tri, p.zhat_planes ? &planes : nullptr, fc, lens, x0, x1, y0, y1, u0, u1, w0,
-                                       w1, std::max(0.0, t0), std::min(1.0, t1), c[Counter::ops_zhat]);
+        const iv::ZHat z = iv::zhat<A>(tri, p.zhat == ZhatMode::kPlanes ? &planes : nullptr, fc, lens, x0, x1, y0,
+                                       y1, u0, u1, w0, w1, std::max(0.0, t0), std::min(1.0, t1),
+                                       c[Counter::ops_zhat]);
         ++c[Counter::conservative_records];
         // Round outwards to float.
         const float zl = tiletest::round_down_to_float(z.zlo), zh = tiletest::round_up_to_float(z.zhi);

@@ -1,71 +1,140 @@
-// Render parameters handed from Python (sim/pipeline.py validates them first).
+// RenderParams: the parameters of one render, generated from params.def (the one declaration of
+// every parameter, with its layer, default, unit, domain and doc). sim/pipeline.py validates the
+// user's values first; the engine checks what it relies on (validate_frame_params in
+// traversal/render.cpp).
 #pragma once
 
+#include <array>
+#include <cstdint>
+#include <cstdlib>
+#include <sstream>
+#include <stdexcept>
 #include <string>
+#include <string_view>
+#include <type_traits>
+#include <vector>
 
 namespace rast5d {
 
 enum class LensShape : int { kSquare = 0, kDisk = 1, kHexagon = 2 };
 
-struct RenderParams {
-  // Image.
-  int width = 0;
-  int height = 0;
-  // Camera, in the engine's pixel-homogeneous clip space (see docs/conventions.md):
-  // X_h = (x_clip + w) * width / 2, Y_h = (w - y_clip) * height / 2, W = w.
-  // Depth of field is the shear X'_h = X_h + u * coc_x_px * (W - F), Y'_h = Y_h + v * coc_y_px * (W - F).
-  double coc_x_px = 0.0;  // CoC radius at infinity in pixels (signed shear coefficient for u)
-  double coc_y_px = 0.0;  // same for v (negative: image rows grow downwards, lens v points up)
-  double focus_w = 1.0;   // F: view depth of the focus plane
-  double near_w = 0.01;   // near plane: samples whose hit point has W < near_w are rejected
-  LensShape lens_shape = LensShape::kDisk;
-  // Pipeline.
-  std::string algorithm = "bruteforce";
-  int tile_size = 2;       // tile edge in pixels: 1, 2, 4 or 8
-  int lens_grid = 4;       // G: G x G lens-grid cells over [-1, 1]^2
-  int hinterleave_tile = 8;
-  int threads = 0;         // 0: all hardware threads
-  int bin_size = 64;       // screen bin edge in pixels (multiple of 8)
-  bool halfspace_h = true;  // 001 Table 2 switches
-  bool halfspace_H = true;
-  bool selective_H = true;  // 001 Appendix A oracle
-  bool oracle_full = false; // Eq. 11-12 instead of the simplified Eq. 15
-  double c_sample = -1.0;   // oracle sample-test cost (ops); < 0: the documented 4D sample-test cost
-  double c_tile = -1.0;     // oracle cost of one H_j line against one tile; < 0: documented
-  bool backface_cull = false;
-  bool exact_ops = false;   // run kernels on the counting scalar type
-  bool count_optimal = true;  // instrument tile.samples_optimal
-  // Sample table facts (filled by sim.render from the table).
-  bool table_has_lens = true;
-  bool table_has_time = true;
-  // Timing model (issue 6 part B, docs/timing.md): record one work record per (triangle, bin)
-  // visit for the cycle-approximate timing model.
-  bool record_timing = true;
-  // Shading, texturing and the texture cache (issue 6 part A; docs/shading.md).
-  int shading_mode = 4;             // ShadingMode: 0 per_sample, 1 msaa, 2 per_lens_cell, 3 cache, 4 none
-  int shading_cache_entries = 1024; // cache mode: LRU entries
-  int shading_grid = 1;             // cache mode: shading-grid points per pixel edge
-  int tex_count = 0;                // texture slots per shader, 0..4 (0: untextured)
-  int tex_filter = 1;               // TexFilter: 0 bilinear, 1 trilinear
-  int tex_layout = 1;               // TexLayout: 0 linear, 1 blocked 4x4, 2 blocked 4x4 Morton
-  int tex_sample_dist = -1;         // texture index of the 000 §5.3 sample-distribution texture, or -1
-  int tex_cache_bytes = 16384;      // hardware.tex_cache
-  int tex_cache_line_bytes = 64;
-  int tex_cache_ways = 4;           // 0 = fully associative
-  int tex_cache_count = 1;
-  // Issue 5, the 5D pipeline (sim/pipeline.py: time_splits, motion_test, clip, zhat, hiz):
-  int time_splits = 1;            // S time sub-intervals per shutter for moving triangles (tile)
-  int time_strata = 8;            // time strata per lens cell in the sample table index (multiple of S)
-  bool motion_intervals = true;   // tile: t̂ / per-sub-interval lens sets (false: whole-shutter h_i)
-  double clip_u_lo = -1.0, clip_u_hi = 1.0;  // user clip box (002 §2); samples outside are rejected
-  double clip_v_lo = -1.0, clip_v_hi = 1.0;
-  double clip_t_lo = 0.0, clip_t_hi = 1.0;
-  bool zhat_planes = true;        // ẑ: moving box + moving planes (002 App. A); false: vertex min/max
-  bool zhat_stats = false;        // tile: compute ẑ for every accepted pair (tightness counters)
-  bool hiz_enabled = false;       // tile: zmax/zmin culling against per-tile HiZ
-  int hiz_tile = 8;               // HiZ tile edge in pixels (>= tile_size, <= 8)
-  int query_first = -1;           // occlusion query: triangles from this index are the query (no writes)
-  int query_mode = 0;             // 0 none, 1 sample-based, 2 interval-based (ẑ vs HiZ, abort)
+// A [lo, hi] range of one sample coordinate (the clip box).
+using CoordRange = std::array<double, 2>;
+
+// One entry of a registry by name: the choices of a choice parameter, in its enum's order.
+struct ChoiceInfo {
+  std::string_view name;
+  std::string_view description;
 };
+
+// The index of `name` in a registry; std::invalid_argument naming the parameter and the choices.
+template <std::size_t N>
+int choice_index(const std::array<ChoiceInfo, N>& table, std::string_view name, std::string_view param) {
+  std::string known;
+  for (std::size_t i = 0; i < N; ++i) {
+    if (table[i].name == name) return static_cast<int>(i);
+    known.append(i ? ", " : "").append(table[i].name);
+  }
+  throw std::invalid_argument(std::string(param) + ": unknown '" + std::string(name) + "' (known: " + known + ")");
+}
+
+// Choice parameters held as an enum; ChoiceTraits<E> names their registry and its entries.
+enum class OracleMode : int { kSimplified = 0, kFull = 1 };
+enum class OpCount : int { kDocumented = 0, kExact = 1 };
+enum class MotionTest : int { kIntervals = 0, kBounds = 1 };
+enum class ZhatMode : int { kPlanes = 0, kVertex = 1 };
+
+template <class E>
+struct ChoiceTraits;
+
+template <>
+struct ChoiceTraits<OracleMode> {
+  static constexpr std::string_view registry = "oracle_modes";
+  static constexpr std::array<ChoiceInfo, 2> table = {{
+      {"simplified", "N = R_S / 2 |X_q - X_p| |Y_q - Y_p| (001 Eq. 15, the paper's)"},
+      {"full", "N = R_S / 8 F(a, b) F(c, d) (001 Eq. 9-12)"},
+  }};
+};
+template <>
+struct ChoiceTraits<OpCount> {
+  static constexpr std::string_view registry = "op_counts";
+  static constexpr std::array<ChoiceInfo, 2> table = {{
+      {"documented", "charge each kernel's documented cost (costs.h)"},
+      {"exact", "run the kernels on the counting scalar type"},
+  }};
+};
+template <>
+struct ChoiceTraits<MotionTest> {
+  static constexpr std::string_view registry = "motion_tests";
+  static constexpr std::array<ChoiceInfo, 2> table = {{
+      {"intervals", "t̂ and lens sets per time sub-interval, samples indexed by time stratum"},
+      {"bounds", "h_i lines over the shutter ends, no t̂"},
+  }};
+};
+template <>
+struct ChoiceTraits<ZhatMode> {
+  static constexpr std::string_view registry = "zhat_modes";
+  static constexpr std::array<ChoiceInfo, 2> table = {{
+      {"planes", "moving box + moving planes (002 App. A)"},
+      {"vertex", "vertex min/max"},
+  }};
+};
+
+struct RenderParams {
+#define RAST5D_PARAM(layer, group, key, type, def, unit, domain, doc) type group##key = def;
+#define RAST5D_PY_PARAM(layer, group, key, type, def, unit, domain, doc)
+#define RAST5D_PARAM_GROUP(layer, name, keys, doc)
+#include "core/params.def"
+#undef RAST5D_PARAM
+#undef RAST5D_PY_PARAM
+#undef RAST5D_PARAM_GROUP
+};
+
+// The domain check of one numeric parameter, from its params.def domain text: "[lo, hi]",
+// "(lo, hi]", ... or "{a, b, c}"; other domains (registries, "") are checked elsewhere. With a user
+// sentinel (" | auto", " | null") the engine default, which the sentinel stands for, is accepted.
+template <class T>
+void check_domain(std::string_view name, T value, T engine_default, std::string_view domain) {
+  if constexpr (std::is_arithmetic_v<T> && !std::is_same_v<T, bool>) {
+    const std::size_t bar = domain.find(" | ");
+    if (bar != std::string_view::npos) {
+      if (value == engine_default) return;
+      domain = domain.substr(0, bar);
+    }
+    if (domain.size() < 2 || (domain[0] != '[' && domain[0] != '(' && domain[0] != '{')) return;
+    std::vector<double> xs;
+    const std::string body(domain.substr(1, domain.size() - 2));
+    const char* s = body.c_str();
+    for (char* end = nullptr;; s = end + 1) {
+      xs.push_back(std::strtod(s, &end));
+      if (*end != ',') break;
+    }
+    const double v = static_cast<double>(value);
+    bool ok = false;
+    if (domain[0] == '{') {
+      for (double x : xs) ok = ok || v == x;
+    } else {
+      ok = (domain[0] == '(' ? v > xs[0] : v >= xs[0]) && (domain.back() == ')' ? v < xs[1] : v <= xs[1]);
+    }
+    if (!ok) {
+      std::ostringstream msg;
+      msg << name << ": expected " << domain << ", got " << value;
+      throw std::invalid_argument(msg.str());
+    }
+  }
+}
+
+// Every numeric RenderParams field against its declared domain (std::invalid_argument otherwise).
+inline void validate_domains(const RenderParams& p) {
+  const RenderParams defaults;
+#define RAST5D_PARAM(layer, group, key, type, def, unit, domain, doc) \
+  check_domain(#group #key, p.group##key, defaults.group##key, domain);
+#define RAST5D_PY_PARAM(layer, group, key, type, def, unit, domain, doc)
+#define RAST5D_PARAM_GROUP(layer, name, keys, doc)
+#include "core/params.def"
+#undef RAST5D_PARAM
+#undef RAST5D_PY_PARAM
+#undef RAST5D_PARAM_GROUP
+}
 
 }  // namespace rast5d

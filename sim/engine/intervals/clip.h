@@ -27,12 +27,12 @@ struct ClipBox {
 
 inline ClipBox clip_box(const RenderParams& p) {
   ClipBox c;
-  c.active_u = p.clip_u_lo > -1.0 || p.clip_u_hi < 1.0;
-  c.active_v = p.clip_v_lo > -1.0 || p.clip_v_hi < 1.0;
-  c.active_t = p.clip_t_lo > 0.0 || p.clip_t_hi < 1.0;
-  if (c.active_u) c.u_lo = p.clip_u_lo, c.u_hi = p.clip_u_hi;
-  if (c.active_v) c.v_lo = p.clip_v_lo, c.v_hi = p.clip_v_hi;
-  if (c.active_t) c.t_lo = p.clip_t_lo, c.t_hi = p.clip_t_hi;
+  c.active_u = p.clip_u[0] > -1.0 || p.clip_u[1] < 1.0;
+  c.active_v = p.clip_v[0] > -1.0 || p.clip_v[1] < 1.0;
+  c.active_t = p.clip_t[0] > 0.0 || p.clip_t[1] < 1.0;
+  if (c.active_u) c.u_lo = p.clip_u[0], c.u_hi = p.clip_u[1];
+  if (c.active_v) c.v_lo = p.clip_v[0], c.v_hi = p.clip_v[1];
+  if (c.active_t) c.t_lo = p.clip_t[0], c.t_hi = p.clip_t[1];
   return c;
 }
 

@@ -134,7 +134,7 @@ inline Footprint build_footprint(const TriSetup& tri, const Frame& f, bool with_
     if (p.selective_H) {
       const tiletest::LensVertex &a = fp.lv[i], &b = fp.lv[k];
       D n_samples;
-      if (!p.oracle_full) {  // Eq. 15: N = R_S / 2 |X_q - X_p| |Y_q - Y_p|
+      if (p.oracle != OracleMode::kFull) {  // Eq. 15: N = R_S / 2 |X_q - X_p| |Y_q - Y_p|
         const D dx = D(b.ax) - D(a.ax), dy = D(b.ay) - D(a.ay);
         n_samples = (vabs(dx) * vabs(dy)) * D(0.5 * spp);
       } else {  // Eq. 9-12: N = R_S / 8 F(a, b) F(c, d)
@@ -149,7 +149,7 @@ inline Footprint build_footprint(const TriSetup& tri, const Frame& f, bool with_
         n_samples = (Ffun(da, db) * Ffun(dc, dd)) * D(spp / 8.0);
       }
       const bool keep = !(n_samples * D(c_sample) < tile_budget);
-      charge<A>(ops, p.oracle_full ? cost::kOracleFull : cost::kOracleSimplified);
+      charge<A>(ops, p.oracle == OracleMode::kFull ? cost::kOracleFull : cost::kOracleSimplified);
       if (!keep) {
         fp.edges[i].active = false;
         ++fp.edges_disabled;

@@ -23,36 +23,20 @@ std::vector<AlgorithmEntry> algorithms() {
 
 void validate_frame_params(const RenderParams& p) {
   auto fail = [](const std::string& m) { throw std::invalid_argument(m); };
-  if (p.width < 1 || p.width > 16384) fail("width: expected 1..16384, got " + std::to_string(p.width));
-  if (p.height < 1 || p.height > 16384)
-    fail("height: expected 1..16384, got " + std::to_string(p.height));
-  if (p.tile_size != 1 && p.tile_size != 2 && p.tile_size != 4 && p.tile_size != 8)
-    fail("tile_size: expected 1, 2, 4 or 8, got " + std::to_string(p.tile_size));
-  if (p.bin_size < 8 || p.bin_size % 8 != 0 || p.bin_size > 4096)
-    fail("bin_size: expected a multiple of 8 in 8..4096, got " + std::to_string(p.bin_size));
-  if (p.threads < 0 || p.threads > 1024)
-    fail("threads: expected 0 (all) .. 1024, got " + std::to_string(p.threads));
-  if (!(p.focus_w > 0)) fail("focus_w: expected > 0, got " + std::to_string(p.focus_w));
-  if (!(p.near_w > 0)) fail("near_w: expected > 0, got " + std::to_string(p.near_w));
-  if (p.time_splits < 1 || p.time_splits > 16 || p.time_strata < 1 || p.time_strata > 64 ||
-      p.time_strata % p.time_splits != 0)  // each time stratum lies in one sub-interval
-    fail("time_splits/time_strata: expected 1..16 / 1..64 with time_strata a multiple of time_splits, got " +
-         std::to_string(p.time_splits) + " / " + std::to_string(p.time_strata));
-  if (p.shading_mode < 0 || p.shading_mode > 4)
-    fail("shading_mode: expected 0..4, got " + std::to_string(p.shading_mode));
-  if (p.shading_cache_entries < 1 || p.shading_cache_entries > (1 << 24))
-    fail("shading_cache_entries: expected 1..16777216, got " + std::to_string(p.shading_cache_entries));
-  if (p.shading_grid < 1 || p.shading_grid > 16)
-    fail("shading_grid: expected 1..16, got " + std::to_string(p.shading_grid));
-  if (p.tex_count < 0 || p.tex_count > kMaxTexSlots)
-    fail("tex_count: expected 0..4, got " + std::to_string(p.tex_count));
-  if (p.tex_filter < 0 || p.tex_filter > 1) fail("tex_filter: expected 0..1, got " + std::to_string(p.tex_filter));
-  if (p.tex_layout < 0 || p.tex_layout > 2) fail("tex_layout: expected 0..2, got " + std::to_string(p.tex_layout));
+  validate_domains(p);  // every numeric parameter against its params.def domain
+  if (p.bin_size % 8 != 0) fail("bin_size: expected a multiple of 8, got " + std::to_string(p.bin_size));
+  if (p.time_strata % p.time_splits != 0)  // each time stratum lies in one sub-interval
+    fail("time_strata: expected a multiple of time_splits, got " + std::to_string(p.time_splits) + " / " +
+         std::to_string(p.time_strata));
+  choice_index(kShadingModes, p.shading, "shading");
+  choice_index(kTexFilters, p.texture_filter, "texture_filter");
+  choice_index(kTexLayouts, p.texture_layout, "texture_layout");
   const int lb = p.tex_cache_line_bytes;
   if (lb < 4 || lb > 4096 || (lb & (lb - 1))) fail("tex_cache_line_bytes: expected a power of two in 4..4096");
-  if (p.tex_cache_bytes < lb || p.tex_cache_bytes % lb)
-    fail("tex_cache_bytes: expected a positive multiple of the line size, got " + std::to_string(p.tex_cache_bytes));
-  if (p.tex_cache_ways < 0 || (p.tex_cache_ways && (p.tex_cache_bytes / lb) % p.tex_cache_ways))
+  if (p.tex_cache_size_bytes < lb || p.tex_cache_size_bytes % lb)
+    fail("tex_cache_size_bytes: expected a positive multiple of the line size, got " +
+         std::to_string(p.tex_cache_size_bytes));
+  if (p.tex_cache_ways < 0 || (p.tex_cache_ways && (p.tex_cache_size_bytes / lb) % p.tex_cache_ways))
     fail("tex_cache_ways: expected 0 or a divisor of the number of lines, got " + std::to_string(p.tex_cache_ways));
   if (p.tex_cache_count < 1 || p.tex_cache_count > 1024)
     fail("tex_cache_count: expected 1..1024, got " + std::to_string(p.tex_cache_count));
@@ -81,19 +65,20 @@ void validate_params(const RenderParams& p, const SampleTable& table) {
 // slots, uvs, analytic uv derivatives and levels of detail (backend/texture.h).
 static void build_shade_frame(const RenderParams& p, const SceneArrays& scene, const std::vector<TriSetup>& setups,
                               const std::vector<char>& alive, int n_bins, ShadeFrame& sf) {
-  sf.mode = static_cast<ShadingMode>(p.shading_mode);
+  sf.mode = static_cast<ShadingMode>(choice_index(kShadingModes, p.shading, "shading"));
   sf.grid = p.shading_grid;
   sf.cache_entries = p.shading_cache_entries;
-  sf.filter = static_cast<TexFilter>(p.tex_filter);
+  sf.filter = static_cast<TexFilter>(choice_index(kTexFilters, p.texture_filter, "texture_filter"));
   sf.line_bytes = p.tex_cache_line_bytes;
   const bool have_tex = scene.uvs && scene.tex_slots && !scene.textures.empty();
-  sf.tex_count = have_tex ? p.tex_count : 0;
-  sf.sample_dist_tex = !scene.textures.empty() ? p.tex_sample_dist : -1;
+  sf.tex_count = have_tex ? p.texture_count : 0;
+  sf.sample_dist_tex = !scene.textures.empty() ? p.texture_sample_distribution_index : -1;
   if (sf.sample_dist_tex >= static_cast<int>(scene.textures.size()))
-    throw std::invalid_argument("tex_sample_dist: no texture " + std::to_string(sf.sample_dist_tex));
+    throw std::invalid_argument("texture_sample_distribution_index: no texture " +
+                                std::to_string(sf.sample_dist_tex));
   if (!sf.textured()) return;
   for (const auto& t : scene.textures) sf.textures.add(t.data, t.height, t.width, t.channels);
-  sf.textures.layout(static_cast<TexLayout>(p.tex_layout));
+  sf.textures.layout(static_cast<TexLayout>(choice_index(kTexLayouts, p.texture_layout, "texture_layout")));
   if (sf.mode != ShadingMode::kNone) sf.streams.assign(static_cast<std::size_t>(n_bins), {});
   if (sf.tex_count == 0) return;
   const std::size_t n = static_cast<std::size_t>(scene.n);
@@ -151,10 +136,9 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
         const float* v0 = scene.v0 + static_cast<std::size_t>(i) * 9;
         const float* v1 = scene.v1 + static_cast<std::size_t>(i) * 9;
         const float* col = scene.colors + static_cast<std::size_t>(i) * 9;
-        alive[i] = p.exact_ops ? setup_triangle<ExactArith>(v0, v1, col, i, p, fc, setups[i],
-                                                            setup_counters[t])
-                               : setup_triangle<FastArith>(v0, v1, col, i, p, fc, setups[i],
-                                                           setup_counters[t]);
+        alive[i] = p.op_count == OpCount::kExact
+                       ? setup_triangle<ExactArith>(v0, v1, col, i, p, fc, setups[i], setup_counters[t])
+                       : setup_triangle<FastArith>(v0, v1, col, i, p, fc, setups[i], setup_counters[t]);
       }
     };
     std::vector<std::thread> pool;
@@ -201,7 +185,7 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
   auto worker = [&](int t) {
     try {
       ThreadState& ts = states[t];
-      auto algo = TraversalRegistry::entries().at(p.algorithm).create(frame, ts, p.exact_ops);
+      auto algo = TraversalRegistry::entries().at(p.algorithm).create(frame, ts, p.op_count == OpCount::kExact);
       for (;;) {
         const int b = next_bin.fetch_add(1);
         if (b >= n_bins || cancel.load(std::memory_order_relaxed)) break;
@@ -265,7 +249,7 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
       static_cast<std::uint64_t>(p.width) * p.height * table.spp();
   result.counters[Counter::frame_bins] = static_cast<std::uint64_t>(n_bins);
   if (shade_frame.textured() && shade_frame.mode != ShadingMode::kNone && !result.interrupted) {
-    const std::uint64_t lines = static_cast<std::uint64_t>(p.tex_cache_bytes / p.tex_cache_line_bytes);
+    const std::uint64_t lines = static_cast<std::uint64_t>(p.tex_cache_size_bytes / p.tex_cache_line_bytes);
     std::vector<std::vector<std::uint32_t>> seg_misses;
     const CacheStats cs = simulate_texture_caches(shade_frame.streams, p.tex_cache_count, lines,
                                                   static_cast<std::uint64_t>(p.tex_cache_ways),

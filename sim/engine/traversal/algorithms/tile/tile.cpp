@@ -10,7 +10,7 @@
 // h_i + H_j test; moving triangles (3D/5D, 002_95ea0844b256f75b.txt §2): per time sub-interval a
 // conservative t̂ and, for 5D, lens sets from the h_i lines over the sub-interval's end vertices
 // (intervals/time_interval.h); samples are selected through the (lens cell, time stratum) index of
-// the table. With motion_intervals off, moving triangles take the h_i lines over the 6 shutter-end
+// the table. With motion_test 'bounds', moving triangles take the h_i lines over the 6 shutter-end
 // vertices, no H_j, no t̂ (counted in trav.motion_fallback). Every accepted pair may be depth-culled
 // against HiZ with ẑ, and occlusion queries use the same ẑ (backend/zcull.h).
 #include <algorithm>
@@ -65,7 +65,7 @@ class Tile final : public Traversal {
       raster_2d(tri, e, bin);
       return;
     }
-    if (tri.moving && f_.p.motion_intervals && !kInterleaved) {
+    if (tri.moving && f_.p.motion_test == MotionTest::kIntervals && !kInterleaved) {
       iv::motion_setup<A>(tri, f_.fc, f_.p.time_splits, ms_, setup_ops);
       if (charge_setup) c_[Counter::ops_setup] += setup_ops;
       raster_motion(tri, bin);
