@@ -20,7 +20,7 @@ from . import _core
 from .errors import ConfigError, check_float, check_int
 
 _SENTINELS = {"auto": "auto", "null": None}
-_PY_TYPES = {"int": int, "float": float, "bool": bool, "str": str, "range": list}
+PY_TYPES = {"int": int, "float": float, "bool": bool, "str": str, "range": list}
 
 
 @dataclass(frozen=True)
@@ -62,7 +62,7 @@ class ParamSpec:
         """The annotation of the user's value."""
         if self.kind == "group":
             return dict
-        t = _PY_TYPES[self.type]
+        t = PY_TYPES[self.type]
         if self.sentinel:
             return t | (type(None) if self.sentinel[0] is None else str)
         return t

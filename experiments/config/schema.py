@@ -81,20 +81,37 @@ class SamplesSpec(_Strict):
         "Multiview only: number of views splitting the lens in u (002 §8); spp is the total over all views"))
 
 
+def _spec_type(spec):
+    """The pydantic type of one parameter declaration (sim/engine/core/params.def): named choices
+    become Literals, so a wrong value fails at load naming the key, file and line."""
+    from sim import params
+
+    if spec.kind == "group":
+        types = {m.py_type for m in spec.members}
+        if spec.keys == "all" and len(types) == 1:
+            return dict[Literal[tuple(m.key for m in spec.members)], types.pop()]
+        return dict
+    names = spec.choices if spec.choices is not None else (
+        spec.values if spec.type == "str" and spec.values is not None else None)
+    if names is not None:
+        return Literal[tuple(names)]
+    base = params.PY_TYPES[spec.type]
+    if spec.sentinel == ("auto",):
+        return Union[base, Literal["auto"]]
+    if spec.sentinel == (None,):
+        return Optional[base]
+    return base
+
+
 def _pipeline_model() -> type[BaseModel]:
-    """The pipeline section, generated from sim.PipelineConfig's field declarations."""
+    """The pipeline section, generated from the parameter declaration through sim.PipelineConfig."""
+    from sim import params
+
+    specs = {spec.name: spec for spec in params.layer("pipeline")}
     fields = {}
-    types = {"algorithm": str, "threads": int, "tile_size": int, "lens_grid": Union[int, Literal["auto"]],
-             "halfspace": dict[Literal["h", "H"], bool], "selective_H": bool, "oracle": Literal["simplified", "full"],
-             "c_sample": Optional[float], "c_tile": Optional[float], "backface_cull": bool,
-             "op_count": Literal["documented", "exact"], "count_optimal": bool, "hinterleave_tile": int,
-             "bin_size": int, "memory_limit_bytes": int}
-    hints = typing.get_type_hints(sim.PipelineConfig)
     for name, info in sim.PipelineConfig.field_docs().items():
         unit = f" [{info['unit']}]" if info["unit"] else ""
-        # Fields added to sim.PipelineConfig appear here by themselves (with their declared type);
-        # the table above only narrows types for better error messages.
-        fields[name] = (types.get(name, hints[name]), Field(info["default"], description=info["doc"] + unit))
+        fields[name] = (_spec_type(specs[name]), Field(info["default"], description=info["doc"] + unit))
     return create_model("PipelineSpec", __config__=ConfigDict(extra="forbid"),
                         __doc__="The rasterizer pipeline (sim.PipelineConfig).", **fields)
 
