@@ -31,7 +31,7 @@ test-all: install
 	$(PY) -m pytest -q -m "not bench"
 
 bench: install
-	$(PY) -m experiments.bench.bench_core
+	$(PY) -m pytest -q -s -m bench
 
 golden: install
 	$(PY) -m tests.golden.golden

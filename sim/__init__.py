@@ -11,8 +11,8 @@ from . import _core
 
 from .errors import ConfigError, SceneInputError
 from .hardware import HardwareConfig, TextureCacheConfig, UnitConfig
-from .pipeline import (PipelineConfig, algorithm_docs, algorithm_names, shading_modes, texture_filters,
-                       texture_layouts)
+from .pipeline import (PipelineConfig, algorithm_docs, algorithm_names, interleaved_algorithms, shading_modes,
+                       texture_filters, texture_layouts)
 from .png import linear_to_srgb8, write_png
 
 from .camera import Camera
@@ -39,6 +39,7 @@ __all__ = [
     "algorithm_docs",
     "algorithm_names",
     "counter_docs",
+    "interleaved_algorithms",
     "linear_to_srgb8",
     "memory_estimate",
     "render",

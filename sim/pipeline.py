@@ -23,6 +23,11 @@ def algorithm_docs() -> dict[str, str]:
     return {name: desc for name, desc, _inter in _core.algorithms()}
 
 
+def interleaved_algorithms() -> list[str]:
+    """Names of the registered algorithms that need an interleaved sample table."""
+    return [name for name, _desc, inter in _core.algorithms() if inter]
+
+
 def shading_modes() -> list[str]:
     """Names of the shading modes (the ``shading`` parameter), in engine order."""
     return params.choices("shading_modes")

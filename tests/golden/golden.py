@@ -33,21 +33,13 @@ SCENES = {
 
 @functools.cache
 def algorithms() -> tuple[tuple[str, ...], tuple[str, ...]]:
-    """(algorithms for arbitrary tables, algorithms that need an interleaved table), from the registry
-    (sim.algorithm_names()); an algorithm needs an interleaved table when it rejects a stratified one."""
-    import models
+    """(algorithms for arbitrary tables, algorithms that need an interleaved table), in registry order,
+    read from the registry (sim.algorithm_names(), sim.interleaved_algorithms())."""
     import sim
 
-    probe = (models.named("single_triangle"), sim.Camera(width=8, height=8, coc_px=2.0),
-             sim.SampleTable.stratified(spp=4, seed=1))
-    arbitrary, interleaved = [], []
-    for name in sim.algorithm_names():
-        try:
-            sim.render(*probe, sim.PipelineConfig(algorithm=name, threads=1))
-            arbitrary.append(name)
-        except sim.ConfigError:
-            interleaved.append(name)
-    return tuple(arbitrary), tuple(interleaved)
+    interleaved = set(sim.interleaved_algorithms())
+    names = sim.algorithm_names()
+    return (tuple(n for n in names if n not in interleaved), tuple(n for n in names if n in interleaved))
 
 
 # Variants: the scene column reads "<scene>+<variant>" and the variant adds pipeline settings.
