@@ -38,7 +38,8 @@ class DepthCull {
   // Per triangle, in every bin: query state and the moving planes of ẑ (charged in the first bin).
   void begin_triangle(const TriSetup& tri, bool charge_setup) {
     const RenderParams& p = f_.p;
-    query_ = p.query_first >= 0 && tri.index >= static_cast<std::uint32_t>(p.query_first) && p.query_mode != QueryMode::kNone;
+    query_ = p.query_first >= 0 && tri.index >= static_cast<std::uint32_t>(p.query_first) &&
+             p.query_mode != QueryMode::kNone;
     set_mode(false);
     need_z_ = p.hiz_enabled || p.zhat_stats || (query_ && p.query_mode == QueryMode::kIntervals);
     if (need_z_ && p.zhat == ZhatMode::kPlanes) {
