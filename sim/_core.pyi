@@ -7,11 +7,6 @@ import numpy as np
 import numpy.typing as npt
 
 # ---- params.cpp: the render parameters (core/params.def) and the registries by name ----
-class LensShape:
-    square: LensShape
-    disk: LensShape
-    hexagon: LensShape
-
 class RenderParams:
     """Engine parameters, declared in sim/engine/core/params.def; set them through sim.render.
     A choice parameter reads and writes its name (ValueError for an unknown one)."""
@@ -23,7 +18,7 @@ class RenderParams:
     coc_y_px: float  # Shear coefficient for v (negative: image rows grow downwards, lens v points up) [px]; default 0.0
     focus_w: float  # F: view depth of the focus plane; default 1.0
     near_w: float  # Near plane: samples whose hit point has W < near_w are rejected; default 0.01
-    lens_shape: LensShape  # Lens aperture shape; default 'disk'
+    lens_shape: str  # Lens aperture shape: the camera's lens (lens_shapes: disk, square, hexagon); default 'disk'
     # pipeline: from sim.PipelineConfig
     algorithm: str  # Traversal algorithm: one of sim.algorithm_names(); default 'bruteforce'
     threads: int  # Worker threads; 0 = all hardware threads (results are identical for any count); default 0
@@ -57,26 +52,28 @@ class RenderParams:
     hiz_enabled: bool  # zmax/zmin culling against per-tile HiZ; default False
     hiz_tile_size: int  # HiZ tile edge (>= tile_size) [px]; default 8
     # hardware: from sim.HardwareConfig
-    tex_cache_size_bytes: int  # Capacity of one texture cache [bytes]; default 16384
-    tex_cache_line_bytes: int  # Texture-cache line size [bytes]; default 64
-    tex_cache_ways: int  # Associativity; 0 = fully associative; default 4
-    tex_cache_count: int  # Texture caches; bin b uses cache b mod count; default 1
+    tex_cache_size_bytes: int  # Capacity of one cache (a whole number of sets of ways x line_bytes) [bytes]; default 16384
+    tex_cache_line_bytes: int  # Cache line size (a power of two) [bytes]; default 64
+    tex_cache_ways: int  # Associativity; 0 = fully associative [ways]; default 4
+    tex_cache_count: int  # Number of texture caches; screen bin b uses cache b mod count [caches]; default 1
     # frame: set by sim.render for this render
     texture_sample_distribution_index: int  # Texture index of the sample-distribution texture (texture_sample_distribution), or -1; default -1
     table_has_lens: bool  # The sample table has lens coordinates (else u = v = 0 is exact); default True
     table_has_time: bool  # The sample table has time coordinates (else t = 0 is exact); default True
     record_timing: bool  # Record one timing work record per (triangle, bin) visit (docs/timing.md); default True
     query_first: int  # Occlusion query: triangles from this index are the query (no writes); -1 none; default -1
-    query_mode: int  # Occlusion query: 0 none, 1 sample-based, 2 interval-based (ẑ vs HiZ, abort); default 0
+    query_mode: str  # Occlusion query: 'none', 'samples' (sample-based) or 'intervals' (ẑ vs HiZ, abort) (query_modes: none, samples, intervals); default 'none'
     # ---- end of the generated fields ----
     def __init__(self) -> None: ...
 
 def param_specs() -> list[dict[str, Any]]:
     """The parameter declaration (params.def), one dict per row in order: kind ('engine',
-    'python' or 'group'), layer, name (user path), engine (RenderParams field or None), group,
-    type, default, unit, domain, doc, choices; group rows: kind, layer, name, keys, doc."""
+    'python' or 'group'), stage (the pipeline stage of its section), layer, name (user path),
+    engine (RenderParams field or None), group, type, default, unit, domain, doc, choices; group
+    rows: kind, stage, layer, name, keys, doc."""
 def choices() -> dict[str, list[tuple[str, str]]]:
-    """Registries by name: {'shading_modes': [(name, description)], 'texture_filters': ..., ...}."""
+    """Registries by name (one per choice parameter, in declaration order): {'lens_shapes':
+    [(name, description)], 'shading_modes': ..., 'query_modes': ..., ...}."""
 
 # ---- render.cpp: the render, the sample-table buckets and the registries of the engine ----
 def render(
@@ -159,5 +156,5 @@ def triangle_lod(v0: npt.NDArray[np.float32], uvs: npt.NDArray[np.float32], tex_
                  near_w: float = 0.0) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.float64]]:
     """Per-triangle level of detail and uv Jacobian (du/dx, du/dy, dv/dx, dv/dy) from the vertices
     projected through the lens centre at shutter open."""
-def texel_address(height: int, width: int, layout: int, level: int, x: int, y: int) -> int:
-    """Byte address of a texel of a lone texture (layout 0 linear, 1 blocked 4x4, 2 Morton blocks)."""
+def texel_address(height: int, width: int, layout: str, level: int, x: int, y: int) -> int:
+    """Byte address of a texel of a lone texture; layout: a name in choices()['texture_layouts']."""

@@ -1,6 +1,8 @@
 """HardwareConfig: the modelled hardware (units of the timing model, caches, memory), validated on
-construction. Every parameter is declared once here, with a unit and a description; the YAML
-``hardware:`` section (experiments/config/schema.py) and docs/config.md are generated from it.
+construction. Every parameter is declared once, with a unit and a description: the texture cache,
+which the engine reads, in params.def (sim/engine/core/params.def), the timing model's units and
+memory here; the YAML ``hardware:`` section (experiments/config/schema.py) and docs/config.md are
+generated from them.
 
 Throughputs are work items per clock in each unit's own currency (triangles, tile tests, sample
 tests, depth tests, quads, texel fetches); latencies are in clocks; FIFO depths in entries.
@@ -10,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 
+from . import params
 from .errors import ConfigError, check_float, check_int, field_docs
 
 
@@ -30,35 +33,45 @@ class UnitConfig:
         check_int(owner, "fifo_entries", self.fifo_entries, 1, 1_000_000)
 
 
-@dataclass(frozen=True)
+def _declared_section(name: str):
+    """Give ``cls`` one dataclass field per row of the params.def group ``name`` of the hardware
+    layer (names, types, defaults, units and docs), in declaration order; its ``validate`` checks
+    each value against its declared domain, then calls ``cls._check_across_fields``."""
+    group = next(s for s in params.layer("hardware") if s.name == name)
+
+    def wrap(cls):
+        annotations = {}
+        for spec in group.members:
+            metadata = {"doc": spec.doc, **({"unit": spec.unit} if spec.unit else {}), "spec": spec}
+            setattr(cls, spec.key, field(default=spec.user_default, metadata=metadata))
+            annotations[spec.key] = spec.py_type
+        cls.__annotations__ = {**annotations, **cls.__dict__.get("__annotations__", {})}
+        cls.section_doc = group.doc
+
+        def validate(self, owner: str) -> None:
+            for f in dataclasses.fields(self):
+                f.metadata["spec"].check(owner, getattr(self, f.name), f.name)
+            self._check_across_fields(owner)
+
+        cls.validate = validate
+        return dataclass(frozen=True)(cls)
+
+    return wrap
+
+
+@_declared_section("tex_cache")
 class TextureCacheConfig:
-    """A set-associative texture cache (one per texture unit)."""
+    """A set-associative texture cache (one per texture unit). Fields: the ``tex_cache`` rows of
+    params.def (sim/engine/core/params.def)."""
 
-    size_bytes: int = field(default=16 * 1024, metadata={"unit": "bytes", "doc": "Capacity of one cache"})
-    line_bytes: int = field(default=64, metadata={"unit": "bytes", "doc": "Cache line size (power of two)"})
-    ways: int = field(default=4, metadata={
-        "unit": "ways", "doc": "Associativity; 0 = fully associative"})
-    policy: str = field(default="lru", metadata={"doc": "Replacement policy: 'lru'"})
-    count: int = field(default=1, metadata={
-        "unit": "caches", "doc": "Number of texture caches (screen tiles are interleaved over them)"})
-    hit_latency_cycles: int = field(default=4, metadata={"unit": "clocks", "doc": "Latency of a hit"})
-    miss_latency_cycles: int = field(default=200, metadata={"unit": "clocks", "doc": "Latency of a miss"})
-
-    def validate(self, owner: str) -> None:
-        check_int(owner, "size_bytes", self.size_bytes, 64, 1 << 30)
-        check_int(owner, "line_bytes", self.line_bytes, 4, 4096)
+    def _check_across_fields(self, owner: str) -> None:
+        """What one declaration row cannot say: a power-of-two line and whole sets."""
         if self.line_bytes & (self.line_bytes - 1):
             raise ConfigError(f"{owner}.line_bytes: expected a power of two, got {self.line_bytes}")
-        check_int(owner, "ways", self.ways, 0, 1 << 20)
         lines = self.size_bytes // self.line_bytes
         if self.size_bytes % self.line_bytes or (self.ways and lines % self.ways):
             raise ConfigError(f"{owner}.size_bytes: {self.size_bytes} is not a whole number of sets of "
                               f"{self.ways} x {self.line_bytes}-byte lines")
-        if self.policy != "lru":
-            raise ConfigError(f"{owner}.policy: expected 'lru', got {self.policy!r}")
-        check_int(owner, "count", self.count, 1, 1024)
-        check_int(owner, "hit_latency_cycles", self.hit_latency_cycles, 0, 1_000_000)
-        check_int(owner, "miss_latency_cycles", self.miss_latency_cycles, 0, 1_000_000)
 
 
 _UNIT_DEFAULTS = {
@@ -90,7 +103,7 @@ class HardwareConfig:
     shader: UnitConfig = _unit("shader")
     texture: UnitConfig = _unit("texture")
     tex_cache: TextureCacheConfig = field(default_factory=TextureCacheConfig, metadata={
-        "doc": "Texture cache geometry and latencies", "section": True})
+        "doc": TextureCacheConfig.section_doc, "section": True})
     memory_bytes_per_clock: float = field(default=32.0, metadata={
         "unit": "bytes/clock", "doc": "Memory bandwidth shared by texture misses and depth traffic"})
     memory_latency_cycles: int = field(default=0, metadata={

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import _core
+from . import _core, params
 from .camera import Camera
 from .errors import ConfigError
 from .pipeline import PipelineConfig
@@ -70,6 +70,12 @@ def conservative_raster(scene, camera: Camera, pipeline: PipelineConfig | None =
     return ConservativeResult(stats, records=out["records"].view(RECORD_DTYPE))  # no copy
 
 
+def query_modes() -> list[str]:
+    """The occlusion-query modes (the engine's query_modes registry without 'none', which means no
+    query), in engine order."""
+    return [m for m in params.choices("query_modes") if m != "none"]
+
+
 @dataclass
 class OcclusionResult:
     """visible: the query may be visible (interval-based: conservative, no false "occluded");
@@ -102,8 +108,8 @@ def occlusion_query(occluders, query, camera: Camera, table, pipeline: PipelineC
     HiZ uses pipeline.hiz.tile_size. Conservative: a hidden query may be reported visible, never
     the reverse."""
     pipeline = pipeline or PipelineConfig(algorithm="tile")
-    if mode not in ("samples", "intervals"):
-        raise ConfigError(f"mode: expected 'samples' or 'intervals', got {mode!r}")
+    if mode not in query_modes():
+        raise ConfigError(f"mode: expected {' or '.join(repr(m) for m in query_modes())}, got {mode!r}")
     if mode == "intervals":
         if pipeline.algorithm != "tile":
             raise ConfigError(f"pipeline.algorithm: the interval-based query needs 'tile', got {pipeline.algorithm!r}")
@@ -112,7 +118,7 @@ def occlusion_query(occluders, query, camera: Camera, table, pipeline: PipelineC
     q = _scene_arrays(query)
     scene = _Concat(occ, q)
     n_occ = occ[0].shape[0]
-    full = render(scene, camera, table, pipeline, query=(n_occ, 1 if mode == "samples" else 2))
+    full = render(scene, camera, table, pipeline, query=(n_occ, mode))
     alone = render(_Concat(occ, tuple(a[:0] for a in q)), camera, table, pipeline)
     work = {k: v - alone.flat_stats.get(k, 0) for k, v in full.flat_stats.items()
             if isinstance(v, int) and not isinstance(v, bool)}

@@ -20,7 +20,10 @@ import math
 
 import numpy as np
 
-LENS_SHAPES = ("disk", "square", "hexagon")
+from . import params
+
+# The engine's lens_shapes registry (core/params.h ChoiceTraits<LensShape>), in engine order.
+LENS_SHAPES = tuple(params.choices("lens_shapes"))
 
 _SQRT3 = math.sqrt(3.0)
 

@@ -29,6 +29,7 @@ class ParamSpec:
     RenderParams field (``hiz_tile_size``, None for Python-only rows and groups)."""
 
     kind: str  # "engine", "python" or "group"
+    stage: str  # the pipeline stage of its params.def section ("intervals", "shading", ...)
     layer: str  # "camera", "pipeline", "hardware" or "frame"
     name: str
     doc: str
@@ -212,11 +213,11 @@ def specs() -> tuple[ParamSpec, ...]:
     rows, groups = [], {}
     for row in _core.param_specs():
         if row["kind"] == "group":
-            groups[row["name"]] = dict(kind="group", layer=row["layer"], name=row["name"], doc=row["doc"],
+            groups[row["name"]] = dict(kind="group", stage=row["stage"], layer=row["layer"], name=row["name"], doc=row["doc"],
                                        keys=row["keys"], members=[])
             rows.append(row["name"])
             continue
-        fields = {k: row[k] for k in ("kind", "layer", "name", "doc", "engine", "group", "type", "default",
+        fields = {k: row[k] for k in ("kind", "stage", "layer", "name", "doc", "engine", "group", "type", "default",
                                       "unit", "domain")}
         spec = ParamSpec(**fields, **_parse_domain(row))
         if spec.group in groups:
@@ -253,8 +254,14 @@ def set_layer(params, name: str, values, only=None) -> None:
 
 
 def choices(registry: str) -> list[str]:
-    """Names in a registry (``shading_modes``, ``texture_filters``, ...), in engine order."""
+    """Names in a registry (``shading_modes``, ``texture_filters``, ``lens_shapes``, ...), in engine
+    order."""
     return [name for name, _desc in _core.choices()[registry]]
+
+
+def stage(layer_name: str, stage_name: str) -> tuple[str, ...]:
+    """The user names of a layer's parameters declared in one pipeline stage of params.def."""
+    return tuple(s.name for s in layer(layer_name) if s.stage == stage_name)
 
 
 # ---- the generated RenderParams stub in sim/_core.pyi ----
@@ -262,8 +269,7 @@ STUB_BEGIN = "    # ---- generated from params.def by `python -m sim.gen_stub`: 
 STUB_END = "    # ---- end of the generated fields ----"
 _LAYER_SETTERS = {"camera": "set from sim.Camera", "pipeline": "from sim.PipelineConfig",
                   "hardware": "from sim.HardwareConfig", "frame": "set by sim.render for this render"}
-_STUB_TYPES = {"int": "int", "float": "float", "bool": "bool", "str": "str", "range": "list[float]",
-               "LensShape": "LensShape"}
+_STUB_TYPES = {"int": "int", "float": "float", "bool": "bool", "str": "str", "range": "list[float]"}
 
 
 def stub_fields() -> str:

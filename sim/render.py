@@ -17,8 +17,6 @@ from .texturing import texture_inputs
 from .timing import estimate as timing_estimate
 from .stats import flat_stats, nest
 
-_LENS_ENUM = {"square": _core.LensShape.square, "disk": _core.LensShape.disk, "hexagon": _core.LensShape.hexagon}
-
 
 @dataclass
 class Result:
@@ -114,7 +112,7 @@ def _camera_params(camera: Camera):
     params = _core.RenderParams()
     for k, v in camera.engine_params().items():
         setattr(params, k, v)
-    params.lens_shape = _LENS_ENUM[camera.lens]
+    params.lens_shape = camera.lens
     return params
 
 
@@ -124,18 +122,15 @@ def _pipeline_params(params, config: PipelineConfig) -> None:
     _params.set_layer(params, "pipeline", config)
 
 
-_INTERVAL_PARAMS = ("motion_test", "time_splits", "time_strata", "clip", "zhat", "zhat_stats", "hiz")
-
-
 def _interval_params(params, config: PipelineConfig) -> None:
-    """The pipeline parameters the conservative mode reads: time/lens intervals, clip box, depth
-    intervals and HiZ (docs/intervals.md)."""
-    _params.set_layer(params, "pipeline", config, only=_INTERVAL_PARAMS)
+    """The pipeline parameters the conservative mode reads: those of the intervals stage of
+    params.def (time/lens intervals, clip box, depth intervals and HiZ; docs/intervals.md)."""
+    _params.set_layer(params, "pipeline", config, only=_params.stage("pipeline", "intervals"))
 
 
 def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *,
            export_samples: bool = False, hardware: HardwareConfig | None = None, timing: bool = True,
-           query: tuple[int, int] | None = None) -> Result:
+           query: tuple[int, str] | None = None) -> Result:
     """Render ``scene`` through ``camera`` with sample ``table``. Raises ConfigError/SceneInputError
     (ValueErrors naming the field and value) for bad input; KeyboardInterrupt on Ctrl-C.
     ``hardware`` (default HardwareConfig()) supplies the texture-cache geometry and feeds the timing
@@ -170,8 +165,8 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     params = _camera_params(camera)
     _pipeline_params(params, config)
     params.lens_grid = grid
-    if query is not None:  # (first query triangle, mode): set by sim.occlusion_query only
-        params.query_first, params.query_mode = int(query[0]), int(query[1])
+    if query is not None:  # (first query triangle, mode name): set by sim.occlusion_query only
+        params.query_first, params.query_mode = int(query[0]), query[1]
     # The engine skips a dimension only where skipping is exact: every sample has u = v = 0 (no
     # lens) or t = 0 (no time). A constant non-zero t still places moving triangles at that t.
     params.table_has_lens = bool(np.any(samples[..., 2:4] != 0))

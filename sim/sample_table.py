@@ -39,6 +39,8 @@ LENS_GRID_SIZES = (1, 2, 4, 8, 16)
 
 # name -> (implementation, extra parameter defaults)
 _GENERATORS: dict[str, tuple[Callable[..., "_Draw"], dict[str, object]]] = {}
+# generators fit to render reference images (image-error metrics): no parameter of their own
+_REFERENCE_GENERATORS: list[str] = []
 _COMMON_DEFAULTS: dict[str, object] = {"seed": 0, "period": 32, "lens": True, "time": True}
 
 
@@ -89,9 +91,11 @@ class SampleTable:
     # ---------------------------------------------------------------- registry
 
     @classmethod
-    def generators(cls) -> list[str]:
-        """Names accepted by `create` (procedural generators; `from_array` is separate)."""
-        return list(_GENERATORS)
+    def generators(cls, reference: bool = False) -> list[str]:
+        """Names accepted by `create` (procedural generators; `from_array` is separate), in
+        registration order; ``reference=True``: only those registered as reference generators (the
+        metrics' reference images)."""
+        return list(_REFERENCE_GENERATORS) if reference else list(_GENERATORS)
 
     @classmethod
     def create(cls, name: str, **params) -> "SampleTable":
@@ -394,12 +398,15 @@ class _Draw:
         self.params = params or {}
 
 
-def _generator(name: str, **extra_defaults):
+def _generator(name: str, reference: bool = False, **extra_defaults):
     """Register a generator `impl(spec, rng, **extras) -> _Draw` under `name`, and expose it as
-    the classmethod ``SampleTable.<name>(**params)``."""
+    the classmethod ``SampleTable.<name>(**params)``; ``reference``: it may render the reference
+    images of the image-error metrics."""
 
     def register(impl):
         _GENERATORS[name] = (impl, extra_defaults)
+        if reference:
+            _REFERENCE_GENERATORS.append(name)
 
         def factory(cls, **params):
             return cls.create(name, **params)
@@ -412,14 +419,14 @@ def _generator(name: str, **extra_defaults):
     return register
 
 
-@_generator("random")
+@_generator("random", reference=True)
 def _random(spec: _Spec, rng: np.random.Generator) -> _Draw:
     """Independent uniform values in all five dimensions."""
     P, S = spec.period, spec.spp
     return _Draw(_round_down_f32(rng.random((P, P, S, 5))))
 
 
-@_generator("stratified")
+@_generator("stratified", reference=True)
 def _stratified(spec: _Spec, rng: np.random.Generator) -> _Draw:
     """Per pixel: jittered (x, y) on an nx×ny grid (nx·ny = spp, closest to square, nx ≥ ny);
     (a, b) jittered on its own nx×ny grid and randomly permuted across the samples; t in spp
@@ -461,7 +468,7 @@ def _stratified_permuted(spec: _Spec, rng: np.random.Generator) -> _Draw:
     return _Draw(unit, params={"grid_xy": (nx, ny), "grid_lens_block": (mx, my)})
 
 
-@_generator("sobol")
+@_generator("sobol", reference=True)
 def _sobol(spec: _Spec, rng: np.random.Generator) -> _Draw:
     """Scrambled Sobol (0,2)-nets. The first spp points of the 2D Sobol sequence (dim 1: van der
     Corput = bit reversal; dim 2: the Pascal-matrix generator) give (x, y), and again (a, b);

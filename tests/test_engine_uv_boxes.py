@@ -51,7 +51,7 @@ def one_tile_uv_boxes(v0: np.ndarray, coc: float, lens: str) -> tuple[int, int]:
     p.width = p.height = 8
     p.coc_x_px, p.coc_y_px = coc, -coc
     p.focus_w, p.near_w = FOCUS, 0.05
-    p.lens_shape = getattr(_core.LensShape, lens)
+    p.lens_shape = lens
     p.algorithm, p.tile_size, p.lens_grid = "tile", 8, 4
     p.halfspace_h, p.halfspace_H = True, False
     p.table_has_lens, p.table_has_time = True, False

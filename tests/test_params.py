@@ -25,7 +25,7 @@ def test_engine_name_is_the_user_name():
 def test_engine_defaults_are_the_declared_defaults():
     p = _core.RenderParams()
     for s in params.specs():
-        if s.kind == "engine" and s.type != "LensShape":
+        if s.kind == "engine":
             assert getattr(p, s.engine) == s.default, s.name
 
 
@@ -66,9 +66,64 @@ def test_choice_registries():
 
 
 def test_hardware_rows_match_hardware_config():
-    """The texture-cache rows are set from sim.HardwareConfig by their nested names, so their engine
-    defaults are HardwareConfig's."""
+    """The texture-cache rows are sim.TextureCacheConfig's fields (names, defaults, units, docs) and
+    are set from sim.HardwareConfig by their nested names, so their engine defaults are its."""
     hw = sim.HardwareConfig().describe()
-    for s in params.layer("hardware"):
-        group, key = s.name.split(".")
-        assert hw[group][key] == s.default, s.name
+    (group,) = [s for s in params.layer("hardware") if s.kind == "group"]
+    assert group.name == "tex_cache"
+    assert [f.name for f in dataclasses.fields(sim.TextureCacheConfig)] == [m.key for m in group.members]
+    docs = sim.HardwareConfig.field_docs()["tex_cache"]
+    assert docs["doc"] == group.doc
+    for m in group.members:
+        assert hw["tex_cache"][m.key] == m.default, m.name
+        assert docs["fields"][m.key] == {"default": m.default, "unit": m.unit, "doc": m.doc}, m.name
+    with pytest.raises(sim.ConfigError, match=r"HardwareConfig.tex_cache.count: expected an integer in 1..1024"):
+        sim.HardwareConfig(tex_cache={"count": 0})
+    with pytest.raises(sim.ConfigError, match=r"tex_cache.line_bytes: expected a power of two"):
+        sim.HardwareConfig(tex_cache={"line_bytes": 48})
+    p = _core.RenderParams()
+    p.tex_cache_count = 0  # the engine checks the same declared domain
+    with pytest.raises(ValueError, match="tex_cache_count"):
+        _render_one(p)
+
+
+def _render_one(p):
+    import numpy as np
+
+    p.width = p.height = 8
+    _core.render(p, np.zeros((0, 3, 3), np.float32), np.zeros((0, 3, 3), np.float32),
+                 np.zeros((0, 3, 3), np.float32), np.zeros((1, 1, 1, 5), np.float32), np.zeros((0,), np.int32),
+                 np.zeros((0, 2), np.float32))
+
+
+def test_registries_by_name():
+    """Every choice parameter is one registry of the engine, read and written by name; the lens
+    shapes and occlusion-query modes of Python and of the schema are those registries."""
+    import experiments.config.schema as schema
+    import typing
+
+    registries = {s.registry for s in params.specs() if s.registry and s.registry != "algorithms"}
+    assert registries == set(_core.choices())
+    assert sim.lens.LENS_SHAPES == tuple(params.choices("lens_shapes")) == ("disk", "square", "hexagon")
+    assert typing.get_args(schema.CameraSpec.model_fields["lens"].annotation)[0] == \
+        typing.Literal[sim.lens.LENS_SHAPES]
+    assert sim.intervals.query_modes() == ["samples", "intervals"]
+    p = _core.RenderParams()
+    p.lens_shape, p.query_mode = "hexagon", "intervals"
+    assert (p.lens_shape, p.query_mode) == ("hexagon", "intervals")
+    with pytest.raises(ValueError, match=r"lens_shape: unknown 'oval' \(known: disk, square, hexagon\)"):
+        p.lens_shape = "oval"
+
+
+def test_interval_parameters_are_the_intervals_stage():
+    assert params.stage("pipeline", "intervals") == (
+        "motion_test", "time_splits", "time_strata", "clip", "zhat", "zhat_stats", "hiz")
+
+
+def test_sample_kinds_come_from_the_generator_registry():
+    import experiments.config.schema as schema
+    import typing
+
+    assert typing.get_args(schema.SamplesSpec.model_fields["kind"].annotation) == tuple(sim.SampleTable.generators())
+    assert typing.get_args(schema.MetricsSpec.model_fields["reference_kind"].annotation) == (
+        "random", "stratified", "sobol")

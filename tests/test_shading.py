@@ -96,14 +96,14 @@ def _morton(x, y):
 def test_texel_addresses(h, w):
     for y in range(h):
         for x in range(w):
-            assert _core.texel_address(h, w, 0, 0, x, y) == (y * w + x) * 4
+            assert _core.texel_address(h, w, "linear", 0, x, y) == (y * w + x) * 4
             bw = -(-w // 4)
             blocked = ((y // 4) * bw + x // 4) * 64 + ((y % 4) * 4 + x % 4) * 4
-            assert _core.texel_address(h, w, 1, 0, x, y) == blocked
+            assert _core.texel_address(h, w, "blocked", 0, x, y) == blocked
             morton = _morton(x // 4, y // 4) * 64 + ((y % 4) * 4 + x % 4) * 4
-            assert _core.texel_address(h, w, 2, 0, x, y) == morton
+            assert _core.texel_address(h, w, "morton", 0, x, y) == morton
     # Level 1 lives after level 0 (4 KiB aligned), without overlap.
-    assert _core.texel_address(h, w, 0, 1, 0, 0) >= h * w * 4
+    assert _core.texel_address(h, w, "linear", 1, 0, 0) >= h * w * 4
 
 
 # ---- mip level vs the closed form for a textured plane -------------------------------------------

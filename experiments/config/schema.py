@@ -18,6 +18,13 @@ import sim
 
 REPO = Path(__file__).resolve().parents[2]
 
+# Names read from their registries: the engine's lens shapes and occlusion-query modes, the sample
+# table's generators (all of them, and those that may render metric references).
+LensShapeName = Literal[tuple(sim.lens.LENS_SHAPES)]
+QueryModeName = Literal[tuple(sim.intervals.query_modes())]
+SampleKind = Literal[tuple(sim.SampleTable.generators())]
+ReferenceKind = Literal[tuple(sim.SampleTable.generators(reference=True))]
+
 
 class ConfigError(ValueError):
     """A configuration file or override is invalid; the message names the file, line, key and value."""
@@ -55,7 +62,7 @@ class CameraSpec(_Strict):
     focus_distance: Optional[float] = Field(None, description="Distance of the focus plane [world units]")
     coc_px: Optional[float] = Field(None, description="CoC radius at infinity [px] (the paper's 'CoC')")
     aperture_radius: Optional[float] = Field(None, description="Aperture radius [world units] (instead of coc_px)")
-    lens: Optional[Literal["disk", "square", "hexagon"]] = Field(None, description="Aperture shape")
+    lens: Optional[LensShapeName] = Field(None, description="Aperture shape")
     eye: Optional[list[float]] = Field(None, description="Camera position [world]; default origin")
     target: Optional[list[float]] = Field(None, description="Point looked at [world]; default -z")
     up: Optional[list[float]] = Field(None, description="Up direction; default +y")
@@ -69,7 +76,7 @@ class CameraSpec(_Strict):
 class SamplesSpec(_Strict):
     """The programmable sample table (sim.SampleTable)."""
 
-    kind: Literal["random", "stratified", "stratified_permuted", "sobol", "interleaved", "multiview"] = Field(
+    kind: SampleKind = Field(
         "stratified", description="Sample-table kind (sim.SampleTable generator)")
     spp: int = Field(16, description="Samples per pixel (1..4096)")
     seed: int = Field(0, description="Random seed")
@@ -140,7 +147,7 @@ def _hardware_model(name: str, docs: dict, owner) -> type[BaseModel]:
 
 HardwareSpec = _hardware_model("HardwareSpec", sim.HardwareConfig.field_docs(), sim.HardwareConfig)
 HardwareSpec.__doc__ = ("The modelled hardware (sim.HardwareConfig: timing units, texture cache, memory). Keys left "
-                        "out keep their defaults; validated by sim.HardwareConfig even where no stage uses it yet.")
+                        "out keep their defaults; validated by sim.HardwareConfig.")
 
 
 class PlotSpec(_Strict):
@@ -185,8 +192,8 @@ class PlotSpec(_Strict):
         "scatter and x-less tables: extra columns shown in the data table (e.g. samples.spp)"))
     echo: bool = Field(False, description="table only: also print the table on the terminal when the page is written")
     optional: bool = Field(False, description=(
-        "Leave the plot out (silently) when a column it names is missing, e.g. timing.cycles before the timing "
-        "model exists"))
+        "Leave the plot out (silently) when a column it names is missing, e.g. timing.cycles where the point "
+        "kind does not produce it"))
 
     @model_validator(mode="after")
     def _check(self):
@@ -215,7 +222,7 @@ class MetricsSpec(_Strict):
     metric.ssim (and metric.flip)."""
 
     reference_spp: int = Field(1024, description="Samples per pixel of the reference image (>= 1024 for reports)")
-    reference_kind: Literal["random", "stratified", "sobol"] = Field(
+    reference_kind: ReferenceKind = Field(
         "stratified", description="Sample-table kind of the reference")
     reference_algorithm: str = Field("tile", description="Algorithm rendering the reference (any exact one: same image)")
     flip: bool = Field(False, description="Also compute FLIP (flip-evaluator; slower)")
@@ -268,7 +275,7 @@ class PointSpec(_Strict):
         "render", description="render | occlusion_query | conservative | retime")
     query: Optional[SceneSpec] = Field(None, description="occlusion_query: the query scene (the config's scene "
                                                          "is the occluders)")
-    mode: Literal["samples", "intervals"] = Field("samples", description=(
+    mode: QueryModeName = Field("samples", description=(
         "occlusion_query: 'samples' (test the query's samples) or 'intervals' (ẑ against HiZ, no sample tests)"))
     hardware: dict[str, Any] = Field(default_factory=dict, description=(
         "retime: hardware keys deep-merged over the config's hardware section for the timing estimate "

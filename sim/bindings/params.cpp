@@ -11,19 +11,12 @@
 #include <string>
 #include <type_traits>
 
-#include "backend/shading.h"
-#include "backend/texture.h"
 #include "core/params.h"
 #include "traversal/render.h"
 
 namespace rast5d::bindings {
 
 namespace {
-
-template <class T, class = void>
-struct IsChoice : std::false_type {};
-template <class T>
-struct IsChoice<T, std::void_t<decltype(ChoiceTraits<T>::table)>> : std::true_type {};
 
 template <class T>
 const char* param_type() {
@@ -32,14 +25,11 @@ const char* param_type() {
   else if constexpr (std::is_integral_v<T>) return "int";
   else if constexpr (std::is_floating_point_v<T>) return "float";
   else if constexpr (std::is_same_v<T, CoordRange>) return "range";
-  else if constexpr (std::is_same_v<T, LensShape>) return "LensShape";
 }
 
 template <class T>
 py::object param_value(const T& v) {
-  if constexpr (IsChoice<T>::value) return py::str(std::string(ChoiceTraits<T>::table[static_cast<int>(v)].name));
-  else if constexpr (std::is_same_v<T, LensShape>)
-    return py::str(v == LensShape::kSquare ? "square" : v == LensShape::kDisk ? "disk" : "hexagon");
+  if constexpr (IsChoice<T>::value) return py::str(std::string(choice_name(v)));
   else return py::cast(v);
 }
 
@@ -48,12 +38,8 @@ void bind_param(py::class_<RenderParams>& c, const char* name, T RenderParams::*
   if constexpr (IsChoice<T>::value) {
     c.def_property(
         name,
-        [member](const RenderParams& p) {
-          return std::string(ChoiceTraits<T>::table[static_cast<int>(p.*member)].name);
-        },
-        [member, name](RenderParams& p, const std::string& v) {
-          p.*member = static_cast<T>(choice_index(ChoiceTraits<T>::table, v, name));
-        });
+        [member](const RenderParams& p) { return std::string(choice_name(p.*member)); },
+        [member, name](RenderParams& p, const std::string& v) { p.*member = choice_value<T>(v, name); });
   } else {
     c.def_readwrite(name, member);
   }
@@ -72,12 +58,9 @@ void add_choices(py::dict& d) {
     d[py::str(std::string(ChoiceTraits<T>::registry))] = choice_list(ChoiceTraits<T>::table);
 }
 
-// The backend's registries (resolved by name at render entry), then those of the enum parameters.
+// The registries of the choice parameters, in declaration order.
 py::dict choices() {
   py::dict d;
-  d["shading_modes"] = choice_list(kShadingModes);
-  d["texture_filters"] = choice_list(kTexFilters);
-  d["texture_layouts"] = choice_list(kTexLayouts);
 #define RAST5D_PARAM(layer, group, key, type, def, unit, domain, doc) add_choices<type>(d);
 #define RAST5D_PY_PARAM(layer, group, key, type, def, unit, domain, doc)
 #define RAST5D_PARAM_GROUP(layer, name, keys, doc)
@@ -89,11 +72,12 @@ py::dict choices() {
 }
 
 // One row of param_specs(); choices are resolved from the registry a "@name" domain names.
-py::dict param_spec(const char* kind, const char* layer, std::string group, const char* key, const char* type,
-                    py::object def, const char* unit, const std::string& domain, const char* doc) {
+py::dict param_spec(const char* stage, const char* kind, const char* layer, std::string group, const char* key,
+                    const char* type, py::object def, const char* unit, const std::string& domain, const char* doc) {
   py::dict d;
   if (!group.empty()) group.pop_back();  // "hiz_" -> "hiz"
   d["kind"] = kind;
+  d["stage"] = stage;
   d["layer"] = layer;
   d["name"] = group.empty() ? std::string(key) : group + "." + key;
   const std::string engine = group.empty() ? std::string(key) : group + "_" + key;
@@ -123,20 +107,23 @@ py::dict param_spec(const char* kind, const char* layer, std::string group, cons
 py::list param_specs() {
   const RenderParams defaults;
   py::list l;
-#define RAST5D_PARAM(layer, group, key, type, def, unit, domain, doc)                                        \
-  l.append(param_spec("engine", #layer, #group, #key, param_type<type>(), param_value(defaults.group##key), \
+  const char* stage = "";
+#define RAST5D_STAGE(name) stage = #name;
+#define RAST5D_PARAM(layer, group, key, type, def, unit, domain, doc)                                             \
+  l.append(param_spec(stage, "engine", #layer, #group, #key, param_type<type>(), param_value(defaults.group##key), \
                       unit, domain, doc));
 #define RAST5D_PY_PARAM(layer, group, key, type, def, unit, domain, doc)                                       \
-  l.append(param_spec("python", #layer, #group, #key, param_type<type>(), param_value(type(def)), unit, domain, \
-                      doc));
-#define RAST5D_PARAM_GROUP(layer, name, keys, doc)                                   \
-  {                                                                                  \
-    py::dict g;                                                                      \
-    g["kind"] = "group", g["layer"] = #layer, g["name"] = #name, g["keys"] = #keys; \
-    g["doc"] = doc;                                                                  \
-    l.append(g);                                                                     \
+  l.append(param_spec(stage, "python", #layer, #group, #key, param_type<type>(), param_value(type(def)), unit, \
+                      domain, doc));
+#define RAST5D_PARAM_GROUP(layer, name, keys, doc)                                                    \
+  {                                                                                                   \
+    py::dict g;                                                                                       \
+    g["kind"] = "group", g["stage"] = stage, g["layer"] = #layer, g["name"] = #name, g["keys"] = #keys; \
+    g["doc"] = doc;                                                                                   \
+    l.append(g);                                                                                      \
   }
 #include "core/params.def"
+#undef RAST5D_STAGE
 #undef RAST5D_PARAM
 #undef RAST5D_PY_PARAM
 #undef RAST5D_PARAM_GROUP
@@ -146,10 +133,6 @@ py::list param_specs() {
 }  // namespace
 
 void register_params(py::module_& m) {
-  py::enum_<LensShape>(m, "LensShape")
-      .value("square", LensShape::kSquare)
-      .value("disk", LensShape::kDisk)
-      .value("hexagon", LensShape::kHexagon);
   py::class_<RenderParams> c(m, "RenderParams");
   c.def(py::init<>());
 #define RAST5D_PARAM(layer, group, key, type, def, unit, domain, doc) \
@@ -162,9 +145,10 @@ void register_params(py::module_& m) {
 #undef RAST5D_PARAM_GROUP
   m.def("param_specs", &param_specs,
         "The parameter declaration (params.def), one dict per row in order: kind ('engine', 'python' or "
-        "'group'), layer, name (user path, 'hiz.tile_size'), engine (RenderParams field or None), group, "
+        "'group'), stage (the pipeline stage of its section), layer, name (user path, 'hiz.tile_size'), "
+        "engine (RenderParams field or None), group, "
         "type, default, unit, domain, doc, choices (names for a registry domain, else None); group rows: "
-        "kind, layer, name, keys ('all' or 'any'), doc.");
+        "kind, stage, layer, name, keys ('all' or 'any'), doc.");
   m.def("choices", &choices, "Registries by name: {registry: [(name, description)]} in engine order.");
 }
 

@@ -5,6 +5,7 @@
 #include <pybind11/stl.h>
 
 #include <random>
+#include <string>
 #include <vector>
 
 #include "backend/cache_model.h"
@@ -131,18 +132,18 @@ void register_selftest(py::module_& m) {
 
   m.def(
       "texel_address",
-      [](int height, int width, int layout, int level, int x, int y) {
-        if (layout < 0 || layout > 2) throw std::invalid_argument("layout: expected 0..2");
+      [](int height, int width, const std::string& layout, int level, int x, int y) {
+        const TexLayout lay = choice_value<TexLayout>(layout, "layout");
         std::vector<float> img(static_cast<std::size_t>(height) * width, 0.0f);
         TextureSet ts;
         ts.add(img.data(), height, width, 1);
-        ts.layout(static_cast<TexLayout>(layout));
+        ts.layout(lay);
         if (level < 0 || level >= ts.levels(0)) throw std::invalid_argument("level: out of range");
         return ts.address(0, level, x, y);
       },
       py::arg("height"), py::arg("width"), py::arg("layout"), py::arg("level"), py::arg("x"), py::arg("y"),
-      "Byte address of texel (x, y) of a level of a lone height x width texture (layout 0 linear, 1 "
-      "blocked 4x4, 2 Morton-ordered 4x4 blocks).");
+      "Byte address of texel (x, y) of a level of a lone height x width texture; layout: a name in "
+      "choices()['texture_layouts'].");
 }
 
 }  // namespace rast5d::bindings

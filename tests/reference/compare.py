@@ -19,7 +19,7 @@ def engine_params(cam, *, has_lens=True, has_time=True):
     p = _core.RenderParams()
     for k, v in cam.engine_params().items():
         setattr(p, k, v)
-    p.lens_shape = getattr(_core.LensShape, cam.lens)
+    p.lens_shape = cam.lens
     p.table_has_lens = has_lens
     p.table_has_time = has_time
     return p

@@ -5,7 +5,7 @@
 //
 // Contract: access() is deterministic (no hashing of pointers, no randomness); feeding the same
 // line stream gives the same counts. Addresses are line indices (byte address / line bytes).
-// The tests check this model against a small Python reference simulator (tests/test_texture.py).
+// The tests check this model against a small Python reference simulator (tests/test_shading.py).
 #pragma once
 
 #include <cstdint>

@@ -77,7 +77,7 @@ class SampleBackend {
     buf_.set_triangle(slot, static_cast<std::int32_t>(tri.index));
     float* dst = buf_.color(slot);
     for (int ch = 0; ch < 3; ++ch) dst[ch] = raw(out[ch]);
-    if (const ShadeFrame* sf = sh_.frame(); sf && (sh_.counting() || sf->tex_count > 0))
+    if (const ShadeFrame* sf = sh_.frame(); sf && (sh_.counting() || sf->texture_count > 0))
       shade_record(*sf, tri, raw(e[0]), raw(e[1]), raw(e[2]), raw(sum), px, py, s, dst);
   }
 
@@ -96,11 +96,11 @@ class SampleBackend {
       const float W = b0 * tri.W[0] + b1 * tri.W[1] + b2 * tri.W[2];
       r.gx = X / W, r.gy = Y / W;
     }
-    if (sf.tex_count > 0) {
+    if (sf.texture_count > 0) {
       const float* uv = &sf.uvs[static_cast<std::size_t>(tri.index) * 6];
       r.u = b0 * uv[0] + b1 * uv[2] + b2 * uv[4];
       r.v = b0 * uv[1] + b1 * uv[3] + b2 * uv[5];
-      for (int k = 0; k < sf.tex_count; ++k) {
+      for (int k = 0; k < sf.texture_count; ++k) {
         const int id = sf.tex_ids[static_cast<std::size_t>(tri.index) * kMaxTexSlots + k];
         if (id < 0) continue;
         float t[3];

@@ -41,21 +41,25 @@
 
 #include "backend/cache_model.h"
 #include "core/counters.h"
-#include "core/params.h"
+#include "core/choice.h"
 #include "core/sample_table.h"
 #include "backend/texture.h"
 
 namespace rast5d {
 
-// Registry by name (the shading parameter), in enum order.
+// The shading parameter: a registry by name (core/choice.h), entries in enum order.
 enum class ShadingMode : int { kPerSample = 0, kMsaa = 1, kPerLensCell = 2, kCache = 3, kNone = 4 };
-inline constexpr std::array<ChoiceInfo, 5> kShadingModes = {{
-    {"per_sample", "supersampling: a lane per (pixel, sample index)"},
-    {"msaa", "a lane per pixel per visit"},
-    {"per_lens_cell", "a lane per (pixel, lens-grid cell) per visit"},
-    {"cache", "a memoising shading cache keyed by (triangle, shading-grid point) (002 §2)"},
-    {"none", "shading work is not modelled (no shade.*/tex.* counts)"},
-}};
+template <>
+struct ChoiceTraits<ShadingMode> {
+  static constexpr std::string_view registry = "shading_modes";
+  static constexpr std::array<ChoiceInfo, 5> table = {{
+      {"per_sample", "supersampling: a lane per (pixel, sample index)"},
+      {"msaa", "a lane per pixel per visit"},
+      {"per_lens_cell", "a lane per (pixel, lens-grid cell) per visit"},
+      {"cache", "a memoising shading cache keyed by (triangle, shading-grid point) (002 §2)"},
+      {"none", "shading work is not modelled (no shade.*/tex.* counts)"},
+  }};
+};
 inline constexpr int kMaxTexSlots = 4;
 
 // Per-render shading constants, read-only while workers run (except the per-bin streams, each
@@ -64,7 +68,7 @@ struct ShadeFrame {
   ShadingMode mode = ShadingMode::kPerSample;
   int grid = 1;                  // shading-grid points per pixel edge (cache mode)
   int cache_entries = 1024;      // shading cache (cache mode)
-  int tex_count = 0;             // texture slots per shader (0: untextured)
+  int texture_count = 0;         // texture slots per shader (0: untextured)
   TexFilter filter = TexFilter::kTrilinear;
   int sample_dist_tex = -1;      // 000 §5.3 sample-distribution texture (nearest, 1:1 pixels), or -1
   int line_bytes = 64;
@@ -74,7 +78,7 @@ struct ShadeFrame {
   std::vector<double> jac;            // n_tri x 4: d(u, v)/d(x, y) in pixels
   std::vector<float> lod;             // n_tri x kMaxTexSlots
   std::vector<std::vector<std::uint32_t>> streams;  // per bin: texture-cache line indices
-  bool textured() const { return tex_count > 0 || sample_dist_tex >= 0; }
+  bool textured() const { return texture_count > 0 || sample_dist_tex >= 0; }
 };
 
 // Per-thread shading state: the records of the open visit, the shading cache, the bin's stream.
@@ -192,7 +196,7 @@ class ShadeState {
     const int qx = static_cast<int>((quad >> 21) & 0x1FFFFF), qy = static_cast<int>(quad >> 42);
     // No texture slots (only the sample-distribution texture): no uvs and no derivatives.
     static constexpr double kNoJacobian[4] = {0, 0, 0, 0};
-    const double* J = sf_->tex_count > 0 ? &sf_->jac[static_cast<std::size_t>(tri_) * 4] : kNoJacobian;
+    const double* J = sf_->texture_count > 0 ? &sf_->jac[static_cast<std::size_t>(tri_) * 4] : kNoJacobian;
     for (int l = 0; l < 4; ++l) {
       float u, v;
       if (first[l] >= 0) {
@@ -215,7 +219,7 @@ class ShadeState {
     const ShadeFrame& sf = *sf_;
     const TextureSet& ts = sf.textures;
     const std::uint64_t lb = static_cast<std::uint64_t>(sf.line_bytes);
-    for (int k = 0; k < sf.tex_count; ++k) {
+    for (int k = 0; k < sf.texture_count; ++k) {
       const int id = sf.tex_ids[static_cast<std::size_t>(tri_) * kMaxTexSlots + k];
       if (id < 0) continue;
       int lv[2];

@@ -2,8 +2,8 @@
 // §3, Appendix A; docs/intervals.md). A traversal that has accepted a pair by its tile test asks
 // check() with the pair's (x, y, u, v, t) box: ẑ (intervals/depth_interval.h) against the HiZ tile's
 // zmax culls the pair (zmax-culling), against zmin lets its samples skip depth reads (zmin-culling).
-// Occlusion-query triangles (query_first and later) either run the depth test only (query_mode 1)
-// or are answered from ẑ alone (query_mode 2: a pair not behind HiZ makes the query visible and
+// Occlusion-query triangles (query_first and later) either run the depth test only (query_mode samples)
+// or are answered from ẑ alone (query_mode intervals: a pair not behind HiZ makes the query visible and
 // the traversal stops).
 //
 // Contract: never culls a pair with a sample that would pass the depth test (ẑ is conservative and
@@ -32,15 +32,16 @@ class DepthCull {
 
  public:
   DepthCull(const Frame& f, Counters& c, BinBuffers& buf, Pipeline& pipe) : f_(f), c_(c), buf_(buf), pipe_(pipe) {
-    if (f.p.hiz_enabled || f.p.query_mode == 2) buf_.hiz().set_tile(f.p.hiz_tile_size);
+    if (f.p.hiz_enabled || f.p.query_mode == QueryMode::kIntervals) buf_.hiz().set_tile(f.p.hiz_tile_size);
   }
 
   // Per triangle, in every bin: query state and the moving planes of ẑ (charged in the first bin).
   void begin_triangle(const TriSetup& tri, bool charge_setup) {
     const RenderParams& p = f_.p;
-    query_ = p.query_first >= 0 && tri.index >= static_cast<std::uint32_t>(p.query_first) && p.query_mode > 0;
+    query_ = p.query_first >= 0 && tri.index >= static_cast<std::uint32_t>(p.query_first) &&
+             p.query_mode != QueryMode::kNone;
     set_mode(false);
-    need_z_ = p.hiz_enabled || p.zhat_stats || (query_ && p.query_mode == 2);
+    need_z_ = p.hiz_enabled || p.zhat_stats || (query_ && p.query_mode == QueryMode::kIntervals);
     if (need_z_ && p.zhat == ZhatMode::kPlanes) {
       std::uint64_t ops = 0;
       iv::moving_planes<A>(tri, planes_, ops);
@@ -63,7 +64,7 @@ class DepthCull {
              double u1, double v0, double v1, double ta, double tb, int n_samples) {
     const RenderParams& p = f_.p;
     if (!need_z_) return true;
-    const bool query_iv = query_ && p.query_mode == 2;
+    const bool query_iv = query_ && p.query_mode == QueryMode::kIntervals;
     const iv::ZHat z = iv::zhat<A>(tri, p.zhat == ZhatMode::kPlanes ? &planes_ : nullptr, f_.fc, lens, x0, x1, y0,
                                    y1, u0, u1, v0, v1, ta, tb, c_[Counter::ops_zhat]);
     ++c_[Counter::zcull_pairs];
@@ -100,7 +101,7 @@ class DepthCull {
 
  private:
   void set_mode(bool skip_reads) {
-    const bool q = query_ && f_.p.query_mode == 1;
+    const bool q = query_ && f_.p.query_mode == QueryMode::kSamples;
     if (skip_reads != skip_reads_ || q != mode_query_) pipe_.set_depth_mode(skip_reads, q);
     skip_reads_ = skip_reads, mode_query_ = q;
   }

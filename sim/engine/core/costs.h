@@ -36,6 +36,14 @@ inline constexpr std::uint64_t kOrientation = 45;       // 3 det (9 each), 2 MUL
 inline constexpr std::uint64_t kOracleSimplified = 6;   // per edge: 2 SUB, 3 MUL, CMP (001 Eq. 15, 13)
 inline constexpr std::uint64_t kOracleFull = 18;        // per edge: 4 SUB, 2 x F(a,b) (5 each), 3 MUL, CMP
 inline constexpr std::uint64_t kOracleBudget = 1;       // per triangle: MUL (tiles x tile cost)
+// Screen bounds over a lens box (tiletest/box_bounds.h, box_bounds_cost): per vertex 2 MIN + 2 MAX
+// into the bounds; per vertex and axis with a line (off the focus plane) 1 MADD for one lens
+// point, 2 MADD (both box ends) for a lens box.
+inline constexpr std::uint64_t kBoxBoundsVertex = 4;
+inline constexpr std::uint64_t kBoxBoundsAxisPoint = 1;
+inline constexpr std::uint64_t kBoxBoundsAxisBox = 2;
+// LAINE's per-sample lens-region test against an empty region (u_min > u_max): 4 CMP that fail.
+inline constexpr std::uint64_t kSampleRegionEmpty = 4;
 
 // ---- time intervals t̂ and the clip box (intervals/time_interval.h, intervals/clip.h) ----
 inline constexpr std::uint64_t kFormCull = 7;  // SUB, RCP, MUL, 2 CMP, MAX, MIN

@@ -14,39 +14,33 @@
 #include <type_traits>
 #include <vector>
 
-namespace rast5d {
+#include "backend/shading.h"
+#include "backend/texture.h"
+#include "core/choice.h"
 
-enum class LensShape : int { kSquare = 0, kDisk = 1, kHexagon = 2 };
+namespace rast5d {
 
 // A [lo, hi] range of one sample coordinate (the clip box).
 using CoordRange = std::array<double, 2>;
 
-// One entry of a registry by name: the choices of a choice parameter, in its enum's order.
-struct ChoiceInfo {
-  std::string_view name;
-  std::string_view description;
-};
-
-// The index of `name` in a registry; std::invalid_argument naming the parameter and the choices.
-template <std::size_t N>
-int choice_index(const std::array<ChoiceInfo, N>& table, std::string_view name, std::string_view param) {
-  std::string known;
-  for (std::size_t i = 0; i < N; ++i) {
-    if (table[i].name == name) return static_cast<int>(i);
-    known.append(i ? ", " : "").append(table[i].name);
-  }
-  throw std::invalid_argument(std::string(param) + ": unknown '" + std::string(name) + "' (known: " + known + ")");
-}
-
-// Choice parameters held as an enum; ChoiceTraits<E> names their registry and its entries.
+// Choice parameters held as an enum; ChoiceTraits<E> names their registry and its entries (the
+// backend's choices, ShadingMode, TexFilter and TexLayout, are declared in backend/).
+enum class LensShape : int { kDisk = 0, kSquare = 1, kHexagon = 2 };
 enum class OracleMode : int { kSimplified = 0, kFull = 1 };
 enum class OpCount : int { kDocumented = 0, kExact = 1 };
 enum class MotionTest : int { kIntervals = 0, kBounds = 1 };
 enum class ZhatMode : int { kPlanes = 0, kVertex = 1 };
+enum class QueryMode : int { kNone = 0, kSamples = 1, kIntervals = 2 };
 
-template <class E>
-struct ChoiceTraits;
-
+template <>
+struct ChoiceTraits<LensShape> {
+  static constexpr std::string_view registry = "lens_shapes";
+  static constexpr std::array<ChoiceInfo, 3> table = {{
+      {"disk", "the unit disk"},
+      {"square", "[-1, 1]^2"},
+      {"hexagon", "the regular hexagon inscribed in the unit circle, vertices (+-1, 0)"},
+  }};
+};
 template <>
 struct ChoiceTraits<OracleMode> {
   static constexpr std::string_view registry = "oracle_modes";
@@ -77,6 +71,15 @@ struct ChoiceTraits<ZhatMode> {
   static constexpr std::array<ChoiceInfo, 2> table = {{
       {"planes", "moving box + moving planes (002 App. A)"},
       {"vertex", "vertex min/max"},
+  }};
+};
+template <>
+struct ChoiceTraits<QueryMode> {
+  static constexpr std::string_view registry = "query_modes";
+  static constexpr std::array<ChoiceInfo, 3> table = {{
+      {"none", "no occlusion query"},
+      {"samples", "the query's samples run the depth test (nothing written); visible iff any passes"},
+      {"intervals", "ẑ of each (query triangle, tile) against HiZ, abort at the first pair that may be visible"},
   }};
 };
 

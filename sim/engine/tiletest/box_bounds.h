@@ -9,6 +9,7 @@
 #include <cstdint>
 
 #include "core/arith.h"
+#include "core/costs.h"
 #include "tiletest/lens_vertex.h"
 #include "tiletest/tile_test.h"
 
@@ -47,8 +48,9 @@ inline void box_bounds(const LensVertex* lv, int n, double u0, double u1, double
 }
 
 inline std::uint64_t box_bounds_cost(const LensVertex* lv, int n, bool point) {
+  const std::uint64_t axis = point ? cost::kBoxBoundsAxisPoint : cost::kBoxBoundsAxisBox;
   std::uint64_t c = 0;
-  for (int j = 0; j < n; ++j) c += 4 + (lv[j].kx ? (point ? 1 : 2) : 0) + (lv[j].ky ? (point ? 1 : 2) : 0);
+  for (int j = 0; j < n; ++j) c += cost::kBoxBoundsVertex + (lv[j].kx ? axis : 0) + (lv[j].ky ? axis : 0);
   return c;
 }
 

@@ -28,18 +28,14 @@ void validate_frame_params(const RenderParams& p) {
   if (p.time_strata % p.time_splits != 0)  // each time stratum lies in one sub-interval
     fail("time_strata: expected a multiple of time_splits, got " + std::to_string(p.time_splits) + " / " +
          std::to_string(p.time_strata));
-  choice_index(kShadingModes, p.shading, "shading");
-  choice_index(kTexFilters, p.texture_filter, "texture_filter");
-  choice_index(kTexLayouts, p.texture_layout, "texture_layout");
+  // What one params.def row cannot say: the texture cache's line size is a power of two and its
+  // lines fill whole sets.
   const int lb = p.tex_cache_line_bytes;
-  if (lb < 4 || lb > 4096 || (lb & (lb - 1))) fail("tex_cache_line_bytes: expected a power of two in 4..4096");
-  if (p.tex_cache_size_bytes < lb || p.tex_cache_size_bytes % lb)
-    fail("tex_cache_size_bytes: expected a positive multiple of the line size, got " +
-         std::to_string(p.tex_cache_size_bytes));
-  if (p.tex_cache_ways < 0 || (p.tex_cache_ways && (p.tex_cache_size_bytes / lb) % p.tex_cache_ways))
+  if (lb & (lb - 1)) fail("tex_cache_line_bytes: expected a power of two, got " + std::to_string(lb));
+  if (p.tex_cache_size_bytes % lb)
+    fail("tex_cache_size_bytes: expected a multiple of the line size, got " + std::to_string(p.tex_cache_size_bytes));
+  if (p.tex_cache_ways && (p.tex_cache_size_bytes / lb) % p.tex_cache_ways)
     fail("tex_cache_ways: expected 0 or a divisor of the number of lines, got " + std::to_string(p.tex_cache_ways));
-  if (p.tex_cache_count < 1 || p.tex_cache_count > 1024)
-    fail("tex_cache_count: expected 1..1024, got " + std::to_string(p.tex_cache_count));
 }
 
 void validate_params(const RenderParams& p, const SampleTable& table) {
@@ -65,28 +61,28 @@ void validate_params(const RenderParams& p, const SampleTable& table) {
 // slots, uvs, analytic uv derivatives and levels of detail (backend/texture.h).
 static void build_shade_frame(const RenderParams& p, const SceneArrays& scene, const std::vector<TriSetup>& setups,
                               const std::vector<char>& alive, int n_bins, ShadeFrame& sf) {
-  sf.mode = static_cast<ShadingMode>(choice_index(kShadingModes, p.shading, "shading"));
+  sf.mode = p.shading;
   sf.grid = p.shading_grid;
   sf.cache_entries = p.shading_cache_entries;
-  sf.filter = static_cast<TexFilter>(choice_index(kTexFilters, p.texture_filter, "texture_filter"));
+  sf.filter = p.texture_filter;
   sf.line_bytes = p.tex_cache_line_bytes;
   const bool have_tex = scene.uvs && scene.tex_slots && !scene.textures.empty();
-  sf.tex_count = have_tex ? p.texture_count : 0;
+  sf.texture_count = have_tex ? p.texture_count : 0;
   sf.sample_dist_tex = !scene.textures.empty() ? p.texture_sample_distribution_index : -1;
   if (sf.sample_dist_tex >= static_cast<int>(scene.textures.size()))
     throw std::invalid_argument("texture_sample_distribution_index: no texture " +
                                 std::to_string(sf.sample_dist_tex));
   if (!sf.textured()) return;
   for (const auto& t : scene.textures) sf.textures.add(t.data, t.height, t.width, t.channels);
-  sf.textures.layout(static_cast<TexLayout>(choice_index(kTexLayouts, p.texture_layout, "texture_layout")));
+  sf.textures.layout(p.texture_layout);
   if (sf.mode != ShadingMode::kNone) sf.streams.assign(static_cast<std::size_t>(n_bins), {});
-  if (sf.tex_count == 0) return;
+  if (sf.texture_count == 0) return;
   const std::size_t n = static_cast<std::size_t>(scene.n);
   sf.uvs.assign(scene.uvs, scene.uvs + n * 6);
   sf.tex_ids.assign(scene.tex_slots, scene.tex_slots + n * kMaxTexSlots);
   for (std::size_t i = 0; i < sf.tex_ids.size(); ++i) {
     std::int32_t& id = sf.tex_ids[i];
-    if (static_cast<int>(i % kMaxTexSlots) >= sf.tex_count) {
+    if (static_cast<int>(i % kMaxTexSlots) >= sf.texture_count) {
       id = -1;
     } else if (id < -1 || id >= sf.textures.size()) {
       throw std::invalid_argument("tex_slots: triangle " + std::to_string(i / kMaxTexSlots) + " uses texture " +

@@ -44,7 +44,8 @@ class Laine final : public Traversal {
           empty = !tile_h_sets<A>(fp, tiletest::expand_lo(tx), tiletest::expand_hi(tx + T), tiletest::expand_lo(ty),
                                   tiletest::expand_hi(ty + T), sx, sy, c_[Counter::ops_tile]);
         ++c_[Counter::tile_accepted];
-        const std::uint64_t region_cost = empty ? 4 : static_cast<std::uint64_t>(sx.n_cmp + sy.n_cmp);
+        const std::uint64_t region_cost =
+            empty ? cost::kSampleRegionEmpty : static_cast<std::uint64_t>(sx.n_cmp + sy.n_cmp);
         // Pixels of the tile inside the triangle's bounds (the bounding-box mask).
         for (int py = std::max(ty, y0); py < std::min(ty + T, y1); ++py)
           for (int px = std::max(tx, x0); px < std::min(tx + T, x1); ++px) {
@@ -58,7 +59,7 @@ class Laine final : public Traversal {
                 bool pass;
                 if (empty) {
                   // Laine's per-sample test u_min <= u <= u_max, v_min <= v <= v_max against an
-                  // empty region (u_min > u_max): four comparisons that always fail.
+                  // empty region (u_min > u_max): cost::kSampleRegionEmpty comparisons that always fail.
                   const F u(ps.u[s]), v(ps.v[s]);
                   pass = (u >= F(1.0f)) & (u <= F(-1.0f)) & (v >= F(1.0f)) & (v <= F(-1.0f));
                 } else {
