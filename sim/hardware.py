@@ -40,21 +40,14 @@ def _declared_section(name: str):
     group = next(s for s in params.layer("hardware") if s.name == name)
 
     def wrap(cls):
-        annotations = {}
-        for spec in group.members:
-            metadata = {"doc": spec.doc, **({"unit": spec.unit} if spec.unit else {}), "spec": spec}
-            setattr(cls, spec.key, field(default=spec.user_default, metadata=metadata))
-            annotations[spec.key] = spec.py_type
-        cls.__annotations__ = {**annotations, **cls.__dict__.get("__annotations__", {})}
         cls.section_doc = group.doc
 
         def validate(self, owner: str) -> None:
-            for f in dataclasses.fields(self):
-                f.metadata["spec"].check(owner, getattr(self, f.name), f.name)
+            params.check_declared(self, owner)
             self._check_across_fields(owner)
 
         cls.validate = validate
-        return dataclass(frozen=True)(cls)
+        return params.declare(cls, group.members, name=lambda spec: spec.key)
 
     return wrap
 

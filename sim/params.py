@@ -9,6 +9,8 @@ when it is stale).
 """
 from __future__ import annotations
 
+import copy
+import dataclasses
 import functools
 import math
 import numbers
@@ -251,6 +253,34 @@ def set_layer(params, name: str, values, only=None) -> None:
         else:
             for engine, v in spec.engine_values(value).items():
                 setattr(params, engine, v)
+
+
+def declare(cls, specs, name=lambda spec: spec.name):
+    """``cls`` as a frozen dataclass with one field per spec, in declaration order: the field is
+    ``name(spec)``, its default the user default, its metadata the doc, the unit and the spec itself
+    (for ``field_docs`` and ``check_declared``)."""
+    annotations = {}
+    for spec in specs:
+        metadata = {"doc": spec.doc, **({"unit": spec.unit} if spec.unit else {}), "spec": spec}
+        default = spec.user_default
+        if isinstance(default, (dict, list)):
+            f = dataclasses.field(default_factory=lambda d=default: copy.deepcopy(d), metadata=metadata)
+        else:
+            f = dataclasses.field(default=default, metadata=metadata)
+        annotations[name(spec)] = spec.py_type
+        setattr(cls, name(spec), f)
+    cls.__annotations__ = {**annotations, **cls.__dict__.get("__annotations__", {})}
+    return dataclasses.dataclass(frozen=True)(cls)
+
+
+def check_declared(obj, owner: str) -> None:
+    """Check every declared field of ``obj`` (a ``declare``d dataclass) against its domain, naming
+    ``owner.field``; a group's value is replaced by its completed, normalised dict."""
+    for f in dataclasses.fields(obj):
+        spec = f.metadata["spec"]
+        value = spec.check(owner, getattr(obj, f.name), f.name)
+        if spec.kind == "group":
+            object.__setattr__(obj, f.name, value)
 
 
 def choices(registry: str) -> list[str]:

@@ -6,7 +6,7 @@ adds only what a single row cannot say: the checks across fields and the lens-gr
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
+import functools
 
 from . import _core, params
 from .errors import ConfigError, field_docs
@@ -43,34 +43,14 @@ def texture_layouts() -> list[str]:
     return params.choices("texture_layouts")
 
 
-def _declared(cls):
-    """Give ``cls`` one dataclass field per pipeline parameter of params.def, in declaration order."""
-    annotations = {}
-    for spec in params.layer("pipeline"):
-        metadata = {"doc": spec.doc, **({"unit": spec.unit} if spec.unit else {}), "spec": spec}
-        default = spec.user_default
-        if isinstance(default, (dict, list)):
-            f = dataclasses.field(default_factory=lambda d=default: {k: v for k, v in d.items()},
-                                  metadata=metadata)
-        else:
-            f = dataclasses.field(default=default, metadata=metadata)
-        annotations[spec.name] = spec.py_type
-        setattr(cls, spec.name, f)
-    cls.__annotations__ = {**annotations, **cls.__dict__.get("__annotations__", {})}
-    return dataclass(frozen=True)(cls)
-
-
-@_declared
+@functools.partial(params.declare, specs=params.layer("pipeline"))
 class PipelineConfig:
     """What the rasterizer does. Every field is validated; bad values raise ConfigError.
     Field documentation: ``PipelineConfig.field_docs()`` and docs/config.md; the declaration is
     sim/engine/core/params.def."""
 
     def __post_init__(self):
-        for f in dataclasses.fields(self):
-            value = f.metadata["spec"].check(_OWNER, getattr(self, f.name))
-            if f.metadata["spec"].kind == "group":
-                object.__setattr__(self, f.name, value)  # completed and normalised
+        params.check_declared(self, _OWNER)
         self._check_across_fields()
 
     def _check_across_fields(self):

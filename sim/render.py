@@ -116,12 +116,6 @@ def _camera_params(camera: Camera):
     return params
 
 
-def _pipeline_params(params, config: PipelineConfig) -> None:
-    """Every pipeline parameter the engine reads, under its one name (params.def); lens_grid
-    'auto' keeps the engine default and is resolved by the caller."""
-    _params.set_layer(params, "pipeline", config)
-
-
 def _interval_params(params, config: PipelineConfig) -> None:
     """The pipeline parameters the conservative mode reads: those of the intervals stage of
     params.def (time/lens intervals, clip box, depth intervals and HiZ; docs/intervals.md)."""
@@ -163,8 +157,8 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
         t = int(np.argwhere(~np.isfinite(v0) | ~np.isfinite(v1))[0][0])
         raise SceneInputError(f"scene.positions: triangle {t} overflows float32 after projection: {p0[t].tolist()}")
     params = _camera_params(camera)
-    _pipeline_params(params, config)
-    params.lens_grid = grid
+    _params.set_layer(params, "pipeline", config)  # lens_grid 'auto' keeps the engine default:
+    params.lens_grid = grid                          # resolved here
     if query is not None:  # (first query triangle, mode name): set by sim.occlusion_query only
         params.query_first, params.query_mode = int(query[0]), query[1]
     # The engine skips a dimension only where skipping is exact: every sample has u = v = 0 (no
@@ -178,7 +172,8 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     else:
         lens_index = np.zeros((0,), np.int32)
         lens_uv = np.zeros((0, 2), np.float32)
-    _params.set_layer(params, "hardware", hardware.describe())
+    hardware_desc = hardware.describe()
+    _params.set_layer(params, "hardware", hardware_desc)
     uvs, slots, textures, sample_dist, col = texture_inputs(scene, p0, col, config, samples)
     params.texture_sample_distribution_index = sample_dist
     col32 = col.astype(np.float32)
@@ -195,7 +190,7 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
         flat = dict(sorted({**flat, **timing_estimate(records, hardware)}.items()))
     desc = {"camera": camera.describe(), "pipeline": config.describe(),
             "table": table.describe() if hasattr(table, "describe") else {}, "lens_grid": grid,
-            "hardware": hardware.describe()}
+            "hardware": hardware_desc}
     return Result(image=out["image"], flat_stats=flat, config=desc,
                   sample_depth=out.get("sample_depth"), sample_triangle=out.get("sample_triangle"),
                   timing_records=records)
