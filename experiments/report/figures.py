@@ -303,8 +303,7 @@ def render_plot(spec, df, out_base: Path | None) -> dict:
             else:
                 ax.set_ylabel(spec.ylabel or (spec.ys[0] if len(spec.ys) == 1 else "value"))
             if f is not None:
-                name = spec.facet.removesuffix(".name").split(".")[-1]
-                ax.set_title(f"{name} = {label(f)}")
+                ax.set_title(f"{_short(spec.facet)} = {label(f)}")
         # One legend for the figure (every panel uses the same colours), outside the panels when long.
         if spec.kind == "scatter":
             handles = _scatter_legend(spec, hues, styles)

@@ -310,16 +310,16 @@ def zcull_savings(df, config) -> list[str]:
     for _, on in df[df["pipeline.hiz.enabled"] == True].iterrows():  # noqa: E712 - a pandas column
         match = df["pipeline.hiz.enabled"] == False  # noqa: E712
         for k in keys:
-            match &= df[k].isna() if _missing(on[k]) else df[k] == on[k]
+            match &= df[k].isna() if missing(on[k]) else df[k] == on[k]
         off = df[match]
         if not len(off):
             continue
         off = off.iloc[0]
         order = on.get("scene.params.order")
-        name = "front_to_back" if _missing(order) else str(order)
+        name = "front_to_back" if missing(order) else str(order)
         motion = on.get("scene.params.motion_px")
-        if on["camera.coc_px"] or not _missing(motion):
-            name += f", CoC {on['camera.coc_px']:g}, motion {0 if _missing(motion) else motion:g} px"
+        if on["camera.coc_px"] or not missing(motion):
+            name += f", CoC {on['camera.coc_px']:g}, motion {0 if missing(motion) else motion:g} px"
         bytes_off = off["depth.bytes_read"] + off["depth.bytes_written"]
         bytes_on = on["depth.bytes_read"] + on["depth.bytes_written"]
         hiz = on["hiz.bytes_read"] + on["hiz.bytes_written"]
@@ -332,10 +332,6 @@ def zcull_savings(df, config) -> list[str]:
     return md_table(["order", "layers", "pairs", "zmax-culled %", "zmin (no reads) %", "depth bytes off",
                      "depth bytes on", "depth bytes saved %", "HiZ bytes", "saved incl. HiZ %",
                      "sample tests saved %"], rows)
-
-
-def _missing(v) -> bool:
-    return missing(v) or (isinstance(v, float) and math.isnan(v))
 
 
 @named_table("multiview_wide")

@@ -7,7 +7,6 @@ the same table). It is cached as results/references/<hash>-<engine version>.npy.
 """
 from __future__ import annotations
 
-import os
 import time
 from pathlib import Path
 
@@ -15,7 +14,7 @@ import numpy as np
 
 from ..config import RenderConfig, build, config_hash
 from . import metrics
-from .store import engine_id, results_dir
+from .store import atomic_write, engine_id, results_dir
 
 REFERENCE_SEED = 2012  # fixed, and different from the seeds of the tables under test
 
@@ -47,10 +46,7 @@ def reference_image(config, threads: int | None = None) -> np.ndarray:
     if threads is not None:
         pipeline = pipeline.replace(threads=threads)
     image = sim.render(scene, camera, table, pipeline).image
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + f".tmp{os.getpid()}.npy")
-    np.save(tmp, image)
-    os.replace(tmp, path)
+    atomic_write(path, lambda tmp: np.save(tmp, image), suffix=".npy")
     return image
 
 

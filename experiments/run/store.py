@@ -83,11 +83,18 @@ def to_frame(rows: list[dict]):
     return df
 
 
-def write_parquet(df, path: Path):
+def atomic_write(path: Path, write, suffix: str = "") -> None:
+    """``write(tmp)`` to a temporary file beside ``path`` (named ``<name>.tmp<pid><suffix>``, so no
+    store glob matches it; ``suffix`` for writers that append their own), then rename it over
+    ``path``: a reader (another worker, a later run) never sees half a file."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + f".tmp{os.getpid()}")
-    df.to_parquet(tmp, index=False, engine="pyarrow")
-    os.replace(tmp, path)  # atomic: a reader never sees half a file
+    tmp = path.with_name(f"{path.name}.tmp{os.getpid()}{suffix}")
+    write(tmp)
+    os.replace(tmp, path)
+
+
+def write_parquet(df, path: Path):
+    atomic_write(path, lambda tmp: df.to_parquet(tmp, index=False, engine="pyarrow"))
 
 
 def store_point(row: dict):
@@ -132,11 +139,9 @@ def store_records(h: str, records, stats: dict) -> None:
 
     import numpy as np
 
-    p = records_path(h)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    tmp = p.with_name(p.name + f".tmp{os.getpid()}.npz")
-    np.savez(tmp, records=records, stats=np.array(json.dumps(stats, default=str)))
-    os.replace(tmp, p)
+    atomic_write(records_path(h),
+                 lambda tmp: np.savez(tmp, records=records, stats=np.array(json.dumps(stats, default=str))),
+                 suffix=".npz")
 
 
 def cached_records(h: str):
