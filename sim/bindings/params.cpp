@@ -8,6 +8,7 @@
 #include <pybind11/stl.h>
 
 #include <array>
+#include <stdexcept>
 #include <string>
 #include <type_traits>
 
@@ -71,9 +72,28 @@ py::dict choices() {
   return d;
 }
 
-// One row of param_specs(); choices are resolved from the registry a "@name" domain names.
+// The names a row accepts: a choice enum's registry (whose name its "@registry" domain must
+// spell), the traversal algorithms for "@algorithms", else None.
+template <class T>
+py::object choice_names(const char* key, const std::string& domain) {
+  py::list l;
+  if constexpr (IsChoice<T>::value) {
+    if (domain.rfind("@" + std::string(ChoiceTraits<T>::registry), 0) != 0)
+      throw std::logic_error(std::string("params.def: ") + key + ": domain '" + domain + "' does not name its registry '" +
+                             std::string(ChoiceTraits<T>::registry) + "'");
+    for (const auto& c : ChoiceTraits<T>::table) l.append(std::string(c.name));
+    return l;
+  } else {
+    if (domain.rfind("@algorithms", 0) != 0) return py::none();
+    for (const auto& a : algorithms()) l.append(a.name);
+    return l;
+  }
+}
+
+// One row of param_specs().
 py::dict param_spec(const char* stage, const char* kind, const char* layer, std::string group, const char* key,
-                    const char* type, py::object def, const char* unit, const std::string& domain, const char* doc) {
+                    const char* type, py::object def, const char* unit, const std::string& domain, const char* doc,
+                    py::object choices) {
   py::dict d;
   if (!group.empty()) group.pop_back();  // "hiz_" -> "hiz"
   d["kind"] = kind;
@@ -88,19 +108,7 @@ py::dict param_spec(const char* stage, const char* kind, const char* layer, std:
   d["unit"] = unit;
   d["domain"] = domain;
   d["doc"] = doc;
-  py::object names = py::none();
-  if (!domain.empty() && domain[0] == '@') {
-    const std::string reg = domain.substr(1, domain.find(' ') - 1);
-    py::list l;
-    if (reg == "algorithms") {
-      for (const auto& a : algorithms()) l.append(a.name);
-    } else {
-      const py::dict registries = choices();
-      for (auto item : registries[py::str(reg)]) l.append(item.cast<py::tuple>()[0]);
-    }
-    names = l;
-  }
-  d["choices"] = names;
+  d["choices"] = std::move(choices);
   return d;
 }
 
@@ -111,10 +119,10 @@ py::list param_specs() {
 #define RAST5D_STAGE(name) stage = #name;
 #define RAST5D_PARAM(layer, group, key, type, def, unit, domain, doc)                                             \
   l.append(param_spec(stage, "engine", #layer, #group, #key, param_type<type>(), param_value(defaults.group##key), \
-                      unit, domain, doc));
+                      unit, domain, doc, choice_names<type>(#group #key, domain)));
 #define RAST5D_PY_PARAM(layer, group, key, type, def, unit, domain, doc)                                       \
   l.append(param_spec(stage, "python", #layer, #group, #key, param_type<type>(), param_value(type(def)), unit, \
-                      domain, doc));
+                      domain, doc, choice_names<type>(#group #key, domain)));
 #define RAST5D_PARAM_GROUP(layer, name, keys, doc)                                                    \
   {                                                                                                   \
     py::dict g;                                                                                       \
