@@ -78,7 +78,8 @@ template <class T>
 py::object choice_names(const char* key, const std::string& domain) {
   py::list l;
   if constexpr (IsChoice<T>::value) {
-    if (domain.rfind("@" + std::string(ChoiceTraits<T>::registry), 0) != 0)
+    const std::string reg = "@" + std::string(ChoiceTraits<T>::registry);
+    if (domain.substr(0, domain.find(' ')) != reg)
       throw std::logic_error(std::string("params.def: ") + key + ": domain '" + domain + "' does not name its registry '" +
                              std::string(ChoiceTraits<T>::registry) + "'");
     for (const auto& c : ChoiceTraits<T>::table) l.append(std::string(c.name));

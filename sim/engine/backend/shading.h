@@ -41,25 +41,12 @@
 
 #include "backend/cache_model.h"
 #include "core/counters.h"
-#include "core/choice.h"
+#include "core/params.h"
 #include "core/sample_table.h"
 #include "backend/texture.h"
 
 namespace rast5d {
 
-// The shading parameter: a registry by name (core/choice.h), entries in enum order.
-enum class ShadingMode : int { kPerSample = 0, kMsaa = 1, kPerLensCell = 2, kCache = 3, kNone = 4 };
-template <>
-struct ChoiceTraits<ShadingMode> {
-  static constexpr std::string_view registry = "shading_modes";
-  static constexpr std::array<ChoiceInfo, 5> table = {{
-      {"per_sample", "supersampling: a lane per (pixel, sample index)"},
-      {"msaa", "a lane per pixel per visit"},
-      {"per_lens_cell", "a lane per (pixel, lens-grid cell) per visit"},
-      {"cache", "a memoising shading cache keyed by (triangle, shading-grid point) (002 §2)"},
-      {"none", "shading work is not modelled (no shade.*/tex.* counts)"},
-  }};
-};
 inline constexpr int kMaxTexSlots = 4;
 
 // Per-render shading constants, read-only while workers run (except the per-bin streams, each

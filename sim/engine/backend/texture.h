@@ -22,31 +22,9 @@
 #include <string>
 #include <vector>
 
-#include "core/choice.h"
+#include "core/params.h"
 
 namespace rast5d {
-
-// The texture_filter and texture_layout parameters: registries by name (core/choice.h), entries
-// in enum order.
-enum class TexFilter : int { kBilinear = 0, kTrilinear = 1 };
-template <>
-struct ChoiceTraits<TexFilter> {
-  static constexpr std::string_view registry = "texture_filters";
-  static constexpr std::array<ChoiceInfo, 2> table = {{
-      {"bilinear", "nearest mip level, bilinear within it"},
-      {"trilinear", "bilinear in the two nearest mip levels, blended"},
-  }};
-};
-enum class TexLayout : int { kLinear = 0, kBlocked = 1, kMorton = 2 };
-template <>
-struct ChoiceTraits<TexLayout> {
-  static constexpr std::string_view registry = "texture_layouts";
-  static constexpr std::array<ChoiceInfo, 3> table = {{
-      {"linear", "row-major texels"},
-      {"blocked", "4x4 texel blocks, blocks row-major"},
-      {"morton", "4x4 texel blocks in Morton order"},
-  }};
-};
 
 inline constexpr int kTexelBytes = 4;
 inline constexpr int kTexBlock = 4;  // blocked layouts: 4 x 4 texels = 64 bytes per block

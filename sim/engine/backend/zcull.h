@@ -55,7 +55,6 @@ class DepthCull {
   }
   // An interval-based query has been answered: the traversal may stop.
   bool query_answered() const { return query_ && query_visible_; }
-  bool needs_zhat() const { return need_z_; }
 
   // One (triangle, tile) pair that passed its tile test: ẑ against HiZ. Returns false when the pair
   // is culled (zmax-culling, or an interval-based query pair: no samples either way); sets the

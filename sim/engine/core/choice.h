@@ -1,5 +1,5 @@
 // Registries by name: a choice parameter is an enum E whose ChoiceTraits<E> specialisation (beside
-// the enum, in the header of the stage that uses it) names the registry and lists its entries in
+// the enum, in core/params.h) names the registry and lists its entries in
 // enum order. Adding a choice is one row of that table (and one enumerator); params.def, the
 // bindings (_core.choices(), the RenderParams attribute read and written by name), the stub,
 // sim.PipelineConfig, the pydantic schema and docs/config.md follow.

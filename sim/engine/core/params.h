@@ -14,8 +14,6 @@
 #include <type_traits>
 #include <vector>
 
-#include "backend/shading.h"
-#include "backend/texture.h"
 #include "core/choice.h"
 
 namespace rast5d {
@@ -23,8 +21,8 @@ namespace rast5d {
 // A [lo, hi] range of one sample coordinate (the clip box).
 using CoordRange = std::array<double, 2>;
 
-// Choice parameters held as an enum; ChoiceTraits<E> names their registry and its entries (the
-// backend's choices, ShadingMode, TexFilter and TexLayout, are declared in backend/).
+// Choice parameters held as an enum; ChoiceTraits<E> names their registry and its entries. Every
+// stage's choice parameters are declared here, so no stage header needs another's for them.
 enum class LensShape : int { kDisk = 0, kSquare = 1, kHexagon = 2 };
 enum class OracleMode : int { kSimplified = 0, kFull = 1 };
 enum class OpCount : int { kDocumented = 0, kExact = 1 };
@@ -80,6 +78,42 @@ struct ChoiceTraits<QueryMode> {
       {"none", "no occlusion query"},
       {"samples", "the query's samples run the depth test (nothing written); visible iff any passes"},
       {"intervals", "ẑ of each (query triangle, tile) against HiZ, abort at the first pair that may be visible"},
+  }};
+};
+
+// The shading parameter: a registry by name, entries in enum order.
+enum class ShadingMode : int { kPerSample = 0, kMsaa = 1, kPerLensCell = 2, kCache = 3, kNone = 4 };
+template <>
+struct ChoiceTraits<ShadingMode> {
+  static constexpr std::string_view registry = "shading_modes";
+  static constexpr std::array<ChoiceInfo, 5> table = {{
+      {"per_sample", "supersampling: a lane per (pixel, sample index)"},
+      {"msaa", "a lane per pixel per visit"},
+      {"per_lens_cell", "a lane per (pixel, lens-grid cell) per visit"},
+      {"cache", "a memoising shading cache keyed by (triangle, shading-grid point) (002 §2)"},
+      {"none", "shading work is not modelled (no shade.*/tex.* counts)"},
+  }};
+};
+
+// The texture_filter and texture_layout parameters: registries by name, entries
+// in enum order.
+enum class TexFilter : int { kBilinear = 0, kTrilinear = 1 };
+template <>
+struct ChoiceTraits<TexFilter> {
+  static constexpr std::string_view registry = "texture_filters";
+  static constexpr std::array<ChoiceInfo, 2> table = {{
+      {"bilinear", "nearest mip level, bilinear within it"},
+      {"trilinear", "bilinear in the two nearest mip levels, blended"},
+  }};
+};
+enum class TexLayout : int { kLinear = 0, kBlocked = 1, kMorton = 2 };
+template <>
+struct ChoiceTraits<TexLayout> {
+  static constexpr std::string_view registry = "texture_layouts";
+  static constexpr std::array<ChoiceInfo, 3> table = {{
+      {"linear", "row-major texels"},
+      {"blocked", "4x4 texel blocks, blocks row-major"},
+      {"morton", "4x4 texel blocks in Morton order"},
   }};
 };
 

@@ -214,12 +214,10 @@ class Tile final : public Traversal {
         }
       }
       ++c_[Counter::tile_accepted];
-      if (zcull_.needs_zhat()) {
-        const bool mv = tri.moving;
-        if (!zcull_.check(tri, tx, ty, x0, x1, y0, y1, true, sx.iv_lo[0], sx.iv_hi[sx.n_intervals - 1], sy.iv_lo[0],
-                    sy.iv_hi[sy.n_intervals - 1], 0.0, mv ? 1.0 : 0.0, (tx1 - px0) * (ty1 - py0) * f_.table.spp()))
-          return;
-      }
+      if (!zcull_.check(tri, tx, ty, x0, x1, y0, y1, true, sx.iv_lo[0], sx.iv_hi[sx.n_intervals - 1], sy.iv_lo[0],
+                        sy.iv_hi[sy.n_intervals - 1], 0.0, tri.moving ? 1.0 : 0.0,
+                        (tx1 - px0) * (ty1 - py0) * f_.table.spp()))
+        return;
       // Samples of surviving cells, each checked against the h_i lines, then inside-tested.
       const int n_cells = active.list(cell_list_.data(), G);
       const int* const cl = cell_list_.data();
@@ -283,17 +281,13 @@ class Tile final : public Traversal {
         n_cells[k] = 0;
         if (!ti.active[k]) continue;
         int* list = &cell_lists_[static_cast<std::size_t>(k) * 256];
-        std::uint32_t bx = ~0u, by = ~0u;
+        std::uint32_t bx = (1u << G) - 1, by = (1u << G) - 1;  // no lens: every column and row
         if (lens) {
           bx = tiletest::axis_cells<D>(ti.sx[k], G);
           by = tiletest::axis_cells<D>(ti.sy[k], G);
           charge<A>(c_[Counter::ops_tile], ti.sx[k].n_cmp + ti.sy[k].n_cmp);
         }
-        for (int j = 0; j < G; ++j) {
-          if (!(by >> j & 1u)) continue;
-          for (int i = 0; i < G; ++i)
-            if ((bx >> i & 1u) && lens_mask_.test(j * G + i)) list[n_cells[k]++] = j * G + i;
-        }
+        n_cells[k] = active_cells(bx, by, G, lens_mask_, lens_mask64_).list(list, G);
         total_cells += n_cells[k];
         // Time strata of the table index that overlap t̂_k: samples outside are never touched.
         const D slo = D(ti.tlo[k]) * D(NT), shi = D(ti.thi[k]) * D(NT);
