@@ -108,8 +108,9 @@ def occlusion_query(occluders, query, camera: Camera, table, pipeline: PipelineC
     HiZ uses pipeline.hiz.tile_size. Conservative: a hidden query may be reported visible, never
     the reverse."""
     pipeline = pipeline or PipelineConfig(algorithm="tile")
-    if mode not in query_modes():
-        raise ConfigError(f"mode: expected {' or '.join(repr(m) for m in query_modes())}, got {mode!r}")
+    modes = query_modes()
+    if mode not in modes:
+        raise ConfigError(f"mode: expected {' or '.join(repr(m) for m in modes)}, got {mode!r}")
     if mode == "intervals":
         if pipeline.algorithm != "tile":
             raise ConfigError(f"pipeline.algorithm: the interval-based query needs 'tile', got {pipeline.algorithm!r}")

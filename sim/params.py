@@ -229,6 +229,7 @@ def specs() -> tuple[ParamSpec, ...]:
                  for r in rows)
 
 
+@functools.cache
 def layer(name: str) -> tuple[ParamSpec, ...]:
     """The top-level parameters one layer sets (a group, not its rows), in declaration order."""
     grouped = {s.name for s in specs() if s.kind == "group"}

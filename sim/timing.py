@@ -100,7 +100,7 @@ DERIVED: tuple[Derived, ...] = (
      "max over units of timing.<unit>.busy_cycles / timing.cores: no pipeline can be faster", _bound),
     Derived("timing.bound_ratio", "ratio",
      "timing.cycles / timing.throughput_bound (1 = throughput-bound; more = latency, FIFO and imbalance losses)",
-     lambda s: ratio(s["timing.cycles"], _bound(s))),
+     lambda s: ratio(s["timing.cycles"], s["timing.throughput_bound"])),
 ) + tuple(
     item for u in UNITS for item in (
         Derived(f"timing.{u}.stall_cycles", "clocks",

@@ -10,11 +10,6 @@ from experiments.run import metrics
 pytestmark = pytest.mark.smoke
 
 
-@pytest.fixture
-def rng():
-    return np.random.default_rng(1234)
-
-
 def test_rmse_and_psnr_of_a_known_perturbation(rng):
     ref = rng.uniform(0.2, 0.8, size=(32, 48, 3))
     d = 0.05

@@ -1,2 +1,2 @@
-"""Reports: result frames (frames.py), figures (figures.py), tables and named tables (tables.py),
-image-error metrics (metrics.py), and the pages of `rast5d report` (pages.py)."""
+"""Reports: result frames (frames.py), figures (figures.py), tables and named tables (tables.py), and
+the pages of `rast5d report` (pages.py)."""

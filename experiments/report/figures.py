@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from .frames import (PlotError, apply_where, cell, check_columns, fmt, label, missing, paper_number, paper_value,
-                     pareto_front, same, sorted_x, unique)
+                     pareto_front, same, sorted_x, spec_columns, unique)
 from .tables import data_table, md_table, powerlaw_table
 
 # Okabe-Ito: distinguishable in colour-blind vision and in greyscale print.
@@ -259,8 +259,7 @@ def render_plot(spec, df, out_base: Path | None) -> dict:
         df = df.assign(**{name: [" ".join(label(v) for v in vals if not missing(v))
                                  for vals in zip(*(df[c] for c in spec.hue))]})
         spec = spec.model_copy(update={"hue": name})
-    if spec.optional and any(c is not None and c not in df.columns
-                             for c in [spec.x, spec.facet, spec.style, *spec.ys, *spec.where]):
+    if spec.optional and any(c not in df.columns for c in [*spec_columns(spec), *spec.where]):
         return {"files": [], "markdown": [], "fits": [], "skipped": True}
     check_columns(df, spec)
     d = apply_where(df, spec.where)

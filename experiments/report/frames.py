@@ -64,9 +64,15 @@ def sorted_x(values) -> list:
         return vals
 
 
+def spec_columns(spec) -> list[str]:
+    """Every result column a plot spec draws (x, hue, facet, style, row, ys, columns)."""
+    cols = [spec.x, spec.hue, spec.facet, spec.style, spec.row, *spec.ys, *spec.columns]
+    return [c for c in cols if c is not None]
+
+
 def check_columns(df, spec):
-    for col in [spec.x, spec.hue, spec.facet, spec.style, spec.row, *spec.ys, *spec.columns]:
-        if col is not None and col not in df.columns:
+    for col in spec_columns(spec):
+        if col not in df.columns:
             near = [c for c in df.columns if col.split(".")[-1] in c][:6]
             raise PlotError(f"plot {spec.title or spec.kind!r}: unknown column {col!r}"
                             + (f" (similar: {near})" if near else ""))

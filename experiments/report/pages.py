@@ -17,7 +17,7 @@ from collections import defaultdict
 from pathlib import Path
 
 from ..config import REPO, ConfigError, RenderConfig, load_dict, validate
-from ..run import results_dir, run_sweep
+from ..run import images_dir, results_dir, run_sweep
 from .figures import render_plot
 from .frames import PlotError, apply_derived
 from .tables import TABLES, md_table
@@ -59,7 +59,7 @@ def section_markdown(config: RenderConfig, config_path: Path, df, out_dir: Path,
     except PlotError as e:
         return lines + [f"**Error:** {e}", ""]
     if o.images and "config_hash" in dfd.columns:  # the points' images, for image_grid plots
-        dfd = dfd.assign(**{"image.path": [str(images_dir(config) / f"{h}.png") for h in dfd["config_hash"]]})
+        dfd = dfd.assign(**{"image.path": [str(images_dir(config.name) / f"{h}.png") for h in dfd["config_hash"]]})
     for i, spec in enumerate(o.plots):
         base = out_dir / f"{config.name}_{i + 1}" if len(o.plots) > 1 else out_dir / config.name
         try:
@@ -103,11 +103,6 @@ def section_markdown(config: RenderConfig, config_path: Path, df, out_dir: Path,
     except OSError:
         pass
     return lines
-
-
-def images_dir(config: RenderConfig) -> Path:
-    """Where a sweep with outputs.images keeps the images of its points."""
-    return results_dir() / "images" / config.name
 
 
 def write_config_page(config: RenderConfig, config_path, df, overrides=()) -> Path:

@@ -22,7 +22,7 @@ from ..config import RESULT_EXCLUDE, RenderConfig, build, build_scene, config_ha
 from .store import cached_records, engine_id, git_rev, store_records
 
 
-def config_columns(config: RenderConfig, camera=None) -> dict:
+def config_columns(config: RenderConfig) -> dict:
     """The flattened resolved config of a point (hardware fully resolved; camera from the built camera)."""
     row = flatten(config.model_dump(exclude=RESULT_EXCLUDE | {"hardware"}))
     row.update(point_columns(config))
@@ -30,8 +30,6 @@ def config_columns(config: RenderConfig, camera=None) -> dict:
         row.update(flatten({"hardware": config.hardware_config().describe()}))
     except Exception:  # noqa: BLE001 - validated on load; keep the row even if not
         pass
-    if camera is not None:
-        row.update(camera_columns(camera))
     row["config_hash"] = config_hash(config)
     return row
 

@@ -9,7 +9,7 @@ from pathlib import Path
 from ..config import RenderConfig, config_hash, expand_sweep
 from .executors import dask, local
 from .points import render_config
-from .store import cached_row, results_dir, store_point, table_path, to_frame, write_parquet
+from .store import cached_row, images_dir as store_images_dir, store_point, table_path, to_frame, write_parquet
 
 
 def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "config", workers: int | None = None,
@@ -28,7 +28,7 @@ def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "c
         workers = ex.workers or os.cpu_count() or 1
     points = expand_sweep(config, source, lines)
     if config.outputs.images and images_dir is None:
-        images_dir = results_dir() / "images" / name
+        images_dir = store_images_dir(name)
     rows: dict[int, dict] = {}
     todo = []
     for i, (point, cfg) in enumerate(points):

@@ -114,6 +114,11 @@ def cached_row(h: str) -> dict | None:
         return None
 
 
+def images_dir(name: str) -> Path:
+    """Where a sweep with outputs.images keeps the images of its points (one PNG per config hash)."""
+    return results_dir() / "images" / name
+
+
 def table_path(name: str) -> Path:
     return results_dir() / f"{name}.parquet"
 
