@@ -54,13 +54,19 @@ def _build(config: RenderConfig, row: dict, threads: int | None):
     return scene, camera, table, pipeline
 
 
-def _render(config, row, image_path, threads):
+def _rendered(config, row: dict, threads):
+    """sim.render of a point; adds its resolved lens grid and every counter and figure to row."""
     import sim
 
     scene, camera, table, pipeline = _build(config, row, threads)
     result = sim.render(scene, camera, table, pipeline, hardware=config.hardware_config())
     row["resolved.lens_grid"] = result.config.get("lens_grid")
     row.update(result.flat_stats)
+    return result
+
+
+def _render(config, row, image_path, threads):
+    result = _rendered(config, row, threads)
     if config.outputs.metrics is not None:
         from .references import point_metrics
 
@@ -102,17 +108,13 @@ def render_config(config: RenderConfig) -> RenderConfig:
 def stored_render(config: RenderConfig, threads: int | None = None):
     """(timing records, flat counters with the resolved camera and scene size) of ``config``'s render, from
     the store or rendered and stored."""
-    import sim
-
     base = render_config(config)
     h = config_hash(base)
     cached = cached_records(h)
     if cached is not None:
         return cached
     stats: dict = {}
-    scene, camera, table, pipeline = _build(base, stats, threads)
-    result = sim.render(scene, camera, table, pipeline, hardware=base.hardware_config())
-    stats.update(result.flat_stats)
+    result = _rendered(base, stats, threads)
     store_records(h, result.timing_records, stats)
     return result.timing_records, stats
 
