@@ -13,6 +13,7 @@ from .errors import ConfigError, SceneInputError
 from .hardware import HardwareConfig, TextureCacheConfig, UnitConfig
 from .pipeline import (PipelineConfig, algorithm_docs, algorithm_names, interleaved_algorithms, shading_modes,
                        texture_filters, texture_layouts)
+from .pipeline import line_algorithms
 from .png import linear_to_srgb8, write_png
 
 from .camera import Camera
@@ -40,6 +41,7 @@ __all__ = [
     "algorithm_names",
     "counter_docs",
     "interleaved_algorithms",
+    "line_algorithms",
     "linear_to_srgb8",
     "memory_estimate",
     "render",

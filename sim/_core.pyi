@@ -35,6 +35,14 @@ class RenderParams:
     count_optimal: bool  # Instrument tile.samples_optimal (exact lens region per tile; 001 Table 1); default True
     hinterleave_tile: int  # HINTERLEAVE tile edge: 4, 8 or 16 [px]; default 8
     bin_size: int  # Screen bin edge for threading (multiple of 8 and of hinterleave_tile) [px]; default 64
+    lines_buffer_size: int  # Segment-buffer capacity per line sample; 0 = unlimited (004 does not state its size) [segments]; default 8
+    lines_min_weight: float  # Reject segments whose κ weight (share of the line) is below this; 0 = off; default 0.001
+    lines_occlusion: bool  # Drop segments covered by a buffered segment entirely in front (and remove those an incoming segment hides); default True
+    lines_merge: bool  # Merge a segment into a buffered one within the three thresholds; default True
+    lines_merge_depth: float  # Merge: largest difference of midpoint depth z; default 0.001
+    lines_merge_color: float  # Merge: largest Euclidean distance of linear RGB colours; default 0.05
+    lines_merge_gap: float  # Merge: largest gap between the two intervals along the line (0: touching or overlapping); default 0.0
+    lines_tile_clip: bool  # Skip line-triangle tests of lines that miss the tile's h_i lens region (same image); default False
     shading: str  # What costs a shader lane: 'per_sample' (supersampling), 'msaa' (one per pixel per visit), 'per_lens_cell' (one per pixel and lens-grid cell per visit), 'cache' (memoising shading cache, 002 §2) or 'none' (not modelled: no shade.*/tex.* counts, fastest); the image is the same in every mode (shading_modes: per_sample, msaa, per_lens_cell, cache, none); default 'none'
     shading_cache_entries: int  # Shading cache (shading: cache): LRU entries, key (triangle, shading-grid point) [entries]; default 1024
     shading_grid: int  # Shading cache: shading-grid points per pixel edge (1 = pixel grid, 2 = 2x2 per pixel, ...) [points/px]; default 1
@@ -61,6 +69,7 @@ class RenderParams:
     table_has_lens: bool  # The sample table has lens coordinates (else u = v = 0 is exact); default True
     table_has_time: bool  # The sample table has time coordinates (else t = 0 is exact); default True
     record_timing: bool  # Record one timing work record per (triangle, bin) visit (docs/timing.md); default True
+    table_lines: bool  # The sample table holds line samples (SampleTable.lines): (x, y) a screen point, (u, v) the line direction; default False
     query_first: int  # Occlusion query: triangles from this index are the query (no writes); -1 none; default -1
     query_mode: str  # Occlusion query: 'none', 'samples' (sample-based) or 'intervals' (ẑ vs HiZ, abort) (query_modes: none, samples, intervals); default 'none'
     # ---- end of the generated fields ----

@@ -15,8 +15,15 @@ _OWNER = "PipelineConfig"
 
 
 def algorithm_names() -> list[str]:
-    """Names of the registered traversal algorithms."""
-    return [name for name, _desc, _inter in _core.algorithms()]
+    """Names of the registered point-sample traversal algorithms: the exact ones, which render the
+    same image from the same point table (line-sample algorithms: line_algorithms())."""
+    lines = set(line_algorithms())
+    return [name for name, _desc, _inter in _core.algorithms() if name not in lines]
+
+
+def line_algorithms() -> list[str]:
+    """Names of the registered line-sample algorithms (004 §3-4): they need SampleTable.lines."""
+    return [name for name, _desc, _inter in _core.algorithms() if name == "lines" or name.startswith("lines_")]
 
 
 def algorithm_docs() -> dict[str, str]:

@@ -140,6 +140,16 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     if not isinstance(config, PipelineConfig):
         raise ConfigError(f"config: expected sim.PipelineConfig, got {type(config).__name__}")
     p0, p1, col = _scene_arrays(scene)
+    is_lines = getattr(table, "kind", "points") == "lines"
+    if is_lines != (config.algorithm == "lines"):
+        if is_lines:
+            raise ConfigError(f"algorithm: a line-sample table (SampleTable.lines) needs algorithm 'lines', "
+                              f"got {config.algorithm!r}")
+        raise ConfigError("algorithm: 'lines' needs a line-sample table (SampleTable.lines / samples.kind lines), "
+                          f"got a {getattr(table, 'generator', type(table).__name__)} point-sample table")
+    if is_lines and p1 is not p0 and not np.array_equal(p0, p1):
+        raise ConfigError("algorithm: 'lines' renders static scenes only (depth of field); the scene moves "
+                          "during the shutter (positions_t1): motion blur needs point samples")
     samples = table.samples(camera.lens)
     spp = int(samples.shape[2])
     grid = config.resolved_lens_grid(spp)
@@ -166,6 +176,7 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     params.table_has_lens = bool(np.any(samples[..., 2:4] != 0))
     params.table_has_time = bool(np.any(samples[..., 4] != 0))
     params.record_timing = bool(timing)
+    params.table_lines = is_lines
     if getattr(table, "n_lens", 0):
         lens_index = np.ascontiguousarray(table.lens_index, dtype=np.int32)
         lens_uv = np.ascontiguousarray(table.lens_positions(camera.lens), dtype=np.float32)

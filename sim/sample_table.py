@@ -279,6 +279,52 @@ class SampleTable:
             declared_lens=lens,
         )
 
+    # ---------------------------------------------------------------- line samples
+
+    @classmethod
+    def lines(cls, n_lines: int = 16, seed: int = 0, period: int = 32, wheel: int = 4) -> "SampleTable":
+        """A line-sample table for ``PipelineConfig(algorithm="lines")`` (004_da3c211285527fac.txt
+        §3): per pixel ``n_lines`` lines through the centre of the disk lens, as wagon wheels of
+        ``wheel`` lines sharing one screen point. The n_lines angles are stratified over [0, π)
+        with a random rotation per pixel (θ_k = π(k + ξ)/n_lines); line k belongs to wheel
+        k mod (n_lines / wheel), so every wheel's spokes are spread evenly; the wheels' screen
+        points are jittered on a stratified grid of the pixel. Sample s holds (x, y, cos θ, sin θ,
+        0): (u, v) is the line's direction, and the line covers the lens points p (u, v), p in
+        [-1, 1]. Static scenes only (no time); the disk lens only."""
+        n_lines = _check_int("n_lines", n_lines, 1, MAX_SPP)
+        seed = _check_int("seed", seed, 0, 2**63 - 1)
+        period = _check_int("period", period, 1, MAX_PERIOD)
+        wheel = _check_int("wheel", wheel, 1, MAX_SPP)
+        wheel = min(wheel, n_lines)
+        if n_lines % wheel:
+            raise ValueError(f"n_lines: expected a multiple of wheel ({wheel}), got {n_lines}")
+        n_points = n_lines // wheel
+        rng = np.random.default_rng(
+            np.random.SeedSequence(entropy=seed, spawn_key=(zlib.crc32(b"lines"), period)))
+        P = period
+        nx, ny = _grid_shape(n_points)
+        cell = rng.permuted(np.tile(np.arange(n_points), (P, P, 1)), axis=2)
+        jit = rng.random((P, P, n_points, 2))
+        px = ((cell % nx) + jit[..., 0]) / nx
+        py = ((cell // nx) + jit[..., 1]) / ny
+        xi = rng.random((P, P, 1))
+        out = np.zeros((P, P, n_lines, 5), dtype=np.float32)
+        for m in range(n_points):
+            for j in range(wheel):
+                k = m + j * n_points
+                s = m * wheel + j
+                theta = np.pi * (k + xi[..., 0]) / n_lines
+                out[:, :, s, 0] = _round_down_f32(px[:, :, m])
+                out[:, :, s, 1] = _round_down_f32(py[:, :, m])
+                out[:, :, s, 2] = np.cos(theta)
+                out[:, :, s, 3] = np.sin(theta)
+        table = cls(generator="lines", period=P, spp=n_lines, seed=seed,
+                    params={"n_lines": n_lines, "seed": seed, "period": P, "wheel": wheel},
+                    has_lens=True, has_time=False, final=out, declared_lens="any")
+        table.kind = "lines"
+        table.n_lines = n_lines
+        return table
+
     # ---------------------------------------------------------------- views
 
     def samples(self, lens: str = "disk") -> np.ndarray:

@@ -21,7 +21,8 @@ pytestmark = pytest.mark.hardcases
 CASES = ref.hard_cases()
 NEAR_COUNTERS = ("setup.near_clipped", "setup.bbox_fallback", "setup.culled_near")
 # (name, needs an interleaved table) for every registered algorithm
-ALGORITHMS = [(name, interleaved) for name, _doc, interleaved in sim._core.algorithms()]
+ALGORITHMS = [(name, interleaved) for name, _doc, interleaved in sim._core.algorithms()
+              if name in sim.algorithm_names()]  # point-sample algorithms
 
 
 def tables():

@@ -60,6 +60,13 @@ def build(config: RenderConfig):
         if t.kind != "multiview":
             raise ConfigError(f"samples.views: only for the multiview kind, got kind={t.kind!r}")
         params["views"] = t.views
-    table = sim.SampleTable.create(t.kind, **params)
+    if t.kind == "lines":
+        extra = {k: v for k, v in (("n_lines", t.n_lines), ("wheel", t.wheel)) if v is not None}
+        table = sim.SampleTable.lines(seed=t.seed, period=t.period, **extra)
+    else:
+        for key in ("n_lines", "wheel"):
+            if getattr(t, key) is not None:
+                raise ConfigError(f"samples.{key}: only for the lines kind, got kind={t.kind!r}")
+        table = sim.SampleTable.create(t.kind, **params)
     pipeline = sim.PipelineConfig(**config.pipeline.model_dump())
     return scene, camera, table, pipeline

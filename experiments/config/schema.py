@@ -22,7 +22,7 @@ REPO = Path(__file__).resolve().parents[2]
 # table's generators (all of them, and those that may render metric references).
 LensShapeName = Literal[tuple(sim.lens.LENS_SHAPES)]
 QueryModeName = Literal[tuple(sim.intervals.query_modes())]
-SampleKind = Literal[tuple(sim.SampleTable.generators())]
+SampleKind = Literal[tuple(sim.SampleTable.generators()) + ("lines",)]  # lines: SampleTable.lines
 ReferenceKind = Literal[tuple(sim.SampleTable.generators(reference=True))]
 
 
@@ -86,6 +86,10 @@ class SamplesSpec(_Strict):
     n_lens: Optional[int] = Field(None, description="Interleaved only: number of discrete lens positions (64, 256)")
     views: Optional[int] = Field(None, description=(
         "Multiview only: number of views splitting the lens in u (002 §8); spp is the total over all views"))
+    n_lines: Optional[int] = Field(None, description=(
+        "Lines only (samples.kind lines, algorithm lines): line samples per pixel (004 §3); default 16"))
+    wheel: Optional[int] = Field(None, description=(
+        "Lines only: lines per wagon wheel sharing one screen point; default 4"))
 
 
 def _spec_type(spec):

@@ -101,4 +101,32 @@ inline constexpr std::uint64_t zhat_plane_cost(bool lens) { return lens ? kZhatP
 // ẑ against the HiZ tile (backend/zcull.h): 2 CMP (zmax, zmin).
 inline constexpr std::uint64_t kHiZCompare = 2;
 
+// ---- line samples (lines/line_test.h, lines/segment_buffer.h; 004 §3-4) ----
+// Per (screen point, triangle): 6 MADD relative coordinates; per edge e 2 MUL + SUB, d/du and d/dv
+// MUL + MADD each; det, d/du, d/dv MUL + 2 MADD each; sum and its gradients 2 ADD each; the near
+// function and its gradients 3 MADD.
+inline constexpr std::uint64_t kLinePointSetup = 6 + 3 * 7 + 9 + 6 + 3;  // 45
+// Per (line, triangle): slopes along the line of e_0..2, det, sum (MUL + MADD each; + 2 for the
+// near function), per function a sign test of the slope and then RCP, MUL, MIN, MAX for a root
+// (or one sign test of the constant for a zero slope), 2 CMP for the two candidate intervals.
+inline constexpr std::uint64_t line_interval_cost(int n_fns, int n_flat) {
+  return 10 + (n_fns == 5 ? 2 : 0) + 5 * static_cast<std::uint64_t>(n_fns - n_flat) +
+         2 * static_cast<std::uint64_t>(n_flat) + 2;
+}
+// Line vs widened uv-box: per axis with a non-zero direction 2 MUL, 2 MIN, 2 MAX; on an axis 2 CMP;
+// 1 CMP for the range.
+inline constexpr std::uint64_t line_box_cost(bool c_zero, bool s_zero) {
+  return (c_zero ? 2 : 6) + (s_zero ? 2 : 6) + 1;
+}
+inline constexpr std::uint64_t kLineBoxWiden = 4;  // per uv-box and tile: 2 SUB, 2 ADD
+// Segment shading at its midpoint (ops.interp): ADD + MUL midpoint, 3 MADD e_i, 2 ADD sum,
+// MADD det, RCP + MUL + MADD depth, RCP + 3 MUL barycentrics, 3 x (MUL + 2 MADD) colour.
+inline constexpr std::uint64_t kLineShade = 2 + 3 + 2 + 1 + 3 + 4 + 9;  // 24
+inline constexpr std::uint64_t kLineDepth = 5;  // 2 MADD, RCP, MUL, MADD
+inline constexpr std::uint64_t kKappa = 4;      // 2 MUL, SUB, MUL
+// A new segment: κ, the too-small CMP, depth at both ends, MIN + MAX of them.
+inline constexpr std::uint64_t kSegNew = kKappa + 1 + 2 * kLineDepth + 2;  // 17
+// Merging two segments: MIN, MAX, ADD, RCP, 3 x (MUL, MADD, MUL) colour, κ, MIN, MAX, MIN depths.
+inline constexpr std::uint64_t kSegMerge = 4 + 9 + kKappa + 3;  // 20
+
 }  // namespace rast5d::cost

@@ -51,7 +51,7 @@ TileWork work_from_counters(const Counters& c) {
   auto d = [&](Counter k) { return c[k]; };
   TileWork w;
   w.tile_tests = d(Counter::tile_visited);
-  w.sample_tests = d(Counter::raster_samples_tested);
+  w.sample_tests = d(Counter::raster_samples_tested) + d(Counter::lines_tests);  // a line test is one item
   w.depth_tests = d(Counter::depth_tests);
   w.quads = d(Counter::shade_quad_requests);
   w.texel_fetches = d(Counter::tex_fetches);

@@ -52,6 +52,18 @@ void validate_params(const RenderParams& p, const SampleTable& table) {
     fail("algorithm: '" + p.algorithm +
          "' needs an interleaved sample table (SampleTable.interleaved), got a table without "
          "discrete lens coordinates");
+  const bool lines_algo = p.algorithm == "lines";
+  if (lines_algo != p.table_lines)
+    fail(lines_algo ? "algorithm: 'lines' needs a line-sample table (SampleTable.lines), got a point-sample table"
+                    : "algorithm: '" + p.algorithm +
+                          "' tests point samples, got a line-sample table (SampleTable.lines needs algorithm 'lines')");
+  if (lines_algo && p.lens_shape != LensShape::kDisk)
+    fail("lens_shape: line samples (algorithm 'lines') cross the disk lens through its centre; got a non-disk lens");
+  if (lines_algo && p.shading != ShadingMode::kNone)
+    fail("shading: line samples shade each segment once at its midpoint; the shading modes model point-sample "
+         "quads: use 'none' with algorithm 'lines'");
+  if (lines_algo && p.texture_count > 0)
+    fail("texture_count: texturing is not modelled for line samples (algorithm 'lines'); use 0");
   if (p.lens_grid != table.grid())
     fail("lens_grid: the sample table was bucketed for G=" + std::to_string(table.grid()) +
          ", got " + std::to_string(p.lens_grid));
@@ -203,6 +215,7 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
           if (track_stream_ends)
             bin_stream_ends[b].push_back(static_cast<std::uint32_t>(shade_frame.streams[b].size()));
         }
+        algo->end_bin(r);
         ts.shade.close_visit();  // algorithms end their visits; this only guards the contract
         ts.buffers.resolve(result.image.data(), p.width);
         if (export_samples)

@@ -35,6 +35,10 @@ class Traversal {
  public:
   virtual ~Traversal() = default;
   virtual void rasterize(const TriSetup& tri, const BinRect& bin, bool charge_setup) = 0;
+  // Called once per bin after its last triangle, before the bin is resolved (every bin, also those
+  // no triangle reached). Algorithms that defer work to the end of a bin (line samples' composite)
+  // do it here.
+  virtual void end_bin(const BinRect& /*bin*/) {}
 };
 
 struct TraversalInfo {

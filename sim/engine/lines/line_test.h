@@ -1,0 +1,189 @@
+// Line samples in the lens (004_da3c211285527fac.txt §3.1): analytic coverage of a lens-space line
+// by a static (possibly defocused) triangle.
+//
+// Contract:
+//  * A line sample is a screen point (sx, sy) and a direction (c, s) = (cos θ, sin θ) through the
+//    lens centre; it covers the lens points p (c, s), p in [-1, 1] (the unit disk lens).
+//  * At a fixed screen point the homogeneous edge functions of the sheared triangle
+//    (sampletest/sample_test.h) are linear in (u, v): the u·v terms cancel because every vertex is
+//    sheared by the same K (W_j - F) (004 Eq. 2 in homogeneous form). So are det = Σ W_j e_j and
+//    sum = Σ e_j. line_point_setup() computes, once per (screen point, triangle), each function's
+//    value at the lens centre and its u and v gradients (004's C_i, A_i, B_i); line_interval()
+//    restricts them to one direction and intersects the half-lines where every e_i has det's sign
+//    (and, for triangles crossing the near plane, where the hit point has W >= near: det - near·sum
+//    has det's sign). The result is at most two intervals (one per sign of det) of p in [-1, 1]:
+//    the triangle's coverage of the line, exact up to float rounding of the interval ends.
+//  * Ties (an e_i exactly zero) have measure zero on a line and are not settled by a top-left rule.
+//  * The costs are counted through the scalar type (core/arith.h); the fast path charges the
+//    documented figures of core/costs.h (cost::kLinePointSetup, line_interval_cost()).
+#pragma once
+
+#include "core/arith.h"
+#include "core/costs.h"
+
+namespace rast5d {
+
+// The lens-space functions of one triangle at one screen point: f(u, v) = f0 + u fu + v fv for
+// f in e_0, e_1, e_2, det, h = det - near·sum, sum.
+template <class F>
+struct LinePoint {
+  F e0[3], eu[3], ev[3];
+  F d0, du, dv;
+  F s0, su, sv;
+  F h0, hu, hv;
+};
+
+// Cost: cost::kLinePointSetup.
+template <class F>
+inline void line_point_setup(const float X[3], const float Y[3], const float W[3], const float cx[3],
+                             const float cy[3], F sx, F sy, F neg_near, LinePoint<F>& o) {
+  F rx[3], ry[3];
+  for (int j = 0; j < 3; ++j) {
+    rx[j] = madd(F(W[j]), -sx, F(X[j]));
+    ry[j] = madd(F(W[j]), -sy, F(Y[j]));
+  }
+  for (int i = 0; i < 3; ++i) {
+    const int j = (i + 1) % 3, k = (i + 2) % 3;
+    o.e0[i] = rx[j] * ry[k] - ry[j] * rx[k];
+    o.eu[i] = madd(-F(cx[k]), ry[j], F(cx[j]) * ry[k]);  // d/du: cx_j ry_k - ry_j cx_k
+    o.ev[i] = madd(-F(cy[j]), rx[k], rx[j] * F(cy[k]));  // d/dv: rx_j cy_k - cy_j rx_k
+  }
+  o.d0 = madd(F(W[2]), o.e0[2], madd(F(W[1]), o.e0[1], F(W[0]) * o.e0[0]));
+  o.du = madd(F(W[2]), o.eu[2], madd(F(W[1]), o.eu[1], F(W[0]) * o.eu[0]));
+  o.dv = madd(F(W[2]), o.ev[2], madd(F(W[1]), o.ev[1], F(W[0]) * o.ev[0]));
+  o.s0 = o.e0[0] + o.e0[1] + o.e0[2];
+  o.su = o.eu[0] + o.eu[1] + o.eu[2];
+  o.sv = o.ev[0] + o.ev[1] + o.ev[2];
+  o.h0 = madd(neg_near, o.s0, o.d0);
+  o.hu = madd(neg_near, o.su, o.du);
+  o.hv = madd(neg_near, o.sv, o.dv);
+}
+
+// One line's functions of p: f(p) = f0 + p g.
+template <class F>
+struct LineFns {
+  F e0[3], eg[3];
+  F d0, dg, s0, sg;
+};
+
+// The coverage of one line: up to two intervals [lo, hi] of p (n of them), and the functions for
+// shading and depth. ops: the documented operation count of this call (data dependent: a function
+// whose slope is zero costs a sign test of its constant instead of a root).
+template <class F>
+struct LineCoverage {
+  int n = 0;
+  float lo[2], hi[2];
+  LineFns<F> fn;
+};
+
+// Cost: line_interval_cost(n_fns, n_flat), n_fns = 4 (+1 with the near function), n_flat the
+// functions with a zero slope; returns that figure.
+template <class F>
+inline std::uint64_t line_interval(const LinePoint<F>& q, F c, F s, bool near_fn, bool back_face_cull,
+                                   LineCoverage<F>& out) {
+  LineFns<F>& fn = out.fn;
+  F g[5], f0[5];
+  for (int i = 0; i < 3; ++i) {
+    fn.e0[i] = q.e0[i];
+    fn.eg[i] = madd(s, q.ev[i], c * q.eu[i]);
+    f0[i] = q.e0[i], g[i] = fn.eg[i];
+  }
+  fn.d0 = q.d0, fn.dg = madd(s, q.dv, c * q.du);
+  fn.s0 = q.s0, fn.sg = madd(s, q.sv, c * q.su);
+  f0[3] = q.d0, g[3] = fn.dg;
+  const int n_fns = near_fn ? 5 : 4;
+  if (near_fn) f0[4] = q.h0, g[4] = madd(s, q.hv, c * q.hu);
+  // Case +1: every function > 0 (det > 0); case -1: every function < 0.
+  F lo_p = F(-1.0f), hi_p = F(1.0f), lo_n = F(-1.0f), hi_n = F(1.0f);
+  bool empty_p = back_face_cull, empty_n = false;
+  int n_flat = 0;
+  for (int k = 0; k < n_fns; ++k) {
+    const int sg = sign_of(g[k]);
+    if (sg == 0) {
+      ++n_flat;
+      const int s0 = sign_of(f0[k]);
+      if (s0 <= 0) empty_p = true;
+      if (s0 >= 0) empty_n = true;
+      continue;
+    }
+    const F r = -f0[k] * rcp(g[k]);  // f(r) = 0
+    if (sg > 0) {  // f > 0 for p > r
+      lo_p = vmax(lo_p, r);
+      hi_n = vmin(hi_n, r);
+    } else {
+      hi_p = vmin(hi_p, r);
+      lo_n = vmax(lo_n, r);
+    }
+  }
+  out.n = 0;
+  const bool cov_p = lo_p < hi_p;
+  const bool cov_n = lo_n < hi_n;
+  if (cov_p && !empty_p) out.lo[out.n] = raw(lo_p), out.hi[out.n] = raw(hi_p), ++out.n;
+  if (cov_n && !empty_n) out.lo[out.n] = raw(lo_n), out.hi[out.n] = raw(hi_n), ++out.n;
+  return cost::line_interval_cost(n_fns, n_flat);
+}
+
+// Evaluate the segment's shading point p: the hit depth z = 1 - near·sum/det and the perspective
+// barycentrics' colour (as backend/sample_backend.h does for a point sample).
+// Cost: cost::kLineShade.
+template <class F>
+inline void line_shade(const LineFns<F>& fn, F p, F neg_near, const float col[3][3], F& z, F out[3]) {
+  F e[3];
+  for (int i = 0; i < 3; ++i) e[i] = madd(p, fn.eg[i], fn.e0[i]);
+  const F sum = e[0] + e[1] + e[2];
+  const F det = madd(p, fn.dg, fn.d0);
+  z = madd(neg_near, sum * rcp(det), F(1.0f));
+  const F inv = rcp(sum);
+  const F b0 = e[0] * inv, b1 = e[1] * inv, b2 = e[2] * inv;
+  for (int ch = 0; ch < 3; ++ch)
+    out[ch] = madd(b2, F(col[2][ch]), madd(b1, F(col[1][ch]), b0 * F(col[0][ch])));
+}
+
+// Hit depth at p only. Cost: cost::kLineDepth.
+template <class F>
+inline F line_depth(F s0, F sg, F d0, F dg, F p, F neg_near) {
+  const F sum = madd(p, sg, s0);
+  const F det = madd(p, dg, d0);
+  return madd(neg_near, sum * rcp(det), F(1.0f));
+}
+
+// κ weight of an interval of a wagon-wheel line (004 §3.1.2) on the unit disk. Lines through the
+// centre at uniform angles sample the disk with density ∝ 1/|p|; weighting dp by |p| undoes it, and
+// the normalisation makes the whole line [-1, 1] weigh 1: κ(p1, p2) = (p2|p2| - p1|p1|) / 2
+// (004 writes 2(p2|p2| - p1|p1|) for its lens p in [-1/2, 1/2]). Cost: cost::kKappa.
+template <class F>
+inline F kappa(F p1, F p2) {
+  return (p2 * vabs(p2) - p1 * vabs(p1)) * F(0.5f);
+}
+
+// Does the line (c, s) through the lens centre meet the (already widened) uv-box
+// [u0, u1] x [v0, v1]? The p range of the box on the line, slab by slab, with 1/c and 1/s per line
+// (c_zero / s_zero: the line lies on that axis, so the box must contain 0 on it).
+// Cost: line_box_cost(c_zero, s_zero).
+template <class F>
+inline bool line_meets_box(F inv_c, F inv_s, bool c_zero, bool s_zero, F u0, F u1, F v0, F v1) {
+  F lo = F(-1.0f), hi = F(1.0f);
+  bool ok = true;
+  if (!c_zero) {
+    const F a = u0 * inv_c, b = u1 * inv_c;
+    lo = vmax(lo, vmin(a, b));
+    hi = vmin(hi, vmax(a, b));
+  } else {
+    const bool below = u0 > F(0.0f);
+    const bool above = u1 < F(0.0f);
+    ok = !(below || above);
+  }
+  if (!s_zero) {
+    const F a = v0 * inv_s, b = v1 * inv_s;
+    lo = vmax(lo, vmin(a, b));
+    hi = vmin(hi, vmax(a, b));
+  } else {
+    const bool below = v0 > F(0.0f);
+    const bool above = v1 < F(0.0f);
+    ok = ok && !(below || above);
+  }
+  const bool meets = lo <= hi;
+  return ok && meets;
+}
+
+}  // namespace rast5d

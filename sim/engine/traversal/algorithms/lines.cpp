@@ -1,0 +1,248 @@
+// LINES (004_da3c211285527fac.txt §3-4): line samples in the lens instead of point samples.
+// The table is a line table (SampleTable.lines): sample s of a pixel is a screen point (x, y) and
+// a line direction (u, v) = (cos θ, sin θ) through the lens centre; consecutive lines with the same
+// screen point form a wagon wheel and share the lens-space setup (004 §3.1.1). For every pixel of
+// the triangle's bounds in the bin and every line, the analytic interval of the line inside the
+// triangle (lines/line_test.h) becomes a segment, shaded at its midpoint and offered to the line's
+// segment buffer (lines/segment_buffer.h). When the bin's triangles are done, end_bin() composites
+// each line (κ-weighted, 004 §3.1.2) into the bin's sample colours, which resolve() averages.
+// With pipeline.lines.tile_clip the triangle's h_i lens region of each screen tile (001 §4.2)
+// first tells which lines can meet the triangle there; the others skip the test (same image).
+//
+// Static triangles only (depth of field, 4D and in-focus 2D): motion blur needs point samples.
+// Not modelled for line samples: texturing, shading quads, per-sample depth export.
+// Counters: lines.*, ops.sample_inside (setups and tests), ops.sample_region (tile clip),
+// ops.tile and ops.setup (tile clip's h_i lines), ops.interp (segment shading), ops.segments.
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+#include "lines/line_test.h"
+#include "lines/segment_buffer.h"
+#include "setup/footprint.h"
+#include "tiletest/halfspace_lens.h"
+#include "traversal/traversal.h"
+
+namespace rast5d {
+namespace {
+
+template <class A>
+class Lines final : public Traversal {
+  using F = typename A::f32;
+  using D = typename A::f64;
+
+ public:
+  Lines(const Frame& f, ThreadState& ts) : f_(f), c_(ts.counters), buf_(ts.buffers) {
+    const RenderParams& p = f.p;
+    rules_.capacity = p.lines_buffer_size;
+    rules_.min_weight = static_cast<float>(p.lines_min_weight);
+    rules_.occlusion = p.lines_occlusion;
+    rules_.merge = p.lines_merge;
+    rules_.merge_depth = static_cast<float>(p.lines_merge_depth);
+    rules_.merge_color2 = static_cast<float>(p.lines_merge_color * p.lines_merge_color);
+    rules_.merge_gap = static_cast<float>(p.lines_merge_gap);
+  }
+
+  void rasterize(const TriSetup& tri, const BinRect& bin, bool charge_setup) override {
+    if (tri.moving)
+      throw std::invalid_argument("algorithm: 'lines' renders static triangles only (depth of field); triangle " +
+                                  std::to_string(tri.index) +
+                                  " moves during the shutter: motion blur needs point samples");
+    open_bin(bin);
+    const RenderParams& p = f_.p;
+    const int x0 = std::max(tri.bx0, bin.x0), x1 = std::min(tri.bx1, bin.x1);
+    const int y0 = std::max(tri.by0, bin.y0), y1 = std::min(tri.by1, bin.y1);
+    if (!p.lines_tile_clip) {
+      for (int py = y0; py < y1; ++py)
+        for (int px = x0; px < x1; ++px) pixel(tri, px, py, nullptr);
+      return;
+    }
+    std::uint64_t setup_ops = 0;
+    const Footprint fp = build_footprint<A>(tri, f_, false, setup_ops);
+    if (charge_setup) c_[Counter::ops_setup] += setup_ops;
+    const int T = p.tile_size;
+    for (int ty = (y0 / T) * T; ty < y1; ty += T)
+      for (int tx = (x0 / T) * T; tx < x1; tx += T) {
+        Boxes boxes;
+        bool clip = fp.h_valid && tri.defocused;
+        if (clip) {
+          ++c_[Counter::tile_visited];
+          tiletest::AxisSet sx, sy;
+          const bool any = tile_h_sets<A>(fp, tiletest::expand_lo(tx), tiletest::expand_hi(tx + T),
+                                          tiletest::expand_lo(ty), tiletest::expand_hi(ty + T), sx, sy,
+                                          c_[Counter::ops_tile]);
+          if (!any) {
+            ++c_[Counter::tile_culled_h];
+            for (int py = std::max(ty, y0); py < std::min(ty + T, y1); ++py)
+              for (int px = std::max(tx, x0); px < std::min(tx + T, x1); ++px)
+                c_[Counter::lines_culled_tile] += static_cast<std::uint64_t>(f_.table.spp());
+            continue;
+          }
+          ++c_[Counter::tile_accepted];
+          widen_boxes(sx, sy, boxes);
+        }
+        for (int py = std::max(ty, y0); py < std::min(ty + T, y1); ++py)
+          for (int px = std::max(tx, x0); px < std::min(tx + T, x1); ++px) pixel(tri, px, py, clip ? &boxes : nullptr);
+      }
+  }
+
+  void end_bin(const BinRect& bin) override {
+    if (!open_ || bin.x0 != bin_.x0 || bin.y0 != bin_.y0) return;
+    const int spp = f_.table.spp();
+    std::uint64_t ops = 0, steps = 0;
+    const F neg_near = F(f_.fc.neg_near);
+    for (int py = bin_.y0; py < bin_.y1; ++py)
+      for (int px = bin_.x0; px < bin_.x1; ++px)
+        for (int s = 0; s < spp; ++s) {
+          const std::size_t slot = buf_.slot(px, py, s);
+          std::vector<Segment>& segs = segs_[slot];
+          if (segs.empty()) continue;
+          float col[3];
+          ops += composite_line<F>(segs, neg_near, scratch_, col, steps);
+          float* dst = buf_.color(slot);
+          for (int ch = 0; ch < 3; ++ch) dst[ch] = col[ch];
+          segs.clear();
+        }
+    charge<A>(c_[Counter::ops_segments], ops);
+    c_[Counter::lines_composite_steps] += steps;
+    open_ = false;
+  }
+
+ private:
+  struct Boxes {
+    int n = 0;
+    float u0[4], u1[4], v0[4], v1[4];
+  };
+
+  void open_bin(const BinRect& bin) {
+    if (open_ && bin.x0 == bin_.x0 && bin.y0 == bin_.y0) return;
+    bin_ = bin;
+    open_ = true;
+    const std::size_t n = static_cast<std::size_t>(bin.x1 - bin.x0) * (bin.y1 - bin.y0) * f_.table.spp();
+    if (segs_.size() < n) segs_.resize(n);
+  }
+
+  // The uv-boxes of the tile (products of the u and v intervals), widened outwards so that float
+  // rounding never skips a line that meets the exact region.
+  void widen_boxes(const tiletest::AxisSet& sx, const tiletest::AxisSet& sy, Boxes& b) {
+    b.n = 0;
+    for (int i = 0; i < sx.n_intervals; ++i)
+      for (int j = 0; j < sy.n_intervals; ++j) {
+        const F e = F(kWiden);
+        b.u0[b.n] = raw(F(static_cast<float>(sx.iv_lo[i])) - e);
+        b.u1[b.n] = raw(F(static_cast<float>(sx.iv_hi[i])) + e);
+        b.v0[b.n] = raw(F(static_cast<float>(sy.iv_lo[j])) - e);
+        b.v1[b.n] = raw(F(static_cast<float>(sy.iv_hi[j])) + e);
+        ++b.n;
+        charge<A>(c_[Counter::ops_tile], cost::kLineBoxWiden);
+      }
+  }
+
+  void pixel(const TriSetup& tri, int px, int py, const Boxes* boxes) {
+    const PixelSamples ps = f_.table.pixel(px, py);
+    const int spp = f_.table.spp();
+    const F neg_near = F(f_.fc.neg_near);
+    const bool near_fn = tri.near_clipped;
+    const bool bfc = f_.p.backface_cull;
+    LinePoint<F> q;
+    bool have_q = false;
+    float qx = 0.0f, qy = 0.0f;
+    for (int s = 0; s < spp; ++s) {
+      const float c = ps.u[s], sn = ps.v[s];
+      if (boxes) {  // tile clip: does the line meet one of the tile's uv-boxes?
+        const bool cz = c == 0.0f, sz = sn == 0.0f;
+        const F ic = F(cz ? 0.0f : 1.0f / c), is = F(sz ? 0.0f : 1.0f / sn);  // per-line table constants
+        bool meets = false;
+        std::uint64_t box_ops = 0;
+        for (int k = 0; k < boxes->n && !meets; ++k) {
+          meets = line_meets_box(ic, is, cz, sz, F(boxes->u0[k]), F(boxes->u1[k]), F(boxes->v0[k]), F(boxes->v1[k]));
+          box_ops += cost::line_box_cost(cz, sz);
+        }
+        charge<A>(c_[Counter::ops_sample_region], box_ops);
+        if (!meets) {
+          ++c_[Counter::lines_culled_tile];
+          continue;
+        }
+      }
+      const float sx = static_cast<float>(px) + ps.x[s], sy = static_cast<float>(py) + ps.y[s];
+      if (!have_q || sx != qx || sy != qy) {  // a new wheel: its screen point's lens-space setup
+        line_point_setup(tri.X, tri.Y, tri.W, tri.cx, tri.cy, F(sx), F(sy), neg_near, q);
+        charge<A>(c_[Counter::ops_sample_inside], cost::kLinePointSetup);
+        ++c_[Counter::lines_point_setups];
+        have_q = true, qx = sx, qy = sy;
+      }
+      LineCoverage<F> cov;
+      const std::uint64_t test_ops = line_interval(q, F(c), F(sn), near_fn, bfc, cov);
+      charge<A>(c_[Counter::ops_sample_inside], test_ops);
+      ++c_[Counter::lines_tests];
+      for (int k = 0; k < cov.n; ++k) offer(tri, cov, cov.lo[k], cov.hi[k], buf_.slot(px, py, s));
+    }
+  }
+
+  // A segment [a, b] of the line: the heuristics, shading at the midpoint, the buffer.
+  void offer(const TriSetup& tri, const LineCoverage<F>& cov, float a, float b, std::size_t slot) {
+    ++c_[Counter::lines_segments];
+    const LineFns<F>& fn = cov.fn;
+    const F neg_near = F(f_.fc.neg_near);
+    std::uint64_t ops = cost::kSegNew;
+    Segment sg{};
+    sg.a = a, sg.b = b;
+    const F k = kappa(F(a), F(b));
+    sg.k = raw(k);
+    const bool small = k < F(rules_.min_weight);
+    const F za = line_depth(fn.s0, fn.sg, fn.d0, fn.dg, F(a), neg_near);
+    const F zb = line_depth(fn.s0, fn.sg, fn.d0, fn.dg, F(b), neg_near);
+    sg.zmin = raw(vmin(za, zb)), sg.zmax = raw(vmax(za, zb));
+    sg.s0 = raw(fn.s0), sg.sg = raw(fn.sg), sg.d0 = raw(fn.d0), sg.dg = raw(fn.dg);
+    if (small) {
+      charge<A>(c_[Counter::ops_segments], ops);
+      ++c_[Counter::lines_rejected_small];
+      return;
+    }
+    std::vector<Segment>& buf = segs_[slot];
+    if (rules_.occlusion && !segment_visible<F>(buf, sg, ops, c_)) {
+      charge<A>(c_[Counter::ops_segments], ops);
+      ++c_[Counter::lines_rejected_occluded];
+      return;
+    }
+    charge<A>(c_[Counter::ops_segments], ops);
+    ops = 0;
+    // Shade at the midpoint (ops.interp, as a covered point sample's depth and colour).
+    {
+      const F m = (F(a) + F(b)) * F(0.5f);
+      F z, col[3];
+      line_shade(fn, m, neg_near, tri.color, z, col);
+      sg.zmid = raw(z);
+      for (int ch = 0; ch < 3; ++ch) sg.col[ch] = raw(col[ch]);
+      charge<A>(c_[Counter::ops_interp], cost::kLineShade);
+    }
+    if (rules_.merge && segment_merge<F>(buf, sg, rules_, ops)) {
+      ++c_[Counter::lines_segments_merged];
+    } else {
+      segment_insert<F>(buf, sg, rules_.capacity, ops, c_);
+    }
+    charge<A>(c_[Counter::ops_segments], ops);
+  }
+
+  static constexpr float kWiden = 1e-4f;
+
+  const Frame& f_;
+  Counters& c_;
+  BinBuffers& buf_;
+  SegmentRules rules_;
+  BinRect bin_{};
+  bool open_ = false;
+  std::vector<std::vector<Segment>> segs_;
+  std::vector<float> scratch_;
+};
+
+}  // namespace
+
+RAST5D_REGISTER_TRAVERSAL("lines",
+                          "Line samples in the lens (004 §3-4): analytic line-triangle intervals, segment "
+                          "buffers with heuristics, κ-weighted composite; needs a line table "
+                          "(SampleTable.lines), static triangles only",
+                          false, Lines);
+
+}  // namespace rast5d

@@ -1,0 +1,198 @@
+"""Line samples (004_da3c211285527fac.txt §3-4; algorithm 'lines'): closed-form coverage of a
+defocused edge, agreement with point sampling (heuristics off, unlimited buffer), the tile-clipped
+path's image, documented == counted operations, and clear errors for wrong combinations."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import sim
+from models import Scene
+
+W, H = 24, 8
+
+
+def _quad(x0, x1, y0, y1, z, color=(1.0, 1.0, 1.0)):
+    a, b, c, d = (x0, y0, z), (x1, y0, z), (x1, y1, z), (x0, y1, z)
+    pos = np.array([[a, b, c], [a, c, d]], dtype=np.float64)
+    col = np.broadcast_to(np.asarray(color, dtype=np.float64), (2, 3, 3)).copy()
+    return pos, col
+
+
+def _scene(*quads):
+    pos = np.concatenate([q[0] for q in quads])
+    col = np.concatenate([q[1] for q in quads])
+    return Scene.from_arrays(pos, colors=col)
+
+
+def _lines_config(**lines):
+    base = {"buffer_size": 0, "min_weight": 0.0, "occlusion": False, "merge": False, "merge_depth": 0.0,
+            "merge_color": 0.0, "merge_gap": 0.0, "tile_clip": False}
+    base.update(lines)
+    return sim.PipelineConfig(algorithm="lines", threads=1, lines=base)
+
+
+def _kappa(p1, p2):
+    return 0.5 * (p2 * np.abs(p2) - p1 * np.abs(p1))
+
+
+def test_defocused_edge_matches_closed_form_per_line():
+    """A large white quad at w = 10 with its right edge at the image centre, focus 5, CoC 8 px at
+    infinity: the edge moves by u K (1 - F/w) = 4u px. A line (c, s) at screen x covers the lens
+    points with x < x_e + 4 p c; its κ-weighted coverage has a closed form, and the pixel is the
+    mean over its lines."""
+    cam = sim.Camera(width=W, height=H, focus_distance=5.0, coc_px=8.0)
+    scene = _scene(_quad(-500.0, 0.0, -500.0, 500.0, -10.0))
+    table = sim.SampleTable.lines(n_lines=8, seed=3)
+    img = sim.render(scene, cam, table, _lines_config(), timing=False).image
+    smp = table.samples("disk").astype(np.float64)
+    x_e, shift = W / 2.0, 8.0 * (1.0 - 5.0 / 10.0)
+    expect = np.zeros((H, W))
+    for py in range(H):
+        for px in range(W):
+            s = smp[py % table.period, px % table.period]
+            d = (px + s[:, 0] - x_e) / shift  # covered where p c > d
+            c = s[:, 2]
+            q = np.clip(d / c, -1.0, 1.0)
+            k = np.where(c > 0, _kappa(q, 1.0), _kappa(-1.0, q))
+            expect[py, px] = k.mean()
+    np.testing.assert_allclose(img[..., 0], expect, atol=2e-5)
+    # The wagon-wheel average over angles converges to the disk's area fraction (sanity of κ).
+    assert 0.0 < img[0, 0, 0] <= 1.0 and img[0, W - 1, 0] == 0.0
+
+
+def test_kappa_weights_are_unbiased_for_the_disk():
+    """Over uniform angles, the κ-weighted coverage of u > d equals the disk area with u > d."""
+    d = 0.3
+    theta = (np.arange(20000) + 0.5) / 20000 * np.pi
+    c = np.cos(theta)
+    q = np.clip(d / c, -1.0, 1.0)
+    k = np.where(c > 0, _kappa(q, 1.0), _kappa(-1.0, q))
+    area = (np.arccos(d) - d * np.sqrt(1 - d * d)) / np.pi
+    assert abs(k.mean() - area) < 1e-4
+
+
+def _layered_scene():
+    return _scene(
+        _quad(-500.0, 500.0, -500.0, 500.0, -12.0, (0.2, 0.4, 0.9)),   # background, behind focus
+        _quad(-0.6, 0.35, -0.3, 0.5, -3.0, (0.9, 0.3, 0.1)),         # in front of focus
+        _quad(0.1, 1.2, -0.6, 0.2, -5.5, (0.2, 0.9, 0.3)),           # near focus
+    )
+
+
+@pytest.mark.parametrize("n_lines", [64])
+def test_lines_agree_with_point_sampling(n_lines):
+    """Heuristics off and an unlimited buffer: an unbiased estimate. The image agrees with 1024
+    stratified points (brute force) within Monte Carlo error."""
+    cam = sim.Camera(width=W, height=16, focus_distance=5.0, coc_px=6.0, fov_y_deg=30.0)
+    scene = _layered_scene()
+    lines = sim.render(scene, cam, sim.SampleTable.lines(n_lines=n_lines, seed=1), _lines_config(), timing=False)
+    points = sim.render(scene, cam, sim.SampleTable.stratified(spp=1024, seed=5, time=False),
+                        sim.PipelineConfig(algorithm="bruteforce", threads=1), timing=False)
+    diff = lines.image - points.image
+    assert np.abs(diff.mean()) < 2e-3
+    assert np.sqrt((diff ** 2).mean()) < 0.02
+    assert np.abs(diff).max() < 0.1
+    assert lines.flat_stats["lines.tests"] > 0 and lines.flat_stats["lines.segments"] > 0
+
+
+def test_occlusion_heuristic_keeps_the_image():
+    """The occlusion test removes only fully hidden segments: same image up to float rounding."""
+    cam = sim.Camera(width=W, height=16, focus_distance=5.0, coc_px=6.0, fov_y_deg=30.0)
+    scene = _layered_scene()
+    table = sim.SampleTable.lines(n_lines=16, seed=2)
+    a = sim.render(scene, cam, table, _lines_config(), timing=False)
+    b = sim.render(scene, cam, table, _lines_config(occlusion=True), timing=False)
+    np.testing.assert_allclose(a.image, b.image, atol=1e-5)
+    assert b.flat_stats["lines.rejected_occluded"] + b.flat_stats["lines.segments_replaced"] > 0
+
+
+def test_tile_clip_same_image_fewer_tests():
+    cam = sim.Camera(width=32, height=24, focus_distance=5.0, coc_px=10.0, fov_y_deg=30.0)
+    scene = _layered_scene()
+    table = sim.SampleTable.lines(n_lines=16, seed=4)
+    cfg = sim.PipelineConfig(algorithm="lines", threads=1)
+    a = sim.render(scene, cam, table, cfg, timing=False)
+    b = sim.render(scene, cam, table, cfg.replace(lines={**cfg.lines, "tile_clip": True}), timing=False)
+    assert np.array_equal(a.image, b.image)
+    sa, sb = a.flat_stats, b.flat_stats
+    assert sb["lines.culled_tile"] > 0
+    assert sb["lines.tests"] + sb["lines.culled_tile"] == sa["lines.tests"]
+    assert sb["lines.segments"] == sa["lines.segments"]
+
+
+@pytest.mark.parametrize("variant", ["default", "small_buffer", "tile_clip", "near"])
+def test_documented_costs_equal_counted(variant):
+    """Every counter, operations included, is the same on the fast path (documented costs) and
+    the counting scalar path."""
+    cam = sim.Camera(width=W, height=16, focus_distance=5.0, coc_px=6.0, fov_y_deg=30.0)
+    scene = _layered_scene()
+    lines = dict(sim.PipelineConfig().lines)
+    if variant == "small_buffer":
+        lines.update(buffer_size=1, merge=False)
+    if variant == "tile_clip":
+        lines.update(tile_clip=True)
+    if variant == "near":  # a floor crossing the near plane: the near function of the interval
+        pos = np.array([[[-5, -1, 1.0], [5, -1, 1.0], [0, -1, -20.0]]])
+        scene = Scene.concat(scene, Scene.from_arrays(pos, colors=(0.7, 0.7, 0.2)))
+    table = sim.SampleTable.lines(n_lines=8, seed=7)
+    cfg = sim.PipelineConfig(algorithm="lines", threads=1, lines=lines)
+    doc = sim.render(scene, cam, table, cfg, timing=False)
+    exact = sim.render(scene, cam, table, cfg.replace(op_count="exact"), timing=False)
+    assert np.array_equal(doc.image, exact.image)
+    keys = [k for k in doc.flat_stats if k.startswith(("ops.", "lines.", "tile."))]
+    assert {k: doc.flat_stats[k] for k in keys} == {k: exact.flat_stats[k] for k in keys}
+    if variant == "small_buffer":
+        assert doc.flat_stats["lines.overflows"] > 0
+
+
+def test_thread_count_does_not_change_results():
+    cam = sim.Camera(width=80, height=72, focus_distance=5.0, coc_px=6.0, fov_y_deg=30.0)
+    scene = _layered_scene()
+    table = sim.SampleTable.lines(n_lines=8, seed=7)
+    cfg = sim.PipelineConfig(algorithm="lines", threads=1)
+    a = sim.render(scene, cam, table, cfg, timing=False)
+    b = sim.render(scene, cam, table, cfg.replace(threads=2), timing=False)
+    assert np.array_equal(a.image, b.image)
+    assert {k: v for k, v in a.flat_stats.items() if k != "time.wall_s"} == \
+        {k: v for k, v in b.flat_stats.items() if k != "time.wall_s"}
+
+
+def test_wrong_combinations_are_clear_errors():
+    cam = sim.Camera(width=8, height=8, coc_px=4.0)
+    scene = _scene(_quad(-1, 1, -1, 1, -6.0))
+    lines_table = sim.SampleTable.lines(n_lines=4)
+    with pytest.raises(sim.ConfigError, match="algorithm.*line-sample table"):
+        sim.render(scene, cam, lines_table, sim.PipelineConfig(algorithm="bruteforce"))
+    with pytest.raises(sim.ConfigError, match="algorithm: 'lines' needs a line-sample table"):
+        sim.render(scene, cam, sim.SampleTable.stratified(spp=4), sim.PipelineConfig(algorithm="lines"))
+    moving = Scene.from_arrays(scene.positions, positions_t1=scene.positions + 0.1)
+    with pytest.raises(sim.ConfigError, match="motion blur needs point samples"):
+        sim.render(moving, cam, lines_table, sim.PipelineConfig(algorithm="lines"))
+    with pytest.raises(sim.ConfigError, match="lens_shape"):
+        sim.render(scene, sim.Camera(width=8, height=8, coc_px=4.0, lens="square"), lines_table,
+                   sim.PipelineConfig(algorithm="lines"))
+    with pytest.raises(sim.ConfigError, match="shading"):
+        sim.render(scene, cam, lines_table, sim.PipelineConfig(algorithm="lines", shading="msaa"))
+    with pytest.raises(sim.ConfigError, match="buffer_size"):
+        sim.PipelineConfig(algorithm="lines", lines={**sim.PipelineConfig().lines, "buffer_size": -1})
+    with pytest.raises(sim.ConfigError, match="min_weight"):
+        sim.PipelineConfig(algorithm="lines", lines={**sim.PipelineConfig().lines, "min_weight": 2.0})
+    with pytest.raises(ValueError, match="n_lines"):
+        sim.SampleTable.lines(n_lines=6, wheel=4)
+    with pytest.raises(ValueError, match="n_lines"):
+        sim.SampleTable.lines(n_lines=0)
+
+
+def test_yaml_lines_config(tmp_path):
+    from experiments.config import build, load_config
+
+    path = tmp_path / "c.yaml"
+    path.write_text("scene: {name: spot_wall}\ncamera: {width: 16, height: 16, coc_px: 8}\n"
+                    "samples: {kind: lines, n_lines: 8}\npipeline: {algorithm: lines}\n")
+    scene, camera, table, pipeline = build(load_config(path))
+    assert table.kind == "lines" and table.spp == 8 and pipeline.algorithm == "lines"
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("scene: {name: spot_wall}\nsamples: {kind: stratified, n_lines: 8}\n")
+    with pytest.raises(ValueError, match="n_lines"):
+        build(load_config(bad))
