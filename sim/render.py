@@ -150,6 +150,10 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     if is_lines and p1 is not p0 and not np.array_equal(p0, p1):
         raise ConfigError("algorithm: 'lines' renders static scenes only (depth of field); the scene moves "
                           "during the shutter (positions_t1): motion blur needs point samples")
+    lod_report = getattr(scene, "lod_report", None)
+    if config.lod["enabled"] and lod_report is None:
+        raise ConfigError("pipeline.lod: level of detail is applied to the scene before the render: "
+                          "scene, report = models.lod.apply(scene, camera, config.lod) (the rast5d configs do it)")
     samples = table.samples(camera.lens)
     spp = int(samples.shape[2])
     grid = config.resolved_lens_grid(spp)
@@ -195,13 +199,15 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     except ValueError as e:  # invalid_argument from the engine: name it as a config error
         raise ConfigError(str(e)) from None
     wall = time.perf_counter() - t0
-    flat = flat_stats(out["counters"], {"time.wall_s": wall})
+    flat = flat_stats(out["counters"], {"time.wall_s": wall, **(lod_report.stats if lod_report else {})})
     records = out.get("timing_records")
     if records is not None:
         flat = dict(sorted({**flat, **timing_estimate(records, hardware)}.items()))
     desc = {"camera": camera.describe(), "pipeline": config.describe(),
             "table": table.describe() if hasattr(table, "describe") else {}, "lens_grid": grid,
             "hardware": hardware_desc}
+    if lod_report is not None:
+        desc["lod"] = lod_report.objects
     return Result(image=out["image"], flat_stats=flat, config=desc,
                   sample_depth=out.get("sample_depth"), sample_triangle=out.get("sample_triangle"),
                   timing_records=records)

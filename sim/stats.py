@@ -60,12 +60,22 @@ MEASURED = {
     "time.wall_s": ("s", "Wall-clock time of the engine call (setup, traversal, resolve)"),
 }
 
+# Blur-based level of detail (models/lod.py, pipeline.lod): figures of the scene handed to the engine.
+LOD = {
+    "lod.triangles_in": ("triangles", "Triangles of the scene before level of detail"),
+    "lod.triangles": ("triangles", "Triangles submitted after level of detail"),
+    "lod.triangles_saved": ("triangles", "lod.triangles_in - lod.triangles"),
+    "lod.objects_simplified": ("objects", "Objects (connected components) rendered at a level > 0"),
+    **{f"lod.triangles_level{k}": ("triangles", f"Triangles submitted from objects at level {k}") for k in range(4)},
+}
+
 
 def counter_docs() -> dict[str, tuple[str, str]]:
     """{name: (unit, description)} for every raw counter, derived figure and measured figure."""
     docs = dict(_core.counter_docs())
     docs.update(derived_docs(DERIVED))
     docs.update(MEASURED)
+    docs.update(LOD)
     docs.update(timing_docs())  # the timing model's figures (docs/timing.md)
     return docs
 

@@ -69,4 +69,8 @@ def build(config: RenderConfig):
                 raise ConfigError(f"samples.{key}: only for the lines kind, got kind={t.kind!r}")
         table = sim.SampleTable.create(t.kind, **params)
     pipeline = sim.PipelineConfig(**config.pipeline.model_dump())
+    if pipeline.lod["enabled"]:  # blur-based level of detail (models/lod.py)
+        from models import lod
+
+        scene, _ = lod.apply(scene, camera, pipeline.lod, textured=pipeline.texture_count > 0)
     return scene, camera, table, pipeline

@@ -26,6 +26,8 @@ def reference_config(config):
     d["samples"] = {"kind": m.reference_kind, "spp": m.reference_spp, "seed": REFERENCE_SEED,
                     "period": config.samples.period, "lens": config.samples.lens, "time": config.samples.time}
     d["pipeline"].update(algorithm=m.reference_algorithm, count_optimal=False, lens_grid="auto")
+    if "lod" in d["pipeline"]:  # the reference renders the full scene
+        d["pipeline"]["lod"] = {**d["pipeline"]["lod"], "enabled": False}
     d["outputs"] = {}
     return RenderConfig.model_validate(d)
 

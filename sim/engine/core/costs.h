@@ -119,6 +119,7 @@ inline constexpr std::uint64_t line_box_cost(bool c_zero, bool s_zero) {
   return (c_zero ? 2 : 6) + (s_zero ? 2 : 6) + 1;
 }
 inline constexpr std::uint64_t kLineBoxWiden = 4;  // per uv-box and tile: 2 SUB, 2 ADD
+inline constexpr std::uint64_t kLineBoxCentre = 4;  // per uv-box and tile: 4 CMP (does it hold the lens centre?)
 // Segment shading at its midpoint (ops.interp): ADD + MUL midpoint, 3 MADD e_i, 2 ADD sum,
 // MADD det, RCP + MUL + MADD depth, RCP + 3 MUL barycentrics, 3 x (MUL + 2 MADD) colour.
 inline constexpr std::uint64_t kLineShade = 2 + 3 + 2 + 1 + 3 + 4 + 9;  // 24

@@ -83,7 +83,8 @@ class Lines final : public Traversal {
           widen_boxes(sx, sy, boxes);
         }
         for (int py = std::max(ty, y0); py < std::min(ty + T, y1); ++py)
-          for (int px = std::max(tx, x0); px < std::min(tx + T, x1); ++px) pixel(tri, px, py, clip ? &boxes : nullptr);
+          for (int px = std::max(tx, x0); px < std::min(tx + T, x1); ++px)
+            pixel(tri, px, py, clip && !boxes.all_lines ? &boxes : nullptr);
       }
   }
 
@@ -112,6 +113,7 @@ class Lines final : public Traversal {
  private:
   struct Boxes {
     int n = 0;
+    bool all_lines = false;  // a box holds the lens centre
     float u0[4], u1[4], v0[4], v1[4];
   };
 
@@ -134,8 +136,12 @@ class Lines final : public Traversal {
         b.u1[b.n] = raw(F(static_cast<float>(sx.iv_hi[i])) + e);
         b.v0[b.n] = raw(F(static_cast<float>(sy.iv_lo[j])) - e);
         b.v1[b.n] = raw(F(static_cast<float>(sy.iv_hi[j])) + e);
+        // Every line passes through the lens centre: a box holding it meets every line.
+        const F z(0.0f);
+        const bool l = F(b.u0[b.n]) <= z, r = F(b.u1[b.n]) >= z, d = F(b.v0[b.n]) <= z, u = F(b.v1[b.n]) >= z;
+        if (l && r && d && u) b.all_lines = true;
         ++b.n;
-        charge<A>(c_[Counter::ops_tile], cost::kLineBoxWiden);
+        charge<A>(c_[Counter::ops_tile], cost::kLineBoxWiden + cost::kLineBoxCentre);
       }
   }
 
