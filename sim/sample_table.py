@@ -98,6 +98,11 @@ class SampleTable:
         return list(_REFERENCE_GENERATORS) if reference else list(_GENERATORS)
 
     @classmethod
+    def kinds(cls) -> list[str]:
+        """Every table kind a config may name: the generators, then 'lines' (SampleTable.lines)."""
+        return cls.generators() + ["lines"]
+
+    @classmethod
     def create(cls, name: str, **params) -> "SampleTable":
         """Build a table with generator `name`. Common params: spp (required, 1..4096), seed=0,
         period=32 (1..256), lens=True, time=True; some generators take more (see their docs)."""

@@ -124,6 +124,6 @@ def test_sample_kinds_come_from_the_generator_registry():
     import experiments.config.schema as schema
     import typing
 
-    assert typing.get_args(schema.SamplesSpec.model_fields["kind"].annotation) == tuple(sim.SampleTable.generators())
+    assert typing.get_args(schema.SamplesSpec.model_fields["kind"].annotation) == tuple(sim.SampleTable.kinds())
     assert typing.get_args(schema.MetricsSpec.model_fields["reference_kind"].annotation) == (
         "random", "stratified", "sobol")

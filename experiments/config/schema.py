@@ -22,7 +22,7 @@ REPO = Path(__file__).resolve().parents[2]
 # table's generators (all of them, and those that may render metric references).
 LensShapeName = Literal[tuple(sim.lens.LENS_SHAPES)]
 QueryModeName = Literal[tuple(sim.intervals.query_modes())]
-SampleKind = Literal[tuple(sim.SampleTable.generators()) + ("lines",)]  # lines: SampleTable.lines
+SampleKind = Literal[tuple(sim.SampleTable.kinds())]  # generators and lines (SampleTable.lines)
 ReferenceKind = Literal[tuple(sim.SampleTable.generators(reference=True))]
 
 

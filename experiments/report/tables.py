@@ -364,3 +364,202 @@ def multiview_wide(df, config) -> list[str]:
                          PAPER_MULTIVIEW.get(int(views), "")])
     return md_table(["CoC per view", "views", "spp", "invocations", "vs 1 view", "lanes incl. helpers", "vs 1 view",
                      "cache hit rate", "supersampled shades", "vs 1 view", "paper"], rows)
+
+
+# ---- line samples, level of detail and the methods page (configs/paper/methods.yaml) -------------
+
+def _col(df, name, default=math.nan):
+    return df[name] if name in df.columns else [default] * len(df)
+
+
+def method_label(row) -> str:
+    """'stratified 64 / tile', 'lines 16', 'lines 16 clip', with ' +LoD' when level of detail is on."""
+    get = row.get if hasattr(row, "get") else (lambda k, d=None: d)
+    if get("pipeline.algorithm") == "lines":
+        n = get("samples.n_lines")
+        s = f"lines {int(n) if n == n and n is not None else '?'}"
+        if str(get("pipeline.lines.tile_clip")) == "True":
+            s += " clip"
+    else:
+        s = f"{get('samples.kind')} {int(get('samples.spp'))} / {get('pipeline.algorithm')}"
+    if str(get("pipeline.lod.enabled")) == "True":
+        s += " +LoD"
+    return s
+
+
+def _work(r) -> float:
+    """Every counted operation: ops.total + ops.interp + ops.segments (the line samples' buffers and
+    composite, and every method's depth and colour interpolation)."""
+    seg = r.get("ops.segments", 0.0)
+    return float(r["ops.total"]) + float(r.get("ops.interp", 0.0)) + (0.0 if seg != seg else float(seg))
+
+
+_T95 = {1: 12.71, 2: 4.30, 3: 3.18, 4: 2.78, 5: 2.57, 6: 2.45, 7: 2.36, 8: 2.31, 9: 2.26, 10: 2.23}
+
+
+def _fit_alpha(x, y):
+    """Least squares log y = c - alpha log x: (alpha, 95% half-width, n); half-width nan with n < 3."""
+    x, y = np.log(np.asarray(x, float)), np.log(np.asarray(y, float))
+    n = len(x)
+    if n < 2:
+        return math.nan, math.nan, n
+    slope, icpt = np.polyfit(x, y, 1)
+    if n < 3:
+        return -float(slope), math.nan, n
+    resid = y - (slope * x + icpt)
+    se = math.sqrt(float(np.sum(resid ** 2)) / (n - 2) / float(np.sum((x - x.mean()) ** 2)))
+    return -float(slope), _T95.get(n - 2, 2.0) * se, n
+
+
+def _families(sub):
+    """(family name, rows) of the methods whose error falls with work: points per (kind, algorithm)
+    and lines (no LoD, no clip)."""
+    out = []
+    no_lod = sub[[str(v) != "True" for v in _col(sub, "pipeline.lod.enabled", False)]]
+    pts = no_lod[no_lod["pipeline.algorithm"] != "lines"]
+    for (kind, algo), g in pts.groupby(["samples.kind", "pipeline.algorithm"]):
+        if g["samples.spp"].nunique() >= 2:
+            out.append((f"points {kind} / {algo}", g))
+    ln = no_lod[(no_lod["pipeline.algorithm"] == "lines")
+                & [str(v) != "True" for v in _col(no_lod, "pipeline.lines.tile_clip", False)]]
+    if len(ln) >= 2:
+        out.append(("lines", ln))
+    return out
+
+
+@named_table("methods_table")
+def methods_table(df, config) -> list[str]:
+    """Scene x CoC x method: work, estimated cycles, wall time, RMSE and FLIP."""
+    df = _ok(df)
+    rows = []
+    for s in _scenes(df):
+        for coc in sorted(df[df["scene.name"] == s]["camera.coc_px"].unique()):
+            sub = df[(df["scene.name"] == s) & (df["camera.coc_px"] == coc)]
+            recs = sorted((r for _, r in sub.iterrows()), key=lambda r: (method_label(r).startswith("lines"), _work(r)))
+            for r in recs:
+                rows.append([s, f"{coc:g}", method_label(r), f"{_work(r):.3g}", f"{float(r['ops.total']):.3g}",
+                             fmt(r.get("timing.cycles", math.nan), "{:.3g}"), f"{float(r['time.wall_s']):.2f}",
+                             f"{float(r['metric.rmse']):.4f}", fmt(r.get("metric.flip", math.nan), "{:.4f}")])
+    return md_table(["scene", "CoC", "method", "ops (all)", "ops.total", "est. cycles", "wall [s]", "RMSE", "FLIP"], rows)
+
+
+@named_table("methods_alpha")
+def methods_alpha(df, config) -> list[str]:
+    """alpha in RMSE ∝ work^-alpha per method family, with a 95% confidence interval (t, n - 2 dof)."""
+    df = _ok(df).dropna(subset=["metric.rmse"])
+    rows = []
+    for s in _scenes(df):
+        for coc in sorted(df[df["scene.name"] == s]["camera.coc_px"].unique()):
+            sub = df[(df["scene.name"] == s) & (df["camera.coc_px"] == coc)]
+            for fam, g in _families(sub):
+                work = [_work(r) for _, r in g.iterrows()]
+                a, hw, n = _fit_alpha(work, g["metric.rmse"].to_numpy(float))
+                ci = "" if hw != hw else f"[{a - hw:.2f}, {a + hw:.2f}]"
+                rows.append([s, f"{coc:g}", fam, f"{a:.2f}", ci, str(n)])
+    return md_table(["scene", "CoC", "method family", "alpha (RMSE ∝ ops^-alpha)", "95% CI", "points"], rows)
+
+
+def _interp_work(g, target):
+    """Work a point-sample family needs to reach RMSE `target` (log-log interpolation between the two
+    bracketing points; extrapolated along the last segment), or nan."""
+    pts = sorted(((_work(r), float(r["metric.rmse"])) for _, r in g.iterrows()), key=lambda p: p[0])
+    if len(pts) < 2:
+        return math.nan
+    for (w0, e0), (w1, e1) in zip(pts, pts[1:]):
+        if min(e0, e1) <= target <= max(e0, e1) or (w1, e1) == pts[-1]:
+            if e0 == e1:
+                return w0
+            t = (math.log(target) - math.log(e0)) / (math.log(e1) - math.log(e0))
+            return math.exp(math.log(w0) + t * (math.log(w1) - math.log(w0)))
+    return math.nan
+
+
+@named_table("methods_claim")
+def methods_claim(df, config) -> list[str]:
+    """004's claim, 16 lines against 256 points (4-5x faster at better quality), on our scenes."""
+    df = _ok(df)
+    rows = []
+    for s in _scenes(df):
+        for coc in sorted(df[df["scene.name"] == s]["camera.coc_px"].unique()):
+            sub = df[(df["scene.name"] == s) & (df["camera.coc_px"] == coc)
+                     & [str(v) != "True" for v in _col(df, "pipeline.lod.enabled", False)]]
+            ln = sub[(sub["pipeline.algorithm"] == "lines") & (_col(sub, "samples.n_lines") == 16)
+                     & [str(v) != "True" for v in _col(sub, "pipeline.lines.tile_clip", False)]]
+            tile = sub[(sub["pipeline.algorithm"] == "tile") & (sub["samples.kind"] == "stratified")]
+            bf = sub[(sub["pipeline.algorithm"] == "bruteforce") & (sub["samples.kind"] == "stratified")]
+            p256 = tile[tile["samples.spp"] == 256]
+            if not len(ln) or not len(p256):
+                continue
+            l, p = ln.iloc[0], p256.iloc[0]
+            lw, pw = _work(l), _work(p)
+            eq = _interp_work(tile, float(l["metric.rmse"]))
+            # BRUTEFORCE's work is linear in spp (its sample loop): scale its 16-spp point to 256.
+            bf256 = _work(bf[bf["samples.spp"] == 16].iloc[0]) * 16 if len(bf[bf["samples.spp"] == 16]) else math.nan
+            rows.append([s, f"{coc:g}", f"{float(l['metric.rmse']):.4f}", f"{float(p['metric.rmse']):.4f}",
+                         f"{pw / lw:.2f}", f"{bf256 / lw:.2f}", f"{eq / lw:.2f}",
+                         f"{float(p['time.wall_s']) / float(l['time.wall_s']):.2f}",
+                         fmt(l.get("metric.flip", math.nan), "{:.4f}"), fmt(p.get("metric.flip", math.nan), "{:.4f}")])
+    rows.append(["**004 (GTX 580, 6 scenes)**", "", "lower noise", "", "", "4-5 (fps, naive point sampler)", "",
+                 "4.2-4.8", "", ""])
+    return md_table(["scene", "CoC", "RMSE 16 lines", "RMSE 256 pts", "ops 256 pts (tile) / 16 lines",
+                     "ops 256 pts (bruteforce) / 16 lines", "ops at equal RMSE (tile) / 16 lines",
+                     "wall 256 pts (tile) / 16 lines", "FLIP 16 lines", "FLIP 256 pts"], rows)
+
+
+@named_table("methods_lod")
+def methods_lod(df, config) -> list[str]:
+    """Level of detail: work saved and the FLIP increase, per scene, CoC and method."""
+    df = _ok(df)
+    on = df[[str(v) == "True" for v in _col(df, "pipeline.lod.enabled", False)]]
+    rows = []
+    for _, r in on.iterrows():
+        keys = {"scene.name": r["scene.name"], "camera.coc_px": r["camera.coc_px"],
+                "pipeline.algorithm": r["pipeline.algorithm"], "samples.kind": r["samples.kind"],
+                "samples.spp": r["samples.spp"]}
+        base = df[[str(v) != "True" for v in _col(df, "pipeline.lod.enabled", False)]]
+        for k, v in keys.items():
+            base = base[base[k] == v]
+        if "pipeline.lines.tile_clip" in df.columns:
+            base = base[base["pipeline.lines.tile_clip"] == r["pipeline.lines.tile_clip"]]
+        if not len(base):
+            continue
+        b = base.iloc[0]
+        saved = 1.0 - _work(r) / _work(b)
+        df_ = float(r.get("metric.flip", math.nan)) - float(b.get("metric.flip", math.nan))
+        rows.append([r["scene.name"], f"{r['camera.coc_px']:g}", method_label(b),
+                     f"{int(r.get('lod.triangles_in', 0)):,} → {int(r.get('lod.triangles', 0)):,}",
+                     f"{100 * saved:.0f}%", fmt(b.get("metric.flip", math.nan), "{:.4f}"),
+                     fmt(r.get("metric.flip", math.nan), "{:.4f}"), f"{df_:+.4f}"])
+    return md_table(["scene", "CoC", "method", "triangles", "ops saved", "FLIP without", "FLIP with LoD",
+                     "FLIP increase"], rows)
+
+
+@named_table("methods_segments")
+def methods_segments(df, config) -> list[str]:
+    """Segment-buffer statistics by CoC, and what the tile clip saved."""
+    df = _ok(df)
+    ln = df[(df["pipeline.algorithm"] == "lines") & [str(v) != "True" for v in _col(df, "pipeline.lod.enabled", False)]]
+    rows = []
+    for s in _scenes(ln):
+        for coc in sorted(ln[ln["scene.name"] == s]["camera.coc_px"].unique()):
+            sub = ln[(ln["scene.name"] == s) & (ln["camera.coc_px"] == coc)]
+            for n in sorted(sub["samples.n_lines"].dropna().unique()):
+                g = sub[sub["samples.n_lines"] == n]
+                off = g[[str(v) != "True" for v in _col(g, "pipeline.lines.tile_clip", False)]]
+                on = g[[str(v) == "True" for v in _col(g, "pipeline.lines.tile_clip", False)]]
+                if not len(off):
+                    continue
+                r = off.iloc[0]
+                seg = max(float(r["lines.segments"]), 1.0)
+                clip = ""
+                if len(on):
+                    c = on.iloc[0]
+                    culled = float(c["lines.culled_tile"]) / max(float(c["lines.tests"]) + float(c["lines.culled_tile"]), 1)
+                    clip = f"{100 * culled:.0f}% tests skipped, ops {_work(c) / _work(r):.2f}x"
+                rows.append([s, f"{coc:g}", str(int(n)), f"{float(r['lines.tests']):.3g}", f"{seg:.3g}",
+                             f"{100 * float(r['lines.overflows']) / seg:.1f}%",
+                             f"{100 * float(r['lines.segments_merged']) / seg:.1f}%",
+                             f"{100 * float(r['lines.rejected_occluded']) / seg:.1f}%",
+                             f"{100 * float(r['lines.rejected_small']) / seg:.1f}%", clip])
+    return md_table(["scene", "CoC", "lines", "line tests", "segments", "overflow", "merged", "occluded", "too small",
+                     "tile clip"], rows)

@@ -113,11 +113,9 @@ inline constexpr std::uint64_t line_interval_cost(int n_fns, int n_flat) {
   return 10 + (n_fns == 5 ? 2 : 0) + 5 * static_cast<std::uint64_t>(n_fns - n_flat) +
          2 * static_cast<std::uint64_t>(n_flat) + 2;
 }
-// Line vs widened uv-box: per axis with a non-zero direction 2 MUL, 2 MIN, 2 MAX; on an axis 2 CMP;
-// 1 CMP for the range.
-inline constexpr std::uint64_t line_box_cost(bool c_zero, bool s_zero) {
-  return (c_zero ? 2 : 6) + (s_zero ? 2 : 6) + 1;
-}
+// Tile clip: per uv-box and tile the pseudo-angle interval of its corners (data dependent, counted
+// in lines/line_test.h box_angles()); per line and box tested 2 CMP against the interval.
+inline constexpr std::uint64_t kLineAngleTest = 2;
 inline constexpr std::uint64_t kLineBoxWiden = 4;  // per uv-box and tile: 2 SUB, 2 ADD
 inline constexpr std::uint64_t kLineBoxCentre = 4;  // per uv-box and tile: 4 CMP (does it hold the lens centre?)
 // Segment shading at its midpoint (ops.interp): ADD + MUL midpoint, 3 MADD e_i, 2 ADD sum,

@@ -156,34 +156,53 @@ inline F kappa(F p1, F p2) {
   return (p2 * vabs(p2) - p1 * vabs(p1)) * F(0.5f);
 }
 
-// Does the line (c, s) through the lens centre meet the (already widened) uv-box
-// [u0, u1] x [v0, v1]? The p range of the box on the line, slab by slab, with 1/c and 1/s per line
-// (c_zero / s_zero: the line lies on that axis, so the box must contain 0 on it).
-// Cost: line_box_cost(c_zero, s_zero).
+// The undirected direction of (x, y) as a pseudo-angle in [0, 2) ("diamond angle": monotone in
+// the angle θ mod π, 0 along +u, 1 along +v), and its shifted form in [1, 3) (values below 1 + 2),
+// which is contiguous across θ = 0 instead of θ = π/2. Line directions are table constants
+// (computed free, like 1/c); for box corners the cost is counted: pseudo_angle() returns its ops.
 template <class F>
-inline bool line_meets_box(F inv_c, F inv_s, bool c_zero, bool s_zero, F u0, F u1, F v0, F v1) {
-  F lo = F(-1.0f), hi = F(1.0f);
-  bool ok = true;
-  if (!c_zero) {
-    const F a = u0 * inv_c, b = u1 * inv_c;
-    lo = vmax(lo, vmin(a, b));
-    hi = vmin(hi, vmax(a, b));
+inline std::uint64_t pseudo_angle(F x, F y, F& a) {
+  std::uint64_t ops = 1;
+  if (y < F(0.0f)) x = -x, y = -y;  // fold: (x, y) and (-x, -y) are one line direction
+  const bool right = x >= F(0.0f);
+  ++ops;
+  if (right) {
+    a = y * rcp(x + y);  // [0, 1]: ADD, RCP, MUL
+    ops += 3;
   } else {
-    const bool below = u0 > F(0.0f);
-    const bool above = u1 < F(0.0f);
-    ok = !(below || above);
+    a = F(1.0f) - x * rcp(y - x);  // (1, 2]: SUB, RCP, MUL, SUB
+    ops += 4;
   }
-  if (!s_zero) {
-    const F a = v0 * inv_s, b = v1 * inv_s;
-    lo = vmax(lo, vmin(a, b));
-    hi = vmin(hi, vmax(a, b));
-  } else {
-    const bool below = v0 > F(0.0f);
-    const bool above = v1 < F(0.0f);
-    ok = ok && !(below || above);
-  }
-  const bool meets = lo <= hi;
-  return ok && meets;
+  const bool wrap = a >= F(2.0f);  // (-1, 0) folds to direction 0
+  ++ops;
+  if (wrap) a = a - F(2.0f), ++ops;
+  return ops;
 }
 
+inline constexpr float kAngleMargin = 1e-5f;
+
+// The pseudo-angle interval of the lines through the lens centre that meet the (widened) uv-box
+// [u0, u1] x [v0, v1], which must not hold the centre: the span of its corners' directions, in the
+// shifted form when the box touches the u axis. Cost: returned.
+template <class F>
+inline std::uint64_t box_angles(F u0, F u1, F v0, F v1, F& lo, F& hi, bool& shifted) {
+  std::uint64_t ops = 2;
+  const bool below = v0 <= F(0.0f), above = v1 >= F(0.0f);
+  shifted = below && above;
+  const F us[2] = {u0, u1}, vs[2] = {v0, v1};
+  lo = F(4.0f), hi = F(-1.0f);
+  for (int i = 0; i < 2; ++i)
+    for (int j = 0; j < 2; ++j) {
+      F a;
+      ops += pseudo_angle(us[i], vs[j], a);
+      if (shifted) {
+        ++ops;
+        if (a < F(1.0f)) a = a + F(2.0f), ++ops;
+      }
+      lo = vmin(lo, a), hi = vmax(hi, a);
+      ops += 2;
+    }
+  lo = lo - F(kAngleMargin), hi = hi + F(kAngleMargin);
+  return ops + 2;
+}
 }  // namespace rast5d

@@ -114,7 +114,8 @@ class Lines final : public Traversal {
   struct Boxes {
     int n = 0;
     bool all_lines = false;  // a box holds the lens centre
-    float u0[4], u1[4], v0[4], v1[4];
+    float lo[4], hi[4];      // pseudo-angle interval of the lines meeting each box
+    bool shifted[4];
   };
 
   void open_bin(const BinRect& bin) {
@@ -126,22 +127,29 @@ class Lines final : public Traversal {
   }
 
   // The uv-boxes of the tile (products of the u and v intervals), widened outwards so that float
-  // rounding never skips a line that meets the exact region.
+  // rounding never skips a line that meets the exact region, as intervals of line directions.
   void widen_boxes(const tiletest::AxisSet& sx, const tiletest::AxisSet& sy, Boxes& b) {
     b.n = 0;
+    b.all_lines = false;
     for (int i = 0; i < sx.n_intervals; ++i)
       for (int j = 0; j < sy.n_intervals; ++j) {
         const F e = F(kWiden);
-        b.u0[b.n] = raw(F(static_cast<float>(sx.iv_lo[i])) - e);
-        b.u1[b.n] = raw(F(static_cast<float>(sx.iv_hi[i])) + e);
-        b.v0[b.n] = raw(F(static_cast<float>(sy.iv_lo[j])) - e);
-        b.v1[b.n] = raw(F(static_cast<float>(sy.iv_hi[j])) + e);
+        const F u0 = F(static_cast<float>(sx.iv_lo[i])) - e, u1 = F(static_cast<float>(sx.iv_hi[i])) + e;
+        const F v0 = F(static_cast<float>(sy.iv_lo[j])) - e, v1 = F(static_cast<float>(sy.iv_hi[j])) + e;
         // Every line passes through the lens centre: a box holding it meets every line.
         const F z(0.0f);
-        const bool l = F(b.u0[b.n]) <= z, r = F(b.u1[b.n]) >= z, d = F(b.v0[b.n]) <= z, u = F(b.v1[b.n]) >= z;
-        if (l && r && d && u) b.all_lines = true;
-        ++b.n;
-        charge<A>(c_[Counter::ops_tile], cost::kLineBoxWiden + cost::kLineBoxCentre);
+        const bool l = u0 <= z, r = u1 >= z, d = v0 <= z, u = v1 >= z;
+        std::uint64_t ops = cost::kLineBoxWiden + cost::kLineBoxCentre;
+        if (l && r && d && u) {
+          b.all_lines = true;
+        } else {
+          F lo, hi;
+          bool shifted;
+          ops += box_angles(u0, u1, v0, v1, lo, hi, shifted);
+          b.lo[b.n] = raw(lo), b.hi[b.n] = raw(hi), b.shifted[b.n] = shifted;
+          ++b.n;
+        }
+        charge<A>(c_[Counter::ops_tile], ops);
       }
   }
 
@@ -156,14 +164,17 @@ class Lines final : public Traversal {
     float qx = 0.0f, qy = 0.0f;
     for (int s = 0; s < spp; ++s) {
       const float c = ps.u[s], sn = ps.v[s];
-      if (boxes) {  // tile clip: does the line meet one of the tile's uv-boxes?
-        const bool cz = c == 0.0f, sz = sn == 0.0f;
-        const F ic = F(cz ? 0.0f : 1.0f / c), is = F(sz ? 0.0f : 1.0f / sn);  // per-line table constants
+      if (boxes) {  // tile clip: does the line's direction fall in a box's interval?
+        float a;
+        pseudo_angle(c, sn, a);  // a table constant of the line (free)
         bool meets = false;
         std::uint64_t box_ops = 0;
         for (int k = 0; k < boxes->n && !meets; ++k) {
-          meets = line_meets_box(ic, is, cz, sz, F(boxes->u0[k]), F(boxes->u1[k]), F(boxes->v0[k]), F(boxes->v1[k]));
-          box_ops += cost::line_box_cost(cz, sz);
+          const F la = F(boxes->shifted[k] && a < 1.0f ? a + 2.0f : a);
+          const bool in_lo = F(boxes->lo[k]) <= la;
+          const bool in_hi = la <= F(boxes->hi[k]);
+          meets = in_lo && in_hi;
+          box_ops += cost::kLineAngleTest;
         }
         charge<A>(c_[Counter::ops_sample_region], box_ops);
         if (!meets) {
