@@ -26,8 +26,10 @@ def reference_config(config):
     d["samples"] = {"kind": m.reference_kind, "spp": m.reference_spp, "seed": REFERENCE_SEED,
                     "period": config.samples.period, "lens": config.samples.lens, "time": config.samples.time}
     d["pipeline"].update(algorithm=m.reference_algorithm, count_optimal=False, lens_grid="auto")
-    if "lod" in d["pipeline"]:  # the reference renders the full scene
-        d["pipeline"]["lod"] = {**d["pipeline"]["lod"], "enabled": False}
+    # The reference renders the full scene (no level of detail) with points: the line-sample
+    # settings do not apply, so they take their defaults and do not split the reference cache.
+    d["pipeline"].pop("lod", None)
+    d["pipeline"].pop("lines", None)
     d["outputs"] = {}
     return RenderConfig.model_validate(d)
 

@@ -1,0 +1,26 @@
+"""The methods page's helpers (experiments/report/tables.py): the α fit with its confidence interval
+against a known power law, and the equal-error interpolation."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+
+from experiments.report import tables
+
+
+def test_alpha_fit_recovers_a_power_law(rng):
+    x = np.array([1e6, 4e6, 1.6e7, 6.4e7, 2.56e8])
+    y = 3.0 * x ** -0.5 * np.exp(rng.normal(0, 0.02, x.size))
+    a, hw, n = tables._fit_alpha(x, y)
+    assert n == 5 and abs(a - 0.5) < 0.05 and 0 < hw < 0.1 and a - hw < 0.5 < a + hw
+    exact, hw0, _ = tables._fit_alpha(x, 3.0 * x ** -0.75)
+    assert abs(exact - 0.75) < 1e-9 and hw0 < 1e-6
+
+
+def test_equal_error_interpolation():
+    g = pd.DataFrame({"ops.total": [1e6, 1e7, 1e8], "ops.interp": [0, 0, 0], "ops.segments": [0, 0, 0],
+                      "metric.rmse": [0.1, 0.01, 0.001]})
+    assert math.isclose(tables._interp_work(g, 0.01), 1e7, rel_tol=1e-9)
+    assert math.isclose(tables._interp_work(g, 10 ** -1.5), 10 ** 6.5, rel_tol=1e-9)
