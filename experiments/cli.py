@@ -9,6 +9,14 @@ from pathlib import Path
 
 
 def _summary(row: dict) -> str:
+    if row.get("samples.kind") == "lines":  # line samples: lines per pixel and line tests
+        n = row.get("samples.n_lines") or 16
+        lod = (f", lod {row['lod.triangles_in']:,} -> {row['lod.triangles']:,} triangles"
+               if "lod.triangles" in row else "")
+        return (f"{row['scene.name'] or row['scene.path']}: {row['pipeline.algorithm']}, CoC {row['camera.coc_px']:g} px, "
+                f"{int(n)} lines, {row['camera.width']}x{row['camera.height']} -> line tests {row['lines.tests']:,}, "
+                f"segments {row['lines.segments']:,}, ops/pixel {row['ops.per_pixel']:,.0f}{lod}, "
+                f"wall {row['time.wall_s']:.2f} s")
     return (f"{row['scene.name'] or row['scene.path']}: {row['pipeline.algorithm']}, CoC {row['camera.coc_px']:g} px, "
             f"{row['samples.spp']} spp ({row['samples.kind']}), {row['camera.width']}x{row['camera.height']} -> "
             f"samples tested {row['raster.samples_tested']:,}, STE {row['raster.ste']:.3f}, "

@@ -36,7 +36,7 @@ class RenderParams:
     hinterleave_tile: int  # HINTERLEAVE tile edge: 4, 8 or 16 [px]; default 8
     bin_size: int  # Screen bin edge for threading (multiple of 8 and of hinterleave_tile) [px]; default 64
     lines_buffer_size: int  # Segment-buffer capacity per line sample; 0 = unlimited (004 does not state its size) [segments]; default 8
-    lines_min_weight: float  # Reject segments whose κ weight (share of the line) is below this; 0 = off; default 0.001
+    lines_min_weight: float  # Drop segments that merged nowhere and whose κ weight (share of the line) is below this; 0 = off; default 0.0001
     lines_occlusion: bool  # Drop segments covered by a buffered segment entirely in front (and remove those an incoming segment hides); default True
     lines_merge: bool  # Merge a segment into a buffered one within the three thresholds; default True
     lines_merge_depth: float  # Merge: largest difference of midpoint depth z; default 0.001

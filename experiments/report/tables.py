@@ -372,6 +372,11 @@ def _col(df, name, default=math.nan):
     return df[name] if name in df.columns else [default] * len(df)
 
 
+def _on(df, name) -> np.ndarray:
+    """Boolean mask: the switch column `name` is true (a sweep that leaves it unset stores nan)."""
+    return np.array([str(v) == "True" for v in _col(df, name, False)], dtype=bool)
+
+
 def method_label(row) -> str:
     """'stratified 64 / tile', 'lines 16', 'lines 16 clip', with ' +LoD' when level of detail is on."""
     get = row.get if hasattr(row, "get") else (lambda k, d=None: d)
@@ -415,13 +420,12 @@ def _families(sub):
     """(family name, rows) of the methods whose error falls with work: points per (kind, algorithm)
     and lines (no LoD, no clip)."""
     out = []
-    no_lod = sub[[str(v) != "True" for v in _col(sub, "pipeline.lod.enabled", False)]]
+    no_lod = sub[~_on(sub, "pipeline.lod.enabled")]
     pts = no_lod[no_lod["pipeline.algorithm"] != "lines"]
     for (kind, algo), g in pts.groupby(["samples.kind", "pipeline.algorithm"]):
         if g["samples.spp"].nunique() >= 2:
             out.append((f"points {kind} / {algo}", g))
-    ln = no_lod[(no_lod["pipeline.algorithm"] == "lines")
-                & [str(v) != "True" for v in _col(no_lod, "pipeline.lines.tile_clip", False)]]
+    ln = no_lod[(no_lod["pipeline.algorithm"] == "lines").to_numpy() & ~_on(no_lod, "pipeline.lines.tile_clip")]
     if len(ln) >= 2:
         out.append(("lines", ln))
     return out
@@ -482,9 +486,9 @@ def methods_claim(df, config) -> list[str]:
     for s in _scenes(df):
         for coc in sorted(df[df["scene.name"] == s]["camera.coc_px"].unique()):
             sub = df[(df["scene.name"] == s) & (df["camera.coc_px"] == coc)
-                     & [str(v) != "True" for v in _col(df, "pipeline.lod.enabled", False)]]
-            ln = sub[(sub["pipeline.algorithm"] == "lines") & (_col(sub, "samples.n_lines") == 16)
-                     & [str(v) != "True" for v in _col(sub, "pipeline.lines.tile_clip", False)]]
+                     & ~_on(df, "pipeline.lod.enabled")]
+            ln = sub[(sub["pipeline.algorithm"] == "lines").to_numpy() & (np.asarray(_col(sub, "samples.n_lines"), float) == 16)
+                     & ~_on(sub, "pipeline.lines.tile_clip")]
             tile = sub[(sub["pipeline.algorithm"] == "tile") & (sub["samples.kind"] == "stratified")]
             bf = sub[(sub["pipeline.algorithm"] == "bruteforce") & (sub["samples.kind"] == "stratified")]
             p256 = tile[tile["samples.spp"] == 256]
@@ -510,17 +514,19 @@ def methods_claim(df, config) -> list[str]:
 def methods_lod(df, config) -> list[str]:
     """Level of detail: work saved and the FLIP increase, per scene, CoC and method."""
     df = _ok(df)
-    on = df[[str(v) == "True" for v in _col(df, "pipeline.lod.enabled", False)]]
+    on = df[_on(df, "pipeline.lod.enabled")]
     rows = []
     for _, r in on.iterrows():
         keys = {"scene.name": r["scene.name"], "camera.coc_px": r["camera.coc_px"],
                 "pipeline.algorithm": r["pipeline.algorithm"], "samples.kind": r["samples.kind"],
                 "samples.spp": r["samples.spp"]}
-        base = df[[str(v) != "True" for v in _col(df, "pipeline.lod.enabled", False)]]
+        base = df[~_on(df, "pipeline.lod.enabled")]
         for k, v in keys.items():
             base = base[base[k] == v]
+        if r["pipeline.algorithm"] == "lines":
+            base = base[np.asarray(base["samples.n_lines"], float) == float(r["samples.n_lines"])]
         if "pipeline.lines.tile_clip" in df.columns:
-            base = base[base["pipeline.lines.tile_clip"] == r["pipeline.lines.tile_clip"]]
+            base = base[_on(base, "pipeline.lines.tile_clip") == (str(r["pipeline.lines.tile_clip"]) == "True")]
         if not len(base):
             continue
         b = base.iloc[0]
@@ -538,15 +544,15 @@ def methods_lod(df, config) -> list[str]:
 def methods_segments(df, config) -> list[str]:
     """Segment-buffer statistics by CoC, and what the tile clip saved."""
     df = _ok(df)
-    ln = df[(df["pipeline.algorithm"] == "lines") & [str(v) != "True" for v in _col(df, "pipeline.lod.enabled", False)]]
+    ln = df[(df["pipeline.algorithm"] == "lines").to_numpy() & ~_on(df, "pipeline.lod.enabled")]
     rows = []
     for s in _scenes(ln):
         for coc in sorted(ln[ln["scene.name"] == s]["camera.coc_px"].unique()):
             sub = ln[(ln["scene.name"] == s) & (ln["camera.coc_px"] == coc)]
             for n in sorted(sub["samples.n_lines"].dropna().unique()):
                 g = sub[sub["samples.n_lines"] == n]
-                off = g[[str(v) != "True" for v in _col(g, "pipeline.lines.tile_clip", False)]]
-                on = g[[str(v) == "True" for v in _col(g, "pipeline.lines.tile_clip", False)]]
+                off = g[~_on(g, "pipeline.lines.tile_clip")]
+                on = g[_on(g, "pipeline.lines.tile_clip")]
                 if not len(off):
                     continue
                 r = off.iloc[0]

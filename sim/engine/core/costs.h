@@ -123,8 +123,9 @@ inline constexpr std::uint64_t kLineBoxCentre = 4;  // per uv-box and tile: 4 CM
 inline constexpr std::uint64_t kLineShade = 2 + 3 + 2 + 1 + 3 + 4 + 9;  // 24
 inline constexpr std::uint64_t kLineDepth = 5;  // 2 MADD, RCP, MUL, MADD
 inline constexpr std::uint64_t kKappa = 4;      // 2 MUL, SUB, MUL
-// A new segment: κ, the too-small CMP, depth at both ends, MIN + MAX of them.
-inline constexpr std::uint64_t kSegNew = kKappa + 1 + 2 * kLineDepth + 2;  // 17
+// A new segment: κ, depth at both ends, MIN + MAX of them (the too-small CMP is charged after the
+// merge test, for segments that did not merge).
+inline constexpr std::uint64_t kSegNew = kKappa + 2 * kLineDepth + 2;  // 16
 // Merging two segments: MIN, MAX, ADD, RCP, 3 x (MUL, MADD, MUL) colour, κ, MIN, MAX, MIN depths.
 inline constexpr std::uint64_t kSegMerge = 4 + 9 + kKappa + 3;  // 20
 

@@ -6,12 +6,13 @@
 //    it holds every segment, and composite() is the exact visibility integral of the line up to
 //    the depth order inside each elementary interval (decided at its midpoint; intersecting
 //    segments are ordered there, as 004 §4.1 accepts).
-//  * Heuristics (pipeline.lines.*), in the order applied to an incoming segment: too small (its κ
-//    weight below min_weight), occluded (an existing segment covers it and lies entirely in front:
-//    dropped; it covers an existing one and lies entirely in front: that one is removed), merge
-//    (depth, colour and gap within thresholds: the two become one segment over their union with
-//    the κ-weighted colour), capacity (a full buffer evicts its smallest-κ segment, or drops the
-//    incoming one when that is the smallest). The occlusion test never changes the image (it
+//  * Heuristics (pipeline.lines.*), in 004 §4.1's order for an incoming segment: occluded (an
+//    existing segment covers it and lies entirely in front: dropped; it covers an existing one and
+//    lies entirely in front: that one is removed), merge (depth, colour and gap within thresholds:
+//    the two become one segment over their union with the κ-weighted colour), length (a segment
+//    that merged nowhere and whose κ weight is below min_weight is dropped: tessellated surfaces
+//    first merge their short pieces), capacity (a full buffer evicts its smallest-κ segment, or
+//    drops the incoming one when that is the smallest). The occlusion test never changes the image (it
 //    removes only segments hidden over their whole extent, depth being monotone along a segment);
 //    the others trade bias for storage and work.
 //  * Every operation is counted in 001 §6.2 units through the scalar type F: the functions return

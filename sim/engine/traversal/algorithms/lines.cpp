@@ -197,7 +197,8 @@ class Lines final : public Traversal {
     }
   }
 
-  // A segment [a, b] of the line: the heuristics, shading at the midpoint, the buffer.
+  // A segment [a, b] of the line: the heuristics in 004 §4.1's order (occlusion, merge, length),
+  // shading at the midpoint, the buffer.
   void offer(const TriSetup& tri, const LineCoverage<F>& cov, float a, float b, std::size_t slot) {
     ++c_[Counter::lines_segments];
     const LineFns<F>& fn = cov.fn;
@@ -207,16 +208,10 @@ class Lines final : public Traversal {
     sg.a = a, sg.b = b;
     const F k = kappa(F(a), F(b));
     sg.k = raw(k);
-    const bool small = k < F(rules_.min_weight);
     const F za = line_depth(fn.s0, fn.sg, fn.d0, fn.dg, F(a), neg_near);
     const F zb = line_depth(fn.s0, fn.sg, fn.d0, fn.dg, F(b), neg_near);
     sg.zmin = raw(vmin(za, zb)), sg.zmax = raw(vmax(za, zb));
     sg.s0 = raw(fn.s0), sg.sg = raw(fn.sg), sg.d0 = raw(fn.d0), sg.dg = raw(fn.dg);
-    if (small) {
-      charge<A>(c_[Counter::ops_segments], ops);
-      ++c_[Counter::lines_rejected_small];
-      return;
-    }
     std::vector<Segment>& buf = segs_[slot];
     if (rules_.occlusion && !segment_visible<F>(buf, sg, ops, c_)) {
       charge<A>(c_[Counter::ops_segments], ops);
@@ -237,7 +232,14 @@ class Lines final : public Traversal {
     if (rules_.merge && segment_merge<F>(buf, sg, rules_, ops)) {
       ++c_[Counter::lines_segments_merged];
     } else {
-      segment_insert<F>(buf, sg, rules_.capacity, ops, c_);
+      // Length: a segment that merged nowhere and is too small to matter is dropped.
+      const bool small = k < F(rules_.min_weight);
+      ++ops;
+      if (small) {
+        ++c_[Counter::lines_rejected_small];
+      } else {
+        segment_insert<F>(buf, sg, rules_.capacity, ops, c_);
+      }
     }
     charge<A>(c_[Counter::ops_segments], ops);
   }
