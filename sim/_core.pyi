@@ -35,7 +35,7 @@ class RenderParams:
     count_optimal: bool  # Instrument tile.samples_optimal (exact lens region per tile; 001 Table 1); default True
     hinterleave_tile: int  # HINTERLEAVE tile edge: 4, 8 or 16 [px]; default 8
     bin_size: int  # Screen bin edge for threading (multiple of 8 and of hinterleave_tile) [px]; default 64
-    lines_buffer_size: int  # Segment-buffer capacity per line sample; 0 = unlimited (004 does not state its size) [segments]; default 8
+    lines_buffer_size: int  # Segment-buffer capacity per line sample; 0 = unlimited (004 does not state its size; 8 overflows by 27% on modern_hall at CoC 40 and darkens it, 32 does not) [segments]; default 32
     lines_min_weight: float  # Drop segments that merged nowhere and whose κ weight (share of the line) is below this; 0 = off; default 0.0001
     lines_occlusion: bool  # Drop segments covered by a buffered segment entirely in front (and remove those an incoming segment hides); default True
     lines_merge: bool  # Merge a segment into a buffered one within the three thresholds; default True

@@ -130,8 +130,9 @@ def test_documented_costs_equal_counted(variant):
     lines = dict(sim.PipelineConfig().lines)
     if variant == "small_buffer":
         lines.update(buffer_size=1, merge=False)
-    if variant == "tile_clip":
+    if variant == "tile_clip":  # several bins: per-triangle work is charged once, in its first bin
         lines.update(tile_clip=True)
+        cam = sim.Camera(width=80, height=72, focus_distance=5.0, coc_px=6.0, fov_y_deg=30.0)
     if variant == "near":  # a floor crossing the near plane: the near function of the interval
         pos = np.array([[[-5, -1, 1.0], [5, -1, 1.0], [0, -1, -20.0]]])
         scene = Scene.concat(scene, Scene.from_arrays(pos, colors=(0.7, 0.7, 0.2)))
