@@ -72,6 +72,10 @@ def cmd_report(args) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="rast5d", description=__doc__)
+    from . import __version__
+
+    parser.add_argument("--version", action="version",
+                        version=f"rast5d {__version__} (Python {sys.version.split()[0]})")
     sub = parser.add_subparsers(dest="command", required=True)
 
     p = sub.add_parser("render", help="render one configuration to an image and statistics")
