@@ -54,9 +54,10 @@ class _Strict(BaseModel):
 class TransformSpec(_Strict):
     """Object-to-world transform: scale, then rotate (degrees about x, then y, then z), then translate."""
 
-    translate: Vec3 = (0.0, 0.0, 0.0)
-    rotate_deg: Vec3 = (0.0, 0.0, 0.0)
-    scale: Union[Annotated[float, Field(gt=0.0, allow_inf_nan=False)], Vec3] = 1.0
+    translate: Vec3 = Field((0.0, 0.0, 0.0), description="Offset [world units], applied last")
+    rotate_deg: Vec3 = Field((0.0, 0.0, 0.0), description="Rotation [deg] about x, then y, then z")
+    scale: Union[Annotated[float, Field(gt=0.0, allow_inf_nan=False)], Vec3] = Field(
+        1.0, description="Uniform factor (> 0) or per-axis factors, applied first")
 
     def matrix(self) -> np.ndarray:
         return compose(
@@ -67,31 +68,37 @@ class TransformSpec(_Strict):
 class MotionSpec(_Strict):
     """Linear motion over the shutter: the object is offset by translate at t=1."""
 
-    translate: Vec3 = (0.0, 0.0, 0.0)
+    translate: Vec3 = Field((0.0, 0.0, 0.0), description="Offset at shutter close (t = 1) [world units]")
 
 
 class CameraHintSpec(_Strict):
     """Suggested camera; the keys mirror sim.Camera's arguments."""
 
-    width: Annotated[int, Field(gt=0)] | None = None
-    height: Annotated[int, Field(gt=0)] | None = None
-    fov_y_deg: Annotated[float, Field(gt=0.0, lt=180.0)] | None = None
-    focus_distance: Annotated[float, Field(gt=0.0, allow_inf_nan=False)] | None = None
-    eye: Vec3 | None = None
-    target: Vec3 | None = None
-    up: Vec3 | None = None
-    near: Annotated[float, Field(gt=0.0, allow_inf_nan=False)] | None = None
+    width: Annotated[int, Field(gt=0)] | None = Field(None, description="Image width [px]")
+    height: Annotated[int, Field(gt=0)] | None = Field(None, description="Image height [px]")
+    fov_y_deg: Annotated[float, Field(gt=0.0, lt=180.0)] | None = Field(
+        None, description="Vertical field of view [deg]")
+    focus_distance: Annotated[float, Field(gt=0.0, allow_inf_nan=False)] | None = Field(
+        None, description="Distance of the focus plane [world units]")
+    eye: Vec3 | None = Field(None, description="Camera position [world]; with target, the camera pose")
+    target: Vec3 | None = Field(None, description="Point looked at [world]")
+    up: Vec3 | None = Field(None, description="Up direction")
+    near: Annotated[float, Field(gt=0.0, allow_inf_nan=False)] | None = Field(
+        None, description="Near plane distance [world units]")
 
 
 class ObjectSpec(_Strict):
     """One object: exactly one of mesh (a file) or scene (a named scene, with params)."""
 
-    mesh: str | None = None
-    scene: str | None = None
-    params: dict[str, Any] = Field(default_factory=dict)
-    transform: TransformSpec | None = None
-    motion: MotionSpec | None = None
-    color: tuple[NonNegative, NonNegative, NonNegative] | None = None
+    mesh: str | None = Field(None, description=(
+        "A mesh file (OBJ, PLY, STL, OFF, glTF/GLB): relative to the scene file, else the working directory, "
+        "else the repository root"))
+    scene: str | None = Field(None, description="A named scene (the table below)")
+    params: dict[str, Any] = Field(default_factory=dict, description="The named scene's parameters")
+    transform: TransformSpec | None = Field(None, description="Object-to-world transform (section below)")
+    motion: MotionSpec | None = Field(None, description="Linear motion over the shutter (section below)")
+    color: tuple[NonNegative, NonNegative, NonNegative] | None = Field(
+        None, description="Linear RGB for every vertex (replaces the file's colours)")
 
     @model_validator(mode="after")
     def _one_source(self) -> "ObjectSpec":
@@ -103,9 +110,13 @@ class ObjectSpec(_Strict):
 
 
 class SceneFileSpec(_Strict):
-    name: str | None = None
-    objects: list[ObjectSpec]
-    camera_hint: CameraHintSpec | None = None
+    """A YAML scene file: objects placed in one world, and a suggested camera."""
+
+    name: str | None = Field(None, description="Scene name (default: the file's stem)")
+    objects: list[ObjectSpec] = Field(..., description="The objects (section below), concatenated in order")
+    camera_hint: CameraHintSpec | None = Field(None, description=(
+        "Suggested camera (section below); the config's camera section overrides it. Without eye/target and "
+        "without named scenes, the view frames the bounding box"))
 
 
 class UniqueKeyLoader(yaml.SafeLoader):

@@ -58,5 +58,8 @@ def field_docs(cls) -> dict[str, dict]:
         if dataclasses.is_dataclass(default):
             entry["fields"] = field_docs(type(default))
             entry["default"] = dataclasses.asdict(default)
+            for name, sub in entry["fields"].items():  # this field's defaults, not the section class's
+                if "fields" not in sub:
+                    sub["default"] = entry["default"][name]
         out[f.name] = entry
     return out
