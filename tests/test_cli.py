@@ -73,12 +73,14 @@ def test_run_sweep_keeps_finished_points(tmp_path):
     ("scene: [{name: quad}, {name: bunyn}]", "did you mean 'bunny'"),
     ("pipeline.tile_sise: [2]", "unknown key 'pipeline.tile_sise'; did you mean 'tile_size'"),
 ])
-def test_run_validates_every_point_before_the_first_render(tmp_path, sweep, message):
+def test_run_validates_every_point_before_the_first_render(tmp_path, sweep, message, capsys, monkeypatch):
+    from experiments.cli import main
+
     cfg = tmp_path / "sweep.yaml"
     cfg.write_text(CONFIG + "sweep:\n  " + sweep + "\n")
-    env = {**os.environ, "RAST5D_RESULTS": str(tmp_path / "res")}
-    r = subprocess.run([sys.executable, "-m", "experiments.cli", "run", str(cfg), "--workers", "0"],
-                       capture_output=True, text=True, env=env)
-    assert r.returncode == 2 and message in r.stderr and "Traceback" not in r.stderr, r.stderr
-    assert f"{cfg}:" in r.stderr or "sweep point" in r.stderr  # names the file or the point
+    monkeypatch.setenv("RAST5D_RESULTS", str(tmp_path / "res"))
+    assert main(["run", str(cfg), "--workers", "0"]) == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err, err
+    assert f"{cfg}:" in err or "sweep point" in err  # names the file or the point
     assert not list((tmp_path / "res").glob("**/*.parquet"))  # nothing rendered
