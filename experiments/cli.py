@@ -151,6 +151,12 @@ def main(argv: list[str] | None = None) -> int:
     p.set_defaults(func=cmd_list)
 
     args = parser.parse_args(argv)
+    import warnings
+
+    def show_warning(message, category, filename, lineno, file=None, line=None):
+        print(f"warning: {message}", file=sys.stderr)  # a user's warning, not a source location
+
+    warnings.showwarning = show_warning
     from .config import ConfigError
     import sim
 

@@ -19,6 +19,7 @@ bounding box (models/framing.py).
 """
 from __future__ import annotations
 
+import difflib
 from pathlib import Path
 from typing import Annotated, Any, Union
 
@@ -153,7 +154,11 @@ def _validation_error(path: Path, exc: ValidationError) -> SceneError:
         loc = tuple(p for p in error["loc"] if not (isinstance(p, str) and p.startswith("function-")))
         if error["type"] == "extra_forbidden":
             where = _format_location(loc[:-1])
-            lines.append(f"unknown key {loc[-1]!r} in {where}")
+            known = {f for m in (SceneFileSpec, ObjectSpec, TransformSpec, MotionSpec, CameraHintSpec)
+                     for f in m.model_fields}
+            close = difflib.get_close_matches(str(loc[-1]), sorted(known), n=1, cutoff=0.6)
+            hint = f"; did you mean {close[0]!r}?" if close else ""
+            lines.append(f"unknown key {loc[-1]!r} in {where}{hint}")
         else:
             lines.append(f"{_format_location(loc)}: {error['msg']}")
     return SceneError(f"{path}: " + "; ".join(lines))

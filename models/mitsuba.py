@@ -93,6 +93,44 @@ def _named_any(element: ET.Element, tag: str, *names: str) -> ET.Element | None:
     return None
 
 
+def _expand_includes(root: ET.Element, base: Path, where: Path, depth: int = 0) -> None:
+    """Replace every <include filename=".."/> by the children of the file it names (relative to the
+    including file), recursively."""
+    if depth > 16:
+        raise SceneError(f"mitsuba: {where}: <include> nested more than 16 deep (a cycle?)")
+    for index, element in reversed(list(enumerate(root))):
+        if element.tag != "include":
+            continue
+        path = base / element.get("filename", "")
+        try:
+            included = ET.parse(path).getroot()
+        except (OSError, ET.ParseError) as exc:
+            raise SceneError(f"mitsuba: {where}: <include filename={element.get('filename')!r}>: {exc}") from None
+        _expand_includes(included, path.parent, path, depth + 1)
+        root.remove(element)
+        for offset, child in enumerate(list(included)):
+            root.insert(index + offset, child)
+
+
+def _spectrum_rgb(text: str, where: str) -> tuple[np.ndarray, bool]:
+    """(linear RGB, exact) of a Mitsuba <spectrum> value: one number (grey, exact) or
+    wavelength:value pairs averaged over 400-500 / 500-600 / 600-700 nm (an approximation)."""
+    text = (text or "").strip()
+    if ":" not in text:
+        value = _floats(text, where)
+        return np.broadcast_to(value[:1], (3,)).copy(), True
+    try:
+        pairs = np.array([[float(a) for a in item.split(":")] for item in text.split(",") if item.strip()])
+    except ValueError:
+        raise SceneError(f"{where}: not a spectrum: {text!r}") from None
+    lam, val = pairs[:, 0], pairs[:, 1]
+    rgb = []
+    for lo, hi in ((600, 700), (500, 600), (400, 500)):
+        grid = np.linspace(lo, hi, 21)
+        rgb.append(float(np.interp(grid, lam, val).mean()))
+    return np.array(rgb), False
+
+
 def _substitute_defaults(root: ET.Element, overrides: dict | None = None) -> None:
     """Mitsuba 3 parameters: <default name="n" value="v"/> and "$n" in any attribute."""
     values = {d.get("name"): d.get("value") for d in root.iter("default") if d.get("name")}
@@ -226,9 +264,12 @@ def _material(bsdf: ET.Element | None, base: Path, ids: dict, report: ImportRepo
         if rgb is not None:
             value = _floats(rgb.get("value"), f"bsdf {bsdf.get('id')}: {name}")
             return tuple(float(v) for v in np.broadcast_to(value, (3,))), None
-        if _named(bsdf, "spectrum", name) is not None:
-            report.approximated[f"<spectrum name={name!r}> as Mitsuba's default grey"] += 1
-            return DEFAULT_REFLECTANCE, None
+        spectrum = _named(bsdf, "spectrum", name)
+        if spectrum is not None:
+            rgb, exact = _spectrum_rgb(spectrum.get("value"), f"bsdf {bsdf.get('id')}: {name}")
+            if not exact:
+                report.approximated["spectral reflectance as its 400-500/500-600/600-700 nm band means"] += 1
+            return tuple(float(v) for v in rgb), None
     if "conductor" in kind:
         eta = _named(bsdf, "rgb", "eta")
         k = _named(bsdf, "rgb", "k")
@@ -363,11 +404,12 @@ def _primitive(kind: str, shape: ET.Element, where: str) -> Scene:
     raise AssertionError(kind)
 
 
-def _shape_bsdf(shape: ET.Element) -> ET.Element | None:
+def _shape_bsdf(shape: ET.Element, ids: dict) -> ET.Element | None:
     inline = shape.find("bsdf")
     if inline is not None:
         return inline
-    return next((r for r in shape.findall("ref") if r.get("name") in (None, "bsdf")), None)
+    refs = [r for r in shape.findall("ref") if r.get("name") in (None, "bsdf")]
+    return next((r for r in refs if r.get("id") in ids), refs[0] if refs and refs[0].get("name") == "bsdf" else None)
 
 
 def read_mitsuba(xml_path: str | Path, *, include_emitters: bool = False, parameters: dict | None = None
@@ -381,10 +423,12 @@ def read_mitsuba(xml_path: str | Path, *, include_emitters: bool = False, parame
         raise SceneError(f"mitsuba: cannot read {xml_path}: {exc}") from None
     if root.tag != "scene":
         raise SceneError(f"mitsuba: {xml_path}: the root element is <{root.tag}>, expected <scene>")
+    base = xml_path.parent
+    _expand_includes(root, base, xml_path)
     _substitute_defaults(root, parameters)
     report = ImportReport()
-    base = xml_path.parent
     ids = {e.get("id"): e for e in root if e.get("id") and e.tag in ("bsdf", "texture")}
+    emitter_ids = {e.get("id") for e in root if e.get("id") and e.tag == "emitter"}
     texture_cache: dict[Path, int] = {}
     textures: list[np.ndarray] = []
     parts = []
@@ -392,6 +436,9 @@ def read_mitsuba(xml_path: str | Path, *, include_emitters: bool = False, parame
         if element.tag in RENDER_ONLY or element.tag in ("bsdf", "texture", "sensor"):
             continue
         if element.tag == "emitter":
+            if element.get("id") in emitter_ids and any(
+                    r.get("id") == element.get("id") for sh in root.findall("shape") for r in sh.findall("ref")):
+                continue  # a shape's area light: reported with its shape
             report.skipped[f"<emitter type={element.get('type')!r}> (lighting is not modelled)"] += 1
             continue
         if element.tag != "shape":
@@ -402,14 +449,15 @@ def read_mitsuba(xml_path: str | Path, *, include_emitters: bool = False, parame
         kind = shape.get("type", "")
         index = len(parts)
         where = f"{xml_path.name}: shape {kind!r} #{index}"
-        if shape.find("emitter") is not None and not include_emitters:
+        is_emitter = shape.find("emitter") is not None or any(r.get("id") in emitter_ids for r in shape.findall("ref"))
+        if is_emitter and not include_emitters:
             report.skipped[f"emitter <shape type={kind!r}> (area light; include_emitters=True keeps it)"] += 1
             continue
         if kind not in MESH_SHAPES + PRIMITIVE_SHAPES:
             report.skipped[f"<shape type={kind!r}>"] += 1
             continue
         try:
-            color, texture_path = _material(_shape_bsdf(shape), base, ids, report)
+            color, texture_path = _material(_shape_bsdf(shape, ids), base, ids, report)
         except SceneError as exc:
             raise SceneError(f"{where}: {exc}") from None
         if kind in MESH_SHAPES:

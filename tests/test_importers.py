@@ -348,3 +348,33 @@ def test_scene_path_in_sweep_and_extends_resolve_against_their_file(tmp_path, mo
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert models.load(config.scene.path).n_triangles == 1
+
+
+def test_scene_file_unknown_key_suggests_the_known_one(tmp_path):
+    (tmp_path / "tri.obj").write_text(OBJ)
+    (tmp_path / "s.yaml").write_text("objects:\n  - mesh: tri.obj\n    transfrom: {scale: 2}\n")
+    with pytest.raises(SceneError, match=r"unknown key 'transfrom' in objects\[0\]; did you mean 'transform'"):
+        models.load(tmp_path / "s.yaml")
+
+
+def test_mitsuba_includes_emitter_refs_and_spectra(tmp_path):
+    """The layout of Mitsuba 3's own scene files: <include> fragments, an area light referenced by id,
+    spectral reflectances (wavelength:value pairs -> band means)."""
+    (tmp_path / "frag").mkdir()
+    (tmp_path / "frag" / "bsdfs.xml").write_text(
+        '<scene version="3.0.0"><bsdf type="diffuse" id="grey"><spectrum name="reflectance" value="0.25"/></bsdf>'
+        '<bsdf type="diffuse" id="reddish"><spectrum name="reflectance" '
+        'value="400:0.1, 500:0.1, 550:0.3, 600:0.8, 700:0.8"/></bsdf></scene>')
+    body = ('<include filename="frag/bsdfs.xml"/><emitter type="area" id="lamp"><rgb name="radiance" value="5"/>'
+            '</emitter><shape type="obj"><string name="filename" value="tri.obj"/><ref id="grey"/>'
+            '<ref id="lamp"/></shape><shape type="obj"><string name="filename" value="tri.obj"/>'
+            '<ref id="grey"/></shape><shape type="rectangle"><ref id="reddish"/></shape>')
+    with pytest.warns(SceneImportWarning) as record:
+        scene = models.load(_mitsuba(tmp_path, body))
+    text = str(record[0].message)
+    assert "area light" in text and "band means" in text and "<emitter" not in text, text
+    assert scene.n_triangles == 3  # the lamp's triangle is left out
+    np.testing.assert_allclose(scene.colors[0, 0], [0.25, 0.25, 0.25])
+    red = scene.colors[1, 0]
+    np.testing.assert_allclose(red[0], 0.8) and np.testing.assert_allclose(red[2], 0.1)
+    assert 0.1 < red[1] < 0.8

@@ -88,3 +88,27 @@ def test_rast5d_list(what, capsys, monkeypatch):
                 "configs": [str(p.relative_to(REPO)) for p in (REPO / "configs").rglob("*.yaml")
                             if "scenes" not in p.parts]}[what]
     assert sorted(names) == sorted(expected)
+
+
+def test_committed_report_pages_carry_no_volatile_provenance(tmp_path, monkeypatch):
+    """`make run` rewrites reports/quickstart/quickstart.md: two runs that differ only in wall time, engine
+    build and revision must write the same text (the volatile facts go to results/provenance/)."""
+    import pandas as pd
+
+    from experiments.config import validate
+    from experiments.report.pages import section_markdown
+
+    monkeypatch.setenv("RAST5D_RESULTS", str(tmp_path / "results"))
+    config = validate({"name": "tiny", "scene": {"name": "quad"}, "outputs": {"page": "tiny", "title": "Tiny"}})
+    cfg_path = tmp_path / "tiny.yaml"
+    cfg_path.write_text("scene: {name: quad}\n")
+    texts = []
+    for wall, engine, rev, elapsed in ((0.5, "aaaa", "1234567", 3.0), (7.25, "bbbb", "89abcde-dirty", 41.0)):
+        df = pd.DataFrame({"status": ["ok"], "time.wall_s": [wall], "engine.version": [engine],
+                           "engine.git_rev": [rev]})
+        texts.append("\n".join(section_markdown(config, cfg_path, df, tmp_path, "rast5d report --only tiny",
+                                                elapsed=elapsed, volatile=False)))
+    assert texts[0] == texts[1] and "1 points (0 failed)" in texts[0]
+    record = (tmp_path / "results" / "provenance" / "tiny.txt").read_text()
+    assert "bbbb" in record and "89abcde-dirty" in record and "41 s this run" in record
+    assert "s of render time" not in (REPO / "reports" / "quickstart" / "quickstart.md").read_text()
