@@ -62,5 +62,5 @@ def test_run_sweep_keeps_finished_points(tmp_path):
     assert (df["status"] == "ok").sum() == 2 and (df["status"] == "error").sum() == 2
     assert df[df["status"] == "error"]["error"].str.contains("spp").all()
     assert sorted(df[df["status"] == "error"]["samples.spp"]) == [5000, 5000]
-    assert len(list((tmp_path / "res" / "points").glob("*.parquet"))) == 2  # only finished points are cached
+    assert len(list((tmp_path / "res" / "points").glob("*.parquet"))) == 4  # failed points are stored too
     assert "2 failed" in r.stdout
