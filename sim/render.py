@@ -152,7 +152,8 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
             f"{config.memory_limit_bytes / 2**30:.2f} GiB (width={camera.width}, height={camera.height}, "
             f"spp={spp}, triangles={p0.shape[0]}, threads={threads})"
         )
-    v0, v1 = camera.engine_vertices(p0, p1)
+    with np.errstate(over="ignore", invalid="ignore"):  # overflow is reported just below, by triangle
+        v0, v1 = camera.engine_vertices(p0, p1)
     if not (np.all(np.isfinite(v0)) and np.all(np.isfinite(v1))):
         t = int(np.argwhere(~np.isfinite(v0) | ~np.isfinite(v1))[0][0])
         raise SceneInputError(f"scene.positions: triangle {t} overflows float32 after projection: {p0[t].tolist()}")

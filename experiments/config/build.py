@@ -60,6 +60,9 @@ def build(config: RenderConfig):
         if t.kind != "multiview":
             raise ConfigError(f"samples.views: only for the multiview kind, got kind={t.kind!r}")
         params["views"] = t.views
-    table = sim.SampleTable.create(t.kind, **params)
+    try:
+        table = sim.SampleTable.create(t.kind, **params)
+    except ValueError as e:  # "spp: expected ..." -> "samples.spp: expected ..."
+        raise ConfigError(f"samples.{e}") from None
     pipeline = sim.PipelineConfig(**config.pipeline.model_dump())
     return scene, camera, table, pipeline
