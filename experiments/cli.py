@@ -59,7 +59,7 @@ def cmd_run(args) -> int:
     data, lines = load_dict(args.config, args.set or [])
     config = validate(data, str(args.config), lines)
     df = run_sweep(config, source=str(args.config), workers=args.workers, scheduler=args.scheduler,
-                   force=args.force, lines=lines)
+                   force=args.force, lines=lines, retry_failed=args.retry_failed)
     if config.outputs.plots and not args.no_report:
         page = write_config_page(config, args.config, df, overrides=args.set or [])
         print(f"report -> {page}")
@@ -108,7 +108,7 @@ def cmd_report(args) -> int:
     from .report.pages import main as report_main
 
     return report_main(only=args.only, workers=args.workers, scheduler=args.scheduler, force=args.force,
-                       quick=args.quick)
+                       quick=args.quick, retry_failed=args.retry_failed)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -134,6 +134,8 @@ def main(argv: list[str] | None = None) -> int:
                    help="local worker processes (default: executor.workers or the core count; 0 = in-process)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="run on a Dask distributed scheduler, e.g. tcp://host:8786")
     p.add_argument("--force", action="store_true", help="re-render points found in the result store")
+    p.add_argument("--retry-failed", action="store_true",
+                   help="re-render stored failed points (otherwise served from the store with their error)")
     p.add_argument("--no-report", action="store_true", help="do not write the config's report page")
     p.set_defaults(func=cmd_run)
 
@@ -144,6 +146,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--workers", type=int, default=None)
     p.add_argument("--scheduler", metavar="ADDRESS")
     p.add_argument("--force", action="store_true")
+    p.add_argument("--retry-failed", action="store_true", help="re-render stored failed points")
     p.set_defaults(func=cmd_report)
 
     p = sub.add_parser("list", help="list the algorithms, named scenes, counters or configs")

@@ -62,7 +62,7 @@ def test_run_sweep_keeps_finished_points(tmp_path):
     assert (df["status"] == "ok").sum() == 2 and (df["status"] == "error").sum() == 2
     assert df[df["status"] == "error"]["error"].str.contains("size").all()
     assert sorted(df[df["status"] == "error"]["scene.params.size"]) == [-1.0, -1.0]
-    assert len(list((tmp_path / "res" / "points").glob("*.parquet"))) == 2  # only finished points are cached
+    assert len(list((tmp_path / "res" / "points").glob("*.parquet"))) == 4  # failed points are stored too
     assert "2 failed" in r.stdout
 
 

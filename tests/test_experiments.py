@@ -184,8 +184,9 @@ def test_a_failing_point_is_recorded_and_the_others_finish(tmp_path, store):
     assert df["status"].tolist() == ["ok", "error", "ok"]
     assert "size" in df["error"].iloc[1] and df["scene.params.size"].tolist() == [1.0, -1.0, 2.0]
     assert df.attrs["summary"]["failed"] == 1
-    # Failed points are not cached: a rerun retries only them.
-    assert runner.run_sweep(c, workers=0, progress=False).attrs["summary"]["rendered"] == 1
+    # Failed points are stored with their error: a rerun serves them, --retry-failed retries only them.
+    assert runner.run_sweep(c, workers=0, progress=False).attrs["summary"]["rendered"] == 0
+    assert runner.run_sweep(c, workers=0, progress=False, retry_failed=True).attrs["summary"]["rendered"] == 1
 
 
 @pytest.mark.filterwarnings("ignore::DeprecationWarning", "ignore::ResourceWarning",

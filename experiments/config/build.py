@@ -84,7 +84,10 @@ def check(config: RenderConfig) -> None:
     params = _table_params(config)
     key = (config.samples.kind, tuple(sorted(params.items())))
     if key not in _CHECKED_TABLES:  # the points of a sweep share a few tables: build each once
-        sim.SampleTable.create(config.samples.kind, **params)
+        try:
+            sim.SampleTable.create(config.samples.kind, **params)
+        except ValueError as e:  # "spp: expected ..." -> "samples.spp: expected ..."
+            raise ConfigError(f"samples.{e}") from None
         _CHECKED_TABLES.add(key)
     sim.PipelineConfig(**config.pipeline.model_dump())
 
@@ -93,6 +96,9 @@ def build(config: RenderConfig):
     """(scene, camera, table, pipeline) for one (non-swept) config."""
     scene = build_scene(config.scene)
     camera = _camera(config, scene.camera_hint)
-    table = sim.SampleTable.create(config.samples.kind, **_table_params(config))
+    try:
+        table = sim.SampleTable.create(config.samples.kind, **_table_params(config))
+    except ValueError as e:  # "spp: expected ..." -> "samples.spp: expected ..."
+        raise ConfigError(f"samples.{e}") from None
     pipeline = sim.PipelineConfig(**config.pipeline.model_dump())
     return scene, camera, table, pipeline

@@ -7,6 +7,7 @@ import hashlib
 import itertools
 import json
 
+from .inputs import config_inputs
 from .schema import ConfigError, RenderConfig, validate
 
 
@@ -108,12 +109,14 @@ def point_columns(config: RenderConfig) -> dict:
 
 def config_hash(config: RenderConfig) -> str:
     """Stable hash of everything that determines a point's result row: scene, camera, samples,
-    pipeline (not the thread count: results are identical for any), hardware, and the metrics spec."""
+    pipeline (not the thread count: results are identical for any), hardware, the metrics spec, and
+    the contents of every file its scenes read (inputs.py)."""
     d = config.model_dump(exclude=RESULT_EXCLUDE)
     d["pipeline"].pop("threads", None)
     d["metrics"] = config.outputs.metrics.model_dump() if config.outputs.metrics else None
     if config.point.kind != "render":
         d["point"] = config.point.model_dump()
+    d["inputs"] = config_inputs(config)  # the contents of every file the point's scenes read
     blob = json.dumps(d, sort_keys=True, default=str).encode()
     return hashlib.sha256(blob).hexdigest()[:16]
 

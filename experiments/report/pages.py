@@ -139,7 +139,7 @@ def report_configs(configs_dir: Path | None = None) -> list[Path]:
 
 
 def main(only=None, workers=None, scheduler=None, force=False, quick=False, configs_dir: Path | None = None,
-         reports_dir: Path | None = None) -> int:
+         reports_dir: Path | None = None, retry_failed: bool = False) -> int:
     out_root = (reports_dir or REPORTS) / ("quick" if quick else "")
     if quick:
         os.environ["RAST5D_RESULTS"] = str(results_dir() / "quick")
@@ -172,7 +172,8 @@ def main(only=None, workers=None, scheduler=None, force=False, quick=False, conf
     for p, config, overrides, lines in loaded:
         t0 = time.perf_counter()
         df = run_sweep(config, source=str(p.relative_to(REPO) if p.is_relative_to(REPO) else p), workers=workers,
-                       scheduler=scheduler, force=force and config.name in chosen, lines=lines)
+                       scheduler=scheduler, force=force and config.name in chosen, lines=lines,
+                       retry_failed=retry_failed)
         failures += int((df["status"] != "ok").sum()) if "status" in df.columns else 0
         for k in counts:
             counts[k] += df.attrs.get("summary", {}).get(k, 0)
