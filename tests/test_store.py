@@ -183,15 +183,16 @@ def test_every_byte_of_a_point_file_is_covered(tmp_path, store):
 def test_a_failed_point_keeps_its_error_and_is_retried_on_request(tmp_path, store):
     d = _scene_dir(tmp_path)
     p = tmp_path / "f.yaml"
+    # a scene parameter's value fails only when the scene is built (spp is checked before any render)
     p.write_text(f"scene: {{path: {d / 's.yaml'}}}\ncamera: {{width: 16, height: 16}}\n"
-                 "sweep:\n  samples.spp: [2, 9999]\n")
+                 "sweep:\n  scene: [{path: " + str(d / "s.yaml") + "}, {name: quad, params: {size: -1.0}}]\n")
     config = xc.load_config(p)
     df = runner.run_sweep(config, workers=0, progress=False)
-    assert df["status"].tolist() == ["ok", "error"] and "spp" in df["error"].iloc[1]
+    assert df["status"].tolist() == ["ok", "error"] and "size" in df["error"].iloc[1]
     stored = [result_store.read_point_file(f) for f in (store / "points").glob("*.parquet")]
     failed = [r for r in stored if r["status"] == "error"]
-    assert len(failed) == 1 and "spp" in failed[0]["error"] and "Traceback (most recent call last)" in failed[0][
-        "traceback"] and "sample_table.py" in failed[0]["traceback"]
+    assert len(failed) == 1 and "size" in failed[0]["error"] and "Traceback (most recent call last)" in failed[0][
+        "traceback"] and "registry.py" in failed[0]["traceback"]
     # served from the store, error and all
     again = runner.run_sweep(config, workers=0, progress=False)
     assert again.attrs["summary"]["rendered"] == 0 and again.attrs["summary"]["failed_cached"] == 1
