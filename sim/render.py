@@ -9,7 +9,7 @@ import numpy as np
 
 from . import _core
 from .camera import Camera
-from .errors import ConfigError, SceneInputError
+from .errors import ConfigError, EmptyFrameWarning, SceneInputError
 from .hardware import HardwareConfig
 from . import params as _params
 from .pipeline import PipelineConfig
@@ -217,6 +217,26 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     desc = {"camera": camera.describe(), "pipeline": config.describe(),
             "table": table.describe() if hasattr(table, "describe") else {}, "lens_grid": grid,
             "hardware": hardware_desc}
+    if query is None and not flat.get("raster.samples_tested"):
+        _warn_empty_frame(flat, camera)
     return Result(image=out["image"], flat_stats=flat, config=desc,
                   sample_depth=out.get("sample_depth"), sample_triangle=out.get("sample_triangle"),
                   timing_records=records)
+
+
+def _warn_empty_frame(flat: dict, camera: Camera) -> None:
+    """EmptyFrameWarning with the setup cull causes when a frame tested no sample."""
+    import warnings
+
+    n = int(flat.get("setup.triangles", 0))
+    causes = {"behind the near plane": "setup.culled_near", "off screen": "setup.culled_offscreen",
+              "degenerate": "setup.culled_degenerate", "back-facing": "setup.culled_backface"}
+    counts = {what: int(flat.get(key, 0)) for what, key in causes.items()}
+    rest = n - sum(counts.values())
+    text = ", ".join(f"{c} {what}" for what, c in counts.items() if c)
+    if rest:
+        text += (", " if text else "") + f"{rest} covering no sample position"
+    d = camera.describe()
+    warnings.warn(f"sim.render: the frame tested no samples: of {n} triangles {text or 'none'} "
+                  f"(camera eye {d.get('eye')}, target {d.get('target')}, near {d.get('near')}); frame the "
+                  "scene (models.frame_hint) or move the camera", EmptyFrameWarning, stacklevel=3)
