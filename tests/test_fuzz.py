@@ -167,7 +167,7 @@ def sample_arrays(draw):
     samples = _maybe_wild(draw, samples, 0.2)
     if li.size and draw(st.floats(0, 1)) < 0.2:
         li = li.copy()
-        li.flat[draw(st.integers(0, li.size - 1))] = draw(wild_int)
+        li.flat[draw(st.integers(0, li.size - 1))] = np.clip(draw(wild_int), -2**31, 2**31 - 1)
     if draw(st.floats(0, 1)) < 0.05:
         samples = samples.reshape(-1, 5)[: draw(st.integers(0, 8))].reshape(1, 1, -1, 5) if samples.size else samples
     return samples, li, luv

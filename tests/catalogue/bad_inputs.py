@@ -504,6 +504,21 @@ def core_cache_ways(d):
     _sim()._core.simulate_cache(np.zeros(4, np.uint64), 8, 3)
 
 
+@case("bindings", "_core.simulate_cache with 2^31 - 1 lines (found by fuzzing: allocated 48 GiB)", "ValueError",
+      r"n_lines: expected 1\.\.67108864, got 2147483647", "the argument, its range and the value")
+def core_cache_lines(d):
+    _sim()._core.simulate_cache(np.zeros(4, np.uint64), 2**31 - 1, 0)
+
+
+@case("bindings", "_core.timing_estimate with an infinite texture-miss latency (found by fuzzing)", "ValueError",
+      r"tex_hit_latency, tex_miss_latency: expected finite numbers", "the arguments")
+def core_timing_latency(d):
+    sim = _sim()
+    k = len(sim._core.timing_units())
+    sim._core.timing_estimate(np.zeros(0, sim._core.timing_record_dtype()), [1.0] * k, [1.0] * k, [4] * k,
+                              4.0, float("inf"))
+
+
 @case("bindings", "_core.texel_address at mip level 9 of a 4 x 4 texture", "ValueError", r"level: out of range",
       "the argument")
 def core_texel_level(d):
