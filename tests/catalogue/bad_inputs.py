@@ -524,6 +524,12 @@ def core_timing_latency(d):
                               4.0, float("inf"))
 
 
+@case("bindings", "_core.texel_address of a 2^31 - 1 x 8 texture (found by fuzzing: allocated 64 GiB)", "ValueError",
+      r"height, width: expected 1\.\.16384, got 2147483647 x 8", "the arguments, their range and the values")
+def core_texel_size(d):
+    _sim()._core.texel_address(2**31 - 1, 8, "linear", 0, 0, 0)
+
+
 @case("bindings", "_core.texel_address at mip level 9 of a 4 x 4 texture", "ValueError", r"level: out of range",
       "the argument")
 def core_texel_level(d):
