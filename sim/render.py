@@ -97,9 +97,9 @@ def memory_estimate(camera: Camera, spp: int, n_triangles: int, config: Pipeline
     bins_y = -(-camera.height // b)
     bin_lists = n_triangles * 4 * 4 + bins_x * bins_y * 32
     export = camera.width * camera.height * spp * 8 * 2 if export_samples else 0
-    # One 64-byte record per (triangle, bin) visit (about 4 bins per triangle, as for the bin
+    # One 96-byte record per (triangle, bin) visit (about 4 bins per triangle, as for the bin
     # lists), held per bin, concatenated and copied to numpy: three copies.
-    timing_records = n_triangles * 4 * 64 * 3 if timing else 0
+    timing_records = n_triangles * 4 * 96 * 3 if timing else 0
     grid = config.resolved_lens_grid(spp)
     sample_index = period * period * (grid * grid * config.time_strata + 1 + spp) * 4
     return int(image + bins + setup + bin_lists + export + timing_records + sample_index)
