@@ -333,6 +333,8 @@ def test_accumulation_table_is_the_same_in_every_pixel():
     assert sorted(np.unique(t.lens_index)) == list(range(16))
     with pytest.raises(ValueError, match="passes"):
         sim.SampleTable.create("accumulation", spp=8, passes=4)
+    with pytest.raises(ValueError, match="passes: expected an integer"):
+        sim.SampleTable.accumulation(passes=0)
     # the time strata: one pass per 1/16 of the shutter
     assert sorted(np.floor(s[0, 0, :, 4] * 16).astype(int)) == list(range(16))
 
