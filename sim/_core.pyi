@@ -59,6 +59,9 @@ class RenderParams:
     zhat_stats: bool  # tile: compute the depth interval of every accepted pair and count its width (zcull.width_zhat, zcull.width_vertex); default False
     hiz_enabled: bool  # zmax/zmin culling against per-tile HiZ; default False
     hiz_tile_size: int  # HiZ tile edge (>= tile_size) [px]; default 8
+    gpu_constants: str  # gpu_* algorithms: 'none' (data on every bounding vertex, setup re-derived per fragment), 'triangle' or 'strip' constants (000 §9.6) (gpu_constants: none, triangle, strip); default 'none'
+    gpu_payload_floats: int  # gpu_* algorithms: floats of contained-triangle data per bounding vertex besides its 4 position floats; auto = 3 x (position 3, disc of confusion 1, colour 3) = 21, + 9 end positions when moving (000 Table 2's bump-mapped example: 35) [floats]; default -1
+    gpu_adaptive_ratio: float  # gpu_adaptive: parallel-edge triangle when the largest confusion radius <= ratio x sqrt(projected area), else the 2D hexagon (000 §4.7); default 0.5
     # hardware: from sim.HardwareConfig
     tex_cache_size_bytes: int  # Capacity of one cache (a whole number of sets of ways x line_bytes) [bytes]; default 16384
     tex_cache_line_bytes: int  # Cache line size (a power of two) [bytes]; default 64

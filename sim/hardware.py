@@ -69,6 +69,14 @@ class TextureCacheConfig:
 
 _UNIT_DEFAULTS = {
     # unit: (throughput, latency, fifo, currency)
+    # The conventional-GPU units (gpu_* algorithms; docs/gpu.md): a GeForce 8800-class part, 128
+    # scalar lanes shared by the geometry and pixel shaders' ALU work, 16 pixels per clock of 2D
+    # rasterization, 32 floats per clock from the geometry shader. Zero latency: records of the
+    # other algorithms (no work in these units) pass through them unchanged.
+    "geometry_shader": (128.0, 0, 64, "ops"),
+    "gs_output": (32.0, 0, 64, "floats"),
+    "raster2d": (16.0, 0, 64, "pixels"),
+    "pixel_shader": (128.0, 0, 64, "ops (lanes)"),
     "setup": (1.0, 16, 16, "triangles"),
     "tile_test": (4.0, 4, 32, "tile tests"),
     "sample_test": (64.0, 4, 64, "sample tests (lanes)"),
@@ -89,6 +97,10 @@ class HardwareConfig:
     """The modelled hardware. Nested sections accept dicts (``HardwareConfig.from_dict``)."""
 
     clock_ghz: float = field(default=1.0, metadata={"unit": "GHz", "doc": "Clock frequency (for times in seconds)"})
+    geometry_shader: UnitConfig = _unit("geometry_shader")
+    gs_output: UnitConfig = _unit("gs_output")
+    raster2d: UnitConfig = _unit("raster2d")
+    pixel_shader: UnitConfig = _unit("pixel_shader")
     setup: UnitConfig = _unit("setup")
     tile_test: UnitConfig = _unit("tile_test")
     sample_test: UnitConfig = _unit("sample_test")

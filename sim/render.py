@@ -99,9 +99,9 @@ def memory_parts(camera: Camera, spp: int, n_triangles: int, config: PipelineCon
         "triangle setup (triangles)": n_triangles * (224 + 1 + 4),
         "bin lists (triangles, bins)": n_triangles * 4 * 4 + bins_x * bins_y * 32,
         "sample export (width x height x spp)": camera.width * camera.height * spp * 8 * 2 if export_samples else 0,
-        # One 64-byte record per (triangle, bin) visit (about 4 bins per triangle, as for the bin
+        # One 96-byte record per (triangle, bin) visit (about 4 bins per triangle, as for the bin
         # lists), held per bin, concatenated and copied to numpy: three copies.
-        "timing records (triangles)": n_triangles * 4 * 64 * 3 if timing else 0,
+        "timing records (triangles)": n_triangles * 4 * 96 * 3 if timing else 0,
         "sample index (period^2 x lens cells x time strata)":
             period * period * (grid * grid * config.time_strata + 1 + spp) * 4,
     }

@@ -724,3 +724,51 @@ def _u32_to_unit(x: np.ndarray) -> np.ndarray:
 
 
 __all__ = ["SampleTable", "LENS_SHAPES", "LENS_GRID_SIZES"]
+
+
+@_generator("accumulation", passes=None)
+def _accumulation(spec: _Spec, rng: np.random.Generator, passes) -> _Draw:
+    """Accumulation buffering (000_de06ed5e73318ec6.txt §2.2, §8; Haeberli and Akeley 1990): N = spp
+    pinhole passes, pass k at lens position k and shutter time k, the SAME for every pixel (no
+    per-pixel randomisation, so the passes' ghosts stay visible). The N lens positions are
+    jittered strata of a near-square grid of the unit square, the N times jittered strata of
+    [0, 1) in a random order, and each pass's (x, y) offset a jittered stratum shared by all
+    pixels (the per-pass anti-aliasing jitter). Sample s of every pixel is pass s and uses discrete
+    lens coordinate s, so the table is interleaved (n_lens = N): `interleave` or `accumulation`
+    render it one pass per lens position. ``SampleTable.accumulation(passes=N, seed=...)``;
+    passes defaults to spp and must equal it when both are given."""
+    S = spec.spp
+    if passes is not None and (isinstance(passes, bool) or not isinstance(passes, (int, np.integer)) or passes != S):
+        raise ValueError(f"passes: expected the number of samples per pixel ({S}), got {passes!r}")
+    if not spec.lens:
+        raise ValueError("lens: the accumulation generator needs the lens dimension (lens=True), got False")
+    P = spec.period
+    nx, ny = _grid_shape(S)
+    k = np.arange(S)
+    lens_unit = np.stack([_stratum_values(k % nx, nx, rng.random(S)), _stratum_values(k // nx, ny, rng.random(S))],
+                         axis=1)
+    order = rng.permutation(S)
+    xy = np.stack([_stratum_values(order % nx, nx, rng.random(S)), _stratum_values(order // nx, ny, rng.random(S))],
+                  axis=1)
+    t = _stratum_values(rng.permutation(S), S, rng.random(S))
+    unit = np.empty((P, P, S, 5))
+    unit[..., 0:2] = xy
+    unit[..., 2:4] = lens_unit
+    unit[..., 4] = t
+    lens_index = np.broadcast_to(k.astype(np.int32), (P, P, S)).copy()
+    return _Draw(unit, lens_unit=lens_unit, lens_index=lens_index, params={"n_lens": S, "passes": S})
+
+
+def _accumulation_factory(cls, passes: int | None = None, **params) -> "SampleTable":
+    """Accumulation buffering: ``SampleTable.accumulation(passes=N, seed=...)`` is the
+    ``accumulation`` generator with spp = N (see its documentation)."""
+    if passes is not None and (isinstance(passes, bool) or not isinstance(passes, (int, np.integer))
+                               or not 1 <= passes <= MAX_SPP):
+        raise ValueError(f"passes: expected an integer in 1..{MAX_SPP}, got {passes!r}")
+    if passes is not None and "spp" not in params:
+        params["spp"] = passes
+    return cls.create("accumulation", passes=passes, **params)
+
+
+_accumulation_factory.__name__ = _accumulation_factory.__qualname__ = "accumulation"
+SampleTable.accumulation = classmethod(_accumulation_factory)

@@ -12,8 +12,9 @@ DERIVED: tuple[Derived, ...] = (
     # operations (001 §6.2), summed over setup, tile and sample stages
     Derived("ops.sample", "ops", "Sample-stage operations: ops.sample_region + ops.sample_inside",
             lambda s: s["ops.sample_region"] + s["ops.sample_inside"]),
-    Derived("ops.total", "ops", "Rasterization operations as in 001 §6.2: ops.setup + ops.tile + ops.sample",
-            lambda s: s["ops.setup"] + s["ops.tile"] + s["ops.sample"]),
+    Derived("ops.total", "ops", "Rasterization operations as in 001 §6.2: ops.setup + ops.tile + ops.sample "
+            "(+ ops.ps_setup: a conventional GPU's pixel shader re-deriving setup per fragment)",
+            lambda s: s["ops.setup"] + s["ops.tile"] + s["ops.sample"] + s["ops.ps_setup"]),
     Derived("ops.per_pixel", "ops/pixel", "ops.total / frame.pixels",
             lambda s: ratio(s["ops.total"], s["frame.pixels"])),
     Derived("ops.per_sample_test", "ops/test", "ops.sample_inside / raster.samples_tested",

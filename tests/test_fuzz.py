@@ -273,6 +273,23 @@ def test_fuzz_probe(data):
     _probe_case(data)
 
 
+def _gpu_bound_case(data):
+    TRIED["gpu_bound"] += 1
+    p, cam = data.draw(camera_params())
+    v0, v1 = data.draw(triangles(cam, n_max=1))
+    v0 = v0[0] if v0.ndim == 3 and len(v0) else np.zeros((3, 3), np.float32)
+    v1 = v1[0] if v1.ndim == 3 and len(v1) else v0
+    method = data.draw(st.sampled_from(["pe_triangle", "vr_triangle", "hexagon2d", "wedge", "reduced_wedge",
+                                        "hexagon3d", "convex_hull", "adaptive", "box", "nope"]))
+    _call(sim._core.gpu_bound, method, p, v0, v1, data.draw(st.booleans()))
+
+
+@FAST
+@given(st.data())
+def test_fuzz_gpu_bound(data):
+    _gpu_bound_case(data)
+
+
 def _buckets_case(data):
     TRIED["lens_grid_buckets"] += 1
     samples, _, _ = data.draw(sample_arrays())
@@ -388,7 +405,8 @@ def test_fuzz_timing_and_cache_models(data):
 # ---- the long variant ----------------------------------------------------------------------------------
 
 CASES = {"render": lambda d: _render_case(d, False), "occlusion_query": lambda d: _render_case(d, True),
-         "conservative_raster": _conservative_case, "probe": _probe_case, "lens_grid_buckets": _buckets_case,
+         "conservative_raster": _conservative_case, "probe": _probe_case, "gpu_bound": _gpu_bound_case,
+         "lens_grid_buckets": _buckets_case,
          "sample_table": _table_case, "texture_setup": _texture_case, "timing_and_cache": _timing_case}
 
 

@@ -72,12 +72,18 @@ def diff_stats(a, b):
 # ---------------------------------------------------------------------------------- same image
 
 
-def check_same_image(scene, camera, table=None):
+# The conventional-GPU algorithms test every sample of every pixel their bounds cover, which at a
+# large CoC costs like bruteforce each: the fast model-scene check runs them up to CoC 10 (the slow
+# 96-px variant at every CoC; synthetic scenes and hard cases at every CoC).
+GPU_ALGORITHMS = frozenset(a for a in ALGORITHMS if a.startswith("gpu_"))
+
+
+def check_same_image(scene, camera, table=None, skip=frozenset()):
     table = table or interleaved_table()
     ref = render(scene, camera, table, algorithm="bruteforce")
     assert ref.flat_stats["raster.samples_hit"] > 0
     for a in ALGORITHMS:
-        if a != "bruteforce":
+        if a != "bruteforce" and a not in skip:
             assert_same_image(ref, render(scene, camera, table, algorithm=a), f"{a} vs bruteforce, {camera!r}")
     return ref
 
@@ -136,7 +142,7 @@ def model_camera(hint, res, coc):
 @pytest.mark.parametrize("name", sorted(MODEL_SCENES))
 def test_same_image_models(name, coc):
     scene, hint = model_scene(name)
-    check_same_image(scene, model_camera(hint, MODEL_SCENES[name][1], coc))
+    check_same_image(scene, model_camera(hint, MODEL_SCENES[name][1], coc), skip=GPU_ALGORITHMS if coc > 10 else frozenset())
 
 
 @pytest.mark.parametrize("name", ["spot", "mixed_sizes"])

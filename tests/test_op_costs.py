@@ -130,7 +130,8 @@ def test_render_charges_the_documented_class_cost(algorithm, cls, op_count):
     st = res.flat_stats
     assert st[f"setup.class_{cls}"] == 3 and st["setup.triangles"] == 3
     assert st["raster.tie_breaks"] == 0  # otherwise ties add cost::kTieBreak per zero edge
-    kernel = "2d" if (algorithm in ("interleave", "hinterleave", "tile_interleaved") and cls == "4d") else cls
+    kernel = "2d" if (algorithm in ("interleave", "hinterleave", "tile_interleaved", "accumulation")
+                      and cls == "4d") else cls
     tested = st[f"raster.samples_tested_{kernel}"]
     assert tested == st["raster.samples_tested"] > 0
     assert st["ops.sample_inside"] / tested == doc(f"sample.inside_{kernel}")

@@ -20,7 +20,9 @@ HYPO = dict(deadline=None, derandomize=True, database=None,
             suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 
 # The record field that carries each unit's work (docs/timing.md, "Units and currencies").
-WORK_FIELD = {"setup": "triangles", "tile_test": "tile_tests", "sample_test": "sample_tests",
+WORK_FIELD = {"geometry_shader": "gs_ops", "gs_output": "gs_floats", "raster2d": "raster_pixels",
+              "pixel_shader": "ps_ops",
+              "setup": "triangles", "tile_test": "tile_tests", "sample_test": "sample_tests",
               "depth": "depth_tests", "shader": "quads", "texture": "texel_fetches", "memory": "memory_bytes"}
 REL = 1e-9  # the model sums in double precision, the tests in numpy: allow rounding only
 
@@ -136,7 +138,7 @@ def test_one_busy_unit_closed_form(unit, tp, latencies, work, hit_latency):
 
 
 @settings(max_examples=200, **HYPO)
-@given(unit=st.sampled_from([u for u in UNITS if u != "setup"]), s_work=st.integers(1, 8),
+@given(unit=st.sampled_from(UNITS[1:]), s_work=st.integers(1, 8),
        up_latency=st.integers(0, 60), fifo=st.integers(1, 6), n=st.integers(1, 40),
        other_latencies=st.lists(st.integers(0, 20), min_size=len(UNITS), max_size=len(UNITS)))
 def test_credit_loop_closed_form(unit, s_work, up_latency, fifo, n, other_latencies):

@@ -227,7 +227,7 @@ class PlotSpec(_Strict):
 class MetricsSpec(_Strict):
     """Image error against a reference image of the same point at many samples per pixel
     (experiments/run/references.py, experiments/run/metrics.py). Adds columns metric.rmse, metric.psnr,
-    metric.ssim (and metric.flip)."""
+    metric.ssim, metric.ghosting (and metric.flip)."""
 
     reference_spp: int = Field(1024, description="Samples per pixel of the reference image (>= 1024 for reports)")
     reference_kind: ReferenceKind = Field(

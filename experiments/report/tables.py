@@ -569,3 +569,143 @@ def methods_segments(df, config) -> list[str]:
                              f"{100 * float(r['lines.rejected_small']) / seg:.1f}%", clip])
     return md_table(["scene", "CoC", "lines", "line tests", "segments", "overflow", "merged", "occluded", "too small",
                      "tile clip"], rows)
+# ---- the conventional-GPU pipeline and accumulation buffering (reports/paper/gpu_methods.md) -----
+
+GPU_METHODS = ["gpu_hexagon3d", "gpu_wedge", "gpu_reduced_wedge", "gpu_hexagon2d", "gpu_pe_triangle",
+               "gpu_vr_triangle", "gpu_convex_hull", "gpu_adaptive"]
+# 000 Table 1: vertices, triangles, computation, usability (003's hull and 000 §4.7 are not in it).
+PAPER_GPU_T1 = {"gpu_hexagon3d": ("12", "20/16", "heavy", "excellent"), "gpu_wedge": ("6", "8", "medium", "good"),
+                "gpu_reduced_wedge": ("5", "4", "intense", "excellent"),
+                "gpu_hexagon2d": ("6", "4", "medium", "mediocre"), "gpu_pe_triangle": ("3", "1", "light", "poor"),
+                "gpu_vr_triangle": ("3", "1", "medium", "very poor")}
+# 000 Table 2: total output floats (none / triangle / strip constants), bump-mapped textured surface.
+PAPER_GPU_T2 = {"gpu_hexagon3d": (858, 788, 123), "gpu_hexagon2d": (234, 164, 59)}
+
+
+def _gpu_rows(df):
+    df = _ok(df)
+    return df[df["pipeline.algorithm"].astype(str).str.startswith("gpu_")]
+
+
+@named_table("gpu_table1")
+def gpu_table1(df, config) -> list[str]:
+    """000 Table 1 measured at CoC 8 px: per input triangle (mean over the scenes) output vertices, strip
+    triangles, geometry-shader ops, output floats; bound area and fragments against hit fragments."""
+    df = _gpu_rows(df)
+    coc = 8 if (df["camera.coc_px"] == 8).any() else sorted(df["camera.coc_px"].unique())[0]
+    df = df[df["camera.coc_px"] == coc]
+    rows = []
+    for m in GPU_METHODS:
+        sub = df[df["pipeline.algorithm"] == m]
+        if not len(sub):
+            continue
+        n = sub["gpu.gs_triangles_in"].astype(float)
+        hit = (sub["gpu.fragments"] - sub["gpu.fragments_zero_hit"]).astype(float)
+        per = lambda c: float((sub[c].astype(float) / n).mean())  # noqa: E731
+        area = float((sub["gpu.bound_area"].astype(float) / 1000.0 / hit).mean())
+        frag = float((sub["gpu.fragments"].astype(float) / hit).mean())
+        paper = PAPER_GPU_T1.get(m, ("", "", "", ""))
+        rows.append([m, f"{per('gpu.gs_vertices'):.2f}", paper[0], f"{per('gpu.gs_triangles'):.2f}", paper[1],
+                     f"{per('gpu.gs_ops'):.0f}", paper[2], f"{per('gpu.gs_floats'):.0f}", f"{area:.2f}", f"{frag:.2f}",
+                     f"{float(sub['raster.ste'].mean()):.3f}", paper[3]])
+    return md_table(["method", "vertices / tri", "paper", "triangles / tri", "paper", "GS ops / tri", "paper",
+                     "floats / tri", "bound area / hit px", "fragments / hit fragment", "PS STE",
+                     "paper usability"], rows)
+
+
+@named_table("gpu_fallbacks")
+def gpu_fallbacks(df, config) -> list[str]:
+    """Fallbacks by cause (000 §4.8) summed over the sweep, per method."""
+    df = _gpu_rows(df)
+    cols = ["gpu.fallback_near", "gpu.fallback_motion", "gpu.fallback_degenerate", "gpu.fallback_vr",
+            "gpu.fallback_reduced", "gpu.volume_clipped", "gpu.adaptive_pe", "gpu.adaptive_hexagon"]
+    rows = []
+    for m in GPU_METHODS:
+        sub = df[df["pipeline.algorithm"] == m]
+        if len(sub):
+            rows.append([m, f"{int(sub['gpu.gs_triangles_in'].sum())}"] + [f"{int(sub[c].sum())}" for c in cols])
+    return md_table(["method", "triangles"] + [c.split(".", 1)[1] for c in cols], rows)
+
+
+@named_table("gpu_vs_tile")
+def gpu_vs_tile(df, config) -> list[str]:
+    """Per scene and CoC: the GPU method with the fewest ops and the one with the fewest estimated
+    cycles, and their ratios to tile."""
+    df = _ok(df)
+    rows = []
+    for s in _scenes(df):
+        for coc in sorted(df["camera.coc_px"].unique()):
+            sub = df[(df["scene.name"] == s) & (df["camera.coc_px"] == coc)]
+            tile = sub[sub["pipeline.algorithm"] == "tile"]
+            gpu = sub[sub["pipeline.algorithm"].astype(str).str.startswith("gpu_")]
+            if not len(tile) or not len(gpu):
+                continue
+            t_ops, t_cyc = float(tile["ops.total"].iloc[0]), float(tile["timing.cycles"].iloc[0])
+            bo = gpu.loc[gpu["ops.total"].astype(float).idxmin()]
+            bc = gpu.loc[gpu["timing.cycles"].astype(float).idxmin()]
+            rows.append([s, f"{coc:g}", f"{t_ops / 1e6:.2f}", bo["pipeline.algorithm"],
+                         f"{float(bo['ops.total']) / t_ops:.2f}", f"{t_cyc / 1e3:.1f}", bc["pipeline.algorithm"],
+                         f"{float(bc['timing.cycles']) / t_cyc:.2f}", str(bc["timing.bottleneck"])])
+    return md_table(["scene", "CoC [px]", "tile Mops", "best GPU (ops)", "ops GPU / tile", "tile kcycles",
+                     "best GPU (cycles)", "cycles GPU / tile", "GPU bottleneck"], rows)
+
+
+@named_table("gpu_table2")
+def gpu_table2(df, config) -> list[str]:
+    """000 Table 2 in kind: per input triangle output floats, per fragment interpolated floats and
+    re-derived setup ops, per constant type; the paper's output floats beside."""
+    df = _gpu_rows(df)
+    rows = []
+    for m in GPU_METHODS:
+        for i, const in enumerate(["none", "triangle", "strip"]):
+            r = _first(df, {"pipeline.algorithm": m, "pipeline.gpu_constants": const})
+            if r is None:
+                continue
+            n, frag = float(r["gpu.gs_triangles_in"]), float(r["gpu.fragments"])
+            paper = PAPER_GPU_T2.get(m)
+            rows.append([m, const, f"{float(r['gpu.gs_floats']) / n:.1f}", str(paper[i]) if paper else "",
+                         f"{float(r['gpu.interp_floats']) / frag:.1f}",
+                         "39" if paper and const == "none" else ("4" if paper else ""),
+                         f"{float(r['ops.ps_setup']) / frag:.2f}", f"{float(r['gpu.gs_ops']) / n:.0f}",
+                         f"{float(r['timing.cycles']) / 1e3:.1f}"])
+    return md_table(["method", "constants", "output floats / tri", "paper", "interpolated floats / fragment",
+                     "paper", "re-derived setup ops / fragment", "GS ops / tri", "kcycles"], rows)
+
+
+def _equal_error_spp(spp, err, target):
+    """The spp at which the log-log interpolated curve err(spp) reaches target (NaN outside the range)."""
+    order = np.argsort(spp)
+    x, y = np.log(np.asarray(spp, float)[order]), np.log(np.asarray(err, float)[order])
+    t = math.log(target)
+    for i in range(len(x) - 1):
+        lo, hi = min(y[i], y[i + 1]), max(y[i], y[i + 1])
+        if lo <= t <= hi and y[i] != y[i + 1]:
+            return float(math.exp(x[i] + (t - y[i]) * (x[i + 1] - x[i]) / (y[i + 1] - y[i])))
+    return math.nan
+
+
+@named_table("accumulation_k")
+def accumulation_k(df, config) -> list[str]:
+    """k = N / (stratified spp of equal RMSE) per scene, CoC and N passes; RMSE and ghosting beside."""
+    df = _ok(df)
+    rows = []
+    for s in _scenes(df):
+        for coc in sorted(df["camera.coc_px"].unique()):
+            sub = df[(df["scene.name"] == s) & (df["camera.coc_px"] == coc)]
+            st = sub[sub["samples.kind"] == "stratified"].sort_values("samples.spp")
+            ac = sub[sub["samples.kind"] == "accumulation"].sort_values("samples.spp")
+            if not len(st) or not len(ac):
+                continue
+            for _, r in ac.iterrows():
+                n = int(r["samples.spp"])
+                e = float(r["metric.rmse"])
+                eq = _equal_error_spp(st["samples.spp"], st["metric.rmse"], e)
+                same = st[st["samples.spp"] == n]
+                e_st = float(same["metric.rmse"].iloc[0]) if len(same) else math.nan
+                g_st = float(same["metric.ghosting"].iloc[0]) if len(same) else math.nan
+                k = n / eq if eq == eq else math.nan
+                rows.append([s, f"{coc:g}", str(n), f"{e:.4f}", f"{e_st:.4f}", f"{eq:.1f}" if eq == eq else "out of range",
+                             f"{k:.2f}" if k == k else "", f"{float(r['metric.ghosting']):.2f}", f"{g_st:.2f}", "~4"])
+    return md_table(["scene", "CoC [px]", "N passes", "RMSE accumulation", "RMSE stratified (N spp)",
+                     "stratified spp of equal RMSE", "k", "ghosting accumulation", "ghosting stratified",
+                     "paper k (000 §9.1, perceived)"], rows)

@@ -5,7 +5,9 @@ All metrics compare linear RGB images clipped to [0, 1] (the engine's output ran
 - psnr: 10 log10(peak^2 / mse) [dB], peak 1 (inf for identical images);
 - ssim: scikit-image's structural_similarity (Wang et al. 2004; Gaussian-free 7x7 window,
   data_range 1, mean over the channels);
-- flip: mean LDR-FLIP (flip-evaluator; Andersson et al. 2020) on the sRGB-encoded images.
+- flip: mean LDR-FLIP (flip-evaluator; Andersson et al. 2020) on the sRGB-encoded images;
+- ghosting: the lag-one spatial autocorrelation of the error (000 §2.2: accumulation buffering's
+  ghosts are coherent copies, so neighbouring pixels err alike; per-pixel stochastic noise does not).
 
 The reference images they compare against: experiments/run/references.py.
 """
@@ -41,6 +43,23 @@ def flip(test: np.ndarray, ref: np.ndarray) -> float:
     test, ref = _pair(test, ref)
     _, mean, _ = flip_evaluator.evaluate(_srgb(ref), _srgb(test), "LDR", inputsRGB=True, applyMagma=False)
     return float(mean)
+
+
+def ghosting(test: np.ndarray, ref: np.ndarray) -> float:
+    """Spatial coherence of the error e = test - ref (channel mean, image mean removed): the mean
+    over horizontal and vertical neighbour pairs of e(p) e(q), divided by the mean of e^2. About 0
+    for independent per-pixel noise, towards 1 for ghosting (000 §2.2, §8); 0 for identical images."""
+    test, ref = _pair(test, ref)
+    e = test - ref
+    if e.ndim == 3:
+        e = e.mean(axis=2)
+    e = e - e.mean()
+    var = float(np.mean(e * e))
+    if var == 0.0 or e.shape[0] < 2 or e.shape[1] < 2:
+        return 0.0
+    cx = float(np.mean(e[:, 1:] * e[:, :-1]))
+    cy = float(np.mean(e[1:, :] * e[:-1, :]))
+    return 0.5 * (cx + cy) / var
 
 
 def _srgb(x: np.ndarray) -> np.ndarray:

@@ -72,10 +72,11 @@ def prepare_references(configs, progress: bool = True) -> None:
 
 
 def point_metrics(config, image: np.ndarray) -> dict:
-    """{metric.rmse, metric.psnr, metric.ssim[, metric.flip]} of a point's image against its reference."""
+    """{metric.rmse, metric.psnr, metric.ssim, metric.ghosting[, metric.flip]} of a point's image against its
+    reference."""
     ref = reference_image(config, threads=1)
     out = {"metric.rmse": metrics.rmse(image, ref), "metric.psnr": metrics.psnr(image, ref),
-           "metric.ssim": metrics.ssim(image, ref),
+           "metric.ssim": metrics.ssim(image, ref), "metric.ghosting": metrics.ghosting(image, ref),
            "metric.reference_spp": config.outputs.metrics.reference_spp}
     if config.outputs.metrics.flip:
         out["metric.flip"] = metrics.flip(image, ref)

@@ -109,5 +109,6 @@ void register_render(py::module_& m);        // render.cpp: render, sample-table
 void register_timing(py::module_& m);        // timing.cpp: timing records and the timing model
 void register_conservative(py::module_& m);  // conservative.cpp: conservative rasterization mode
 void register_selftest(py::module_& m);      // selftest.cpp: probes and unit checks for the tests
+void register_gpu(py::module_& m);           // gpu.cpp: the conventional-GPU geometry shader probe
 
 }  // namespace rast5d::bindings

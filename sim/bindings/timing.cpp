@@ -12,8 +12,8 @@
 namespace rast5d::bindings {
 
 void register_timing(py::module_& m) {
-  PYBIND11_NUMPY_DTYPE(TileWork, bin, triangles, tile_tests, sample_tests, depth_tests, quads, texel_fetches,
-                       tex_misses, memory_bytes);
+  PYBIND11_NUMPY_DTYPE(TileWork, bin, gs_ops, gs_floats, raster_pixels, ps_ops, triangles, tile_tests, sample_tests,
+                       depth_tests, quads, texel_fetches, tex_misses, memory_bytes);
 
 
   m.def("timing_record_dtype", []() { return py::dtype::of<TileWork>(); },

@@ -117,6 +117,19 @@ struct ChoiceTraits<TexLayout> {
   }};
 };
 
+// The gpu_constants parameter (000 §9.6): where the contained triangle's data lives for the
+// conventional-GPU pipeline's pixel shader.
+enum class GpuConstants : int { kNone = 0, kTriangle = 1, kStrip = 2 };
+template <>
+struct ChoiceTraits<GpuConstants> {
+  static constexpr std::string_view registry = "gpu_constants";
+  static constexpr std::array<ChoiceInfo, 3> table = {{
+      {"none", "every bounding vertex carries the triangle's data; the pixel shader re-derives the sample-kernel setup per fragment"},
+      {"triangle", "triangle constants: data once per bounding triangle, setup derived once in the geometry shader"},
+      {"strip", "strip constants: data once per bounding strip, setup derived once in the geometry shader"},
+  }};
+};
+
 struct RenderParams {
 #define RAST5D_PARAM(layer, group, key, type, def, unit, domain, doc) type group##key = def;
 #define RAST5D_PY_PARAM(layer, group, key, type, def, unit, domain, doc)

@@ -23,6 +23,10 @@ namespace rast5d {
 
 std::uint64_t TileWork::amount(Unit u) const {
   switch (u) {
+    case Unit::geometry_shader: return gs_ops;
+    case Unit::gs_output: return gs_floats;
+    case Unit::raster2d: return raster_pixels;
+    case Unit::pixel_shader: return ps_ops;
     case Unit::setup: return triangles;
     case Unit::tile_test: return tile_tests;
     case Unit::sample_test: return sample_tests;
@@ -37,6 +41,10 @@ std::uint64_t TileWork::amount(Unit u) const {
 
 TileWork TileWork::since(const TileWork& b) const {
   TileWork w;
+  w.gs_ops = gs_ops - b.gs_ops;
+  w.gs_floats = gs_floats - b.gs_floats;
+  w.raster_pixels = raster_pixels - b.raster_pixels;
+  w.ps_ops = ps_ops - b.ps_ops;
   w.tile_tests = tile_tests - b.tile_tests;
   w.sample_tests = sample_tests - b.sample_tests;
   w.depth_tests = depth_tests - b.depth_tests;
@@ -51,7 +59,14 @@ TileWork work_from_counters(const Counters& c) {
   auto d = [&](Counter k) { return c[k]; };
   TileWork w;
   w.tile_tests = d(Counter::tile_visited);
-  w.sample_tests = d(Counter::raster_samples_tested) + d(Counter::lines_tests);  // a line test is one item
+  // Sample tests run in a conventional GPU's pixel shader are pixel_shader work (gpu.ps_ops), not
+  // the fixed-function sample-test unit's.
+  w.sample_tests = d(Counter::raster_samples_tested) - d(Counter::gpu_ps_samples_tested)
+                   + d(Counter::lines_tests);  // a line test is one item
+  w.gs_ops = d(Counter::gpu_gs_ops);
+  w.gs_floats = d(Counter::gpu_gs_floats);
+  w.raster_pixels = d(Counter::gpu_raster_pixels_tested);
+  w.ps_ops = d(Counter::gpu_ps_ops);
   w.depth_tests = d(Counter::depth_tests);
   w.quads = d(Counter::shade_quad_requests);
   w.texel_fetches = d(Counter::tex_fetches);

@@ -23,6 +23,10 @@ namespace rast5d {
 // The units in pipeline order: (identifier, exported name, currency, description). Declared once;
 // the timing figures' docs (sim.counter_docs, docs/counters.md) are generated from this list.
 #define RAST5D_TIMING_UNITS(X)                                                                            \
+  X(geometry_shader, "geometry_shader", "ops", "Conventional GPU: geometry-shader ALU (gpu.gs_ops)")      \
+  X(gs_output, "gs_output", "floats", "Conventional GPU: geometry shader to rasterizer bandwidth (gpu.gs_floats)") \
+  X(raster2d, "raster2d", "pixels", "Conventional GPU: 2D rasterizer pixel tests (gpu.raster_pixels_tested)") \
+  X(pixel_shader, "pixel_shader", "ops", "Conventional GPU: pixel-shader lanes (gpu.ps_ops: sample tests, re-derived setup)") \
   X(setup, "setup", "triangles", "Triangle setup (one triangle per live or culled triangle)")           \
   X(tile_test, "tile_test", "tile tests", "Tile vs triangle tests (tile.visited)")                      \
   X(sample_test, "sample_test", "sample tests", "Sample-in-triangle tests, throughput = lanes")         \
@@ -52,6 +56,10 @@ inline constexpr std::array<UnitInfo, kNumUnits> kUnitInfo = {{
 // (it is also a numpy structured dtype: sim.timing.RECORD_DTYPE).
 struct TileWork {
   std::int32_t bin = 0;              // screen bin in raster order (< 0: not binned, e.g. culled)
+  std::uint64_t gs_ops = 0;          // geometry_shader
+  std::uint64_t gs_floats = 0;       // gs_output
+  std::uint64_t raster_pixels = 0;   // raster2d
+  std::uint64_t ps_ops = 0;          // pixel_shader
   std::uint32_t triangles = 0;       // setup: triangles set up
   std::uint64_t tile_tests = 0;      // tile_test
   std::uint64_t sample_tests = 0;    // sample_test

@@ -1,0 +1,173 @@
+// The conventional-GPU pipeline as a traversal (000_de06ed5e73318ec6.txt §3, Fig. 4;
+// 003_53fb3558c3c934ea.txt): per triangle the geometry shader emits bounding geometry
+// (gpu/geometry_shader.h), the fixed-function 2D rasterizer turns it into fragments
+// (gpu/raster2d.h), and the pixel shader tests every sample of each fragment against the triangle
+// at the sample's (u, v, t) with the engine's exact sample test and tie rule (the sample pipeline,
+// traversal/sample_pipeline.h; 000 §5.1-5.2, 003's per-MSAA-sample loop), then hands covered
+// samples to the same backend. Every sample the exact test hits lies in a fragment (the bounds are
+// conservative), so the image is bruteforce's.
+//
+// Pixel shader (000 §5.1, §9.6): without triangle constants it re-derives the sample kernel's
+// per-triangle constants from the interpolated vertex data for every fragment (ops.ps_setup);
+// with triangle or strip constants the geometry shader derives them once. Interpolation moves
+// 4 + payload floats per fragment without constants, 4 with (gpu.interp_floats).
+//
+// Counters: gpu.* and ops.ps_setup; the geometry shader's operations go to ops.setup (and
+// gpu.gs_ops), the rasterizer's to ops.tile; once per triangle in its first bin (charge_setup).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+
+#include "gpu/geometry_shader.h"
+#include "gpu/raster2d.h"
+#include "traversal/traversal.h"
+
+namespace rast5d::gpu {
+
+// Per-render constants of the geometry shader, from the parameters and the sample table.
+inline GsFrame make_gs_frame(const Frame& f) {
+  GsFrame g;
+  g.kx = f.fc.lens_active ? f.fc.kx_d : 0.0;
+  g.ky = f.fc.lens_active ? f.fc.ky_d : 0.0;
+  g.focus = f.fc.focus_d;
+  g.neg_focus = -f.fc.focus_d;
+  g.near_clip = f.fc.near_d * (1.0 - 0x1p-12);
+  g.s = 1.0 / std::max(1, std::max(f.p.width, f.p.height));
+  g.inv_s = std::max(1, std::max(f.p.width, f.p.height));
+  g.adaptive_ratio = f.p.gpu_adaptive_ratio;
+  // The lens set's support: the unit disk when every (u, v) of the table lies in it, else the
+  // square [-1, 1]^2 (always valid).
+  bool disk = true;
+  const int P = f.table.period(), spp = f.table.spp();
+  for (int py = 0; py < P && disk; ++py)
+    for (int px = 0; px < P && disk; ++px) {
+      const PixelSamples ps = f.table.pixel(px, py);
+      for (int s = 0; s < spp; ++s) {
+        const double u = ps.u[s], v = ps.v[s];
+        if (!(u * u + v * v <= 1.0)) {
+          disk = false;
+          break;
+        }
+      }
+    }
+  g.disk = disk;
+  return g;
+}
+
+// Floats of contained-triangle data per bounding vertex besides its 4 position floats.
+inline int payload_floats(const RenderParams& p, const TriSetup& tri) {
+  if (p.gpu_payload_floats >= 0) return p.gpu_payload_floats;
+  return 3 * (3 + 1 + 3) + (tri.moving ? 9 : 0);
+}
+
+template <class A, Method kMethod>
+class GpuBounding final : public Traversal {
+  using D = typename A::f64;
+  using F = typename A::f32;
+
+ public:
+  GpuBounding(const Frame& f, ThreadState& ts)
+      : f_(f), c_(ts.counters), pipe_(f, ts), gs_(make_gs_frame(f)) {}
+
+  void rasterize(const TriSetup& tri, const BinRect& bin, bool charge_setup) override {
+    std::uint64_t gs_ops = 0, raster_setup_ops = 0;
+    const Bound b = gs_.run(kMethod, tri, gs_ops);
+    const GpuConstants constants = f_.p.gpu_constants;
+    if (constants != GpuConstants::kNone) rederive(tri, gs_ops);  // once, in the geometry shader
+    RasterSetup r;
+    raster_setup<A>(b, tri, r, raster_setup_ops);
+    if (charge_setup) account(tri, b, gs_ops, raster_setup_ops);
+
+    const int x0 = std::max(r.x0, bin.x0), x1 = std::min(r.x1, bin.x1);
+    const int y0 = std::max(r.y0, bin.y0), y1 = std::min(r.y1, bin.y1);
+    if (x0 >= x1 || y0 >= y1) return;
+    const int P = payload_floats(f_.p, tri);
+    const std::uint64_t interp = constants == GpuConstants::kNone ? 4 + P : 4;
+    const int spp = f_.table.spp();
+    std::uint64_t raster_ops = 0;
+    pipe_.begin(tri);
+    for (int py = y0; py < y1; ++py)
+      for (int px = x0; px < x1; ++px) {
+        ++c_[Counter::gpu_raster_pixels_tested];
+        if (!pixel_covered<A>(r, px, py, raster_ops)) continue;
+        // A fragment: the pixel shader.
+        ++c_[Counter::gpu_fragments];
+        c_[Counter::gpu_interp_floats] += interp;
+        std::uint64_t ps_setup = 0;
+        if (constants == GpuConstants::kNone) rederive(tri, ps_setup);
+        const std::uint64_t covered0 = c_[Counter::raster_samples_covered];
+        const std::uint64_t ops0 = c_[Counter::ops_sample_inside];
+        pipe_.push_pixel(px, py, f_.table.pixel(px, py));
+        pipe_.flush();
+        if (c_[Counter::raster_samples_covered] == covered0) ++c_[Counter::gpu_fragments_zero_hit];
+        c_[Counter::gpu_ps_samples_tested] += static_cast<std::uint64_t>(spp);
+        c_[Counter::ops_ps_setup] += ps_setup;
+        c_[Counter::gpu_ps_ops] += ps_setup + (c_[Counter::ops_sample_inside] - ops0);
+      }
+    c_[Counter::ops_tile] += raster_ops;
+    pipe_.end_visit();  // a visit = the triangle's fragments in this bin
+    pipe_.flush();
+  }
+
+ private:
+  // The sample kernel's per-triangle constants, derived from the vertex data (000 §9.6): the
+  // static shear coefficients (4D) or the motion deltas (3D, 5D). Costs kRederiveShear / Motion.
+  void rederive(const TriSetup& tri, std::uint64_t& ops) const {
+    if (tri.cls == DimClass::k4D) {
+      for (int j = 0; j < 3; ++j) {
+        const F cx = madd(F(tri.W[j]), F(f_.fc.kx), F(f_.fc.neg_kx_f));
+        const F cy = madd(F(tri.W[j]), F(f_.fc.ky), F(f_.fc.neg_ky_f));
+        sink_ = raw(cx) + raw(cy);
+      }
+      charge<A>(ops, cost::gpu::kRederiveShear);
+    } else if (tri.moving) {
+      for (int j = 0; j < 3; ++j) {
+        const F X1 = F(tri.X[j] + tri.dX[j]), Y1 = F(tri.Y[j] + tri.dY[j]), W1 = F(tri.W[j] + tri.dW[j]);
+        sink_ = raw(X1 - F(tri.X[j])) + raw(Y1 - F(tri.Y[j])) + raw(W1 - F(tri.W[j]));
+      }
+      charge<A>(ops, cost::gpu::kRederiveMotion);
+    }
+  }
+
+  void account(const TriSetup& tri, const Bound& b, std::uint64_t gs_ops, std::uint64_t raster_setup_ops) {
+    ++c_[Counter::gpu_gs_triangles_in];
+    c_[Counter::gpu_gs_vertices] += static_cast<std::uint64_t>(b.out_vertices);
+    c_[Counter::gpu_gs_triangles] += static_cast<std::uint64_t>(b.out_triangles);
+    const std::uint64_t strip = static_cast<std::uint64_t>(b.out_triangles) + 2;
+    const std::uint64_t P = static_cast<std::uint64_t>(payload_floats(f_.p, tri));
+    std::uint64_t floats = 0;
+    switch (f_.p.gpu_constants) {
+      case GpuConstants::kNone: floats = strip * (4 + P); break;
+      case GpuConstants::kTriangle: floats = strip * 4 + static_cast<std::uint64_t>(b.out_triangles) * P; break;
+      case GpuConstants::kStrip: floats = strip * 4 + P; break;
+    }
+    c_[Counter::gpu_gs_floats] += floats;
+    c_[Counter::gpu_gs_ops] += gs_ops;
+    c_[Counter::ops_setup] += gs_ops;
+    c_[Counter::ops_tile] += raster_setup_ops;
+    const double area = std::min(b.area, 1e15);
+    c_[Counter::gpu_bound_area] += static_cast<std::uint64_t>(std::llround(std::max(0.0, area) * 1000.0));
+    switch (b.fallback) {
+      case Fallback::kNone: break;
+      case Fallback::kNear: ++c_[Counter::gpu_fallback_near]; break;
+      case Fallback::kMotion: ++c_[Counter::gpu_fallback_motion]; break;
+      case Fallback::kDegenerate: ++c_[Counter::gpu_fallback_degenerate]; break;
+      case Fallback::kVR: ++c_[Counter::gpu_fallback_vr]; break;
+      case Fallback::kReduced: ++c_[Counter::gpu_fallback_reduced]; break;
+    }
+    if (b.volume_clipped) ++c_[Counter::gpu_volume_clipped];
+    if (kMethod == Method::kAdaptive && !tri.moving && !tri.near_clipped) {
+      if (b.used == Method::kPETriangle) ++c_[Counter::gpu_adaptive_pe];
+      if (b.used == Method::kHexagon2D) ++c_[Counter::gpu_adaptive_hexagon];
+    }
+  }
+
+  const Frame& f_;
+  Counters& c_;
+  SamplePipeline<A> pipe_;
+  GeometryShader<A> gs_;
+  mutable float sink_ = 0.0f;
+};
+
+}  // namespace rast5d::gpu

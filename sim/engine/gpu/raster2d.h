@@ -1,0 +1,91 @@
+// The conventional 2D rasterizer of the GPU pipeline (000_de06ed5e73318ec6.txt §3.1): the
+// geometry shader's bounding polygon (gpu/geometry_shader.h) is rasterized conservatively: a
+// pixel is a fragment when its square [px, px + 1] x [py, py + 1] meets every half-plane of the
+// polygon (one fragment per pixel and triangle, as a convex strip dilated by the pixel gives).
+// Every sample of the pixel can then be tested by the pixel shader, whatever its offset in the
+// pixel. The rasterizer scans the box of the polygon's vertices inside the triangle's setup box
+// (its scissor: no hit lies outside it) and the screen bin.
+//
+// Costs (gpu/costs.h): per edge kRasterEdgeSetup, per vertex kRasterScanVertex (once per triangle),
+// per (pixel, edge) evaluated kRasterEdge (the test stops at the first edge that rejects).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+#include "core/arith.h"
+#include "core/bin_rect.h"
+#include "gpu/costs.h"
+#include "gpu/geometry_shader.h"
+
+namespace rast5d::gpu {
+
+struct RasterSetup {
+  int n = 0;
+  double nx[kMaxPlanes], ny[kMaxPlanes], h[kMaxPlanes];
+  double ox[kMaxPlanes], oy[kMaxPlanes];  // the pixel corner that tests each edge (0 or 1)
+  int x0 = 0, x1 = 0, y0 = 0, y1 = 0;     // scan box [x0, x1) x [y0, y1) before the bin
+};
+
+// Edge setup and scan box. Operations go to ops (charged once per triangle by the caller).
+template <class A>
+inline void raster_setup(const Bound& b, const TriSetup& tri, RasterSetup& r, std::uint64_t& ops) {
+  using D = typename A::f64;
+  r.n = b.n_planes;
+  for (int i = 0; i < r.n; ++i) {
+    r.nx[i] = b.nx[i], r.ny[i] = b.ny[i], r.h[i] = b.h[i];
+    r.ox[i] = D(b.nx[i]) < D(0.0) ? 1.0 : 0.0;
+    r.oy[i] = D(b.ny[i]) < D(0.0) ? 1.0 : 0.0;
+    charge<A>(ops, cost::gpu::kRasterEdgeSetup);
+  }
+  r.x0 = tri.bx0, r.x1 = tri.bx1, r.y0 = tri.by0, r.y1 = tri.by1;
+  if (!b.verts_valid || b.n_verts < 3) return;
+  D lx = D(b.vx[0]), hx = lx, ly = D(b.vy[0]), hy = ly;
+  for (int i = 0; i < b.n_verts; ++i) {
+    lx = vmin(lx, D(b.vx[i])), hx = vmax(hx, D(b.vx[i]));
+    ly = vmin(ly, D(b.vy[i])), hy = vmax(hy, D(b.vy[i]));
+    charge<A>(ops, cost::gpu::kRasterScanVertex);
+  }
+  // The vertices are those of the polygon before its margins: widen the scan box by the margins'
+  // effect on the vertices, computed from the margined half-planes (robustness, not charged).
+  double mlx = raw(lx), mhx = raw(hx), mly = raw(ly), mhy = raw(hy);
+  if (b.n_planes == b.n_verts) {
+    for (int i = 0; i < b.n_planes; ++i) {
+      const int j = (i + 1) % b.n_planes;
+      const double det = b.nx[i] * b.ny[j] - b.ny[i] * b.nx[j];
+      if (!(det > 0.0)) return;  // keep the setup box
+      const double x = (b.h[i] * b.ny[j] - b.h[j] * b.ny[i]) / det;
+      const double y = (b.nx[i] * b.h[j] - b.nx[j] * b.h[i]) / det;
+      if (!std::isfinite(x) || !std::isfinite(y)) return;
+      mlx = std::min(mlx, x), mhx = std::max(mhx, x), mly = std::min(mly, y), mhy = std::max(mhy, y);
+    }
+  } else {
+    return;
+  }
+  const double pad = 0x1p-6 + 1e-9 * std::max({std::fabs(mlx), std::fabs(mhx), std::fabs(mly), std::fabs(mhy)});
+  auto clampi = [](double v, int lo, int hi) {
+    if (!(v > lo)) return lo;
+    if (!(v < hi)) return hi;
+    return static_cast<int>(v);
+  };
+  r.x0 = std::max(r.x0, clampi(std::floor(mlx - pad), tri.bx0, tri.bx1));
+  r.x1 = std::min(r.x1, clampi(std::floor(mhx + pad) + 1.0, tri.bx0, tri.bx1));
+  r.y0 = std::max(r.y0, clampi(std::floor(mly - pad), tri.by0, tri.by1));
+  r.y1 = std::min(r.y1, clampi(std::floor(mhy + pad) + 1.0, tri.by0, tri.by1));
+}
+
+// Does pixel (px, py)'s square meet every half-plane? Operations go to ops.
+template <class A>
+inline bool pixel_covered(const RasterSetup& r, int px, int py, std::uint64_t& ops) {
+  using D = typename A::f64;
+  for (int i = 0; i < r.n; ++i) {
+    const D cx(px + r.ox[i]), cy(py + r.oy[i]);
+    const bool out = madd(D(r.nx[i]), cx, D(r.ny[i]) * cy) > D(r.h[i]);
+    charge<A>(ops, cost::gpu::kRasterEdge);
+    if (out) return false;
+  }
+  return true;
+}
+
+}  // namespace rast5d::gpu

@@ -1,0 +1,16 @@
+// GPU_ADAPTIVE: the conventional-GPU pipeline (gpu/gpu_pipeline.h) with the 000 §4.7 per-triangle choice: parallel-edge triangle for small blur bound.
+#include "gpu/gpu_pipeline.h"
+
+namespace rast5d {
+namespace {
+
+template <class A>
+using GpuAdaptive = gpu::GpuBounding<A, gpu::Method::kAdaptive>;
+
+}  // namespace
+
+RAST5D_REGISTER_TRAVERSAL("gpu_adaptive",
+                          "000 §4.7 per-triangle choice: parallel-edge triangle for small blur, 2D hexagon for large, 3D hexagon across the near plane, convex hull when moving; pixel-shader stochastic test",
+                          false, GpuAdaptive);
+
+}  // namespace rast5d

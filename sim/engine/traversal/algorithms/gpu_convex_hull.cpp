@@ -1,0 +1,16 @@
+// GPU_CONVEX_HULL: the conventional-GPU pipeline (gpu/gpu_pipeline.h) with the 003 bound.
+#include "gpu/gpu_pipeline.h"
+
+namespace rast5d {
+namespace {
+
+template <class A>
+using GpuConvexHull = gpu::GpuBounding<A, gpu::Method::kConvexHull>;
+
+}  // namespace
+
+RAST5D_REGISTER_TRAVERSAL("gpu_convex_hull",
+                          "003 (2+1)D convex hull of the vertices' confusion boxes at both shutter ends (motion and defocus; clip-and-box across z = 0), pixel-shader stochastic test",
+                          false, GpuConvexHull);
+
+}  // namespace rast5d

@@ -1,0 +1,16 @@
+// GPU_HEXAGON2D: the conventional-GPU pipeline (gpu/gpu_pipeline.h) with the 000 §4.4 2D bounding hexagon bound.
+#include "gpu/gpu_pipeline.h"
+
+namespace rast5d {
+namespace {
+
+template <class A>
+using GpuHexagon2D = gpu::GpuBounding<A, gpu::Method::kHexagon2D>;
+
+}  // namespace
+
+RAST5D_REGISTER_TRAVERSAL("gpu_hexagon2d",
+                          "000 §4.4 2D bounding hexagon (6 vertices, 4 triangles), rasterized, then a pixel-shader stochastic test of every sample of each fragment",
+                          false, GpuHexagon2D);
+
+}  // namespace rast5d

@@ -1,0 +1,16 @@
+// GPU_HEXAGON3D: the conventional-GPU pipeline (gpu/gpu_pipeline.h) with the 000 §4.4 3D hexagonal bounding volume bound.
+#include "gpu/gpu_pipeline.h"
+
+namespace rast5d {
+namespace {
+
+template <class A>
+using GpuHexagon3D = gpu::GpuBounding<A, gpu::Method::kHexagon3D>;
+
+}  // namespace
+
+RAST5D_REGISTER_TRAVERSAL("gpu_hexagon3d",
+                          "000 §4.4 3D hexagonal bounding volume (12 vertices, 20 triangles), rasterized, pixel-shader stochastic test",
+                          false, GpuHexagon3D);
+
+}  // namespace rast5d

@@ -1,0 +1,16 @@
+// GPU_PE_TRIANGLE: the conventional-GPU pipeline (gpu/gpu_pipeline.h) with the 000 §4.5 parallel-edge bounding triangle bound.
+#include "gpu/gpu_pipeline.h"
+
+namespace rast5d {
+namespace {
+
+template <class A>
+using GpuPETriangle = gpu::GpuBounding<A, gpu::Method::kPETriangle>;
+
+}  // namespace
+
+RAST5D_REGISTER_TRAVERSAL("gpu_pe_triangle",
+                          "000 §4.5 parallel-edge bounding triangle (2D; 3 vertices, 1 triangle), rasterized, then a pixel-shader stochastic test of every sample of each fragment",
+                          false, GpuPETriangle);
+
+}  // namespace rast5d

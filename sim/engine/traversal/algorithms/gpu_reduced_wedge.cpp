@@ -1,0 +1,16 @@
+// GPU_REDUCED_WEDGE: the conventional-GPU pipeline (gpu/gpu_pipeline.h) with the 000 §4.5 reduced bounding wedge bound.
+#include "gpu/gpu_pipeline.h"
+
+namespace rast5d {
+namespace {
+
+template <class A>
+using GpuReducedWedge = gpu::GpuBounding<A, gpu::Method::kReducedWedge>;
+
+}  // namespace
+
+RAST5D_REGISTER_TRAVERSAL("gpu_reduced_wedge",
+                          "000 §4.5 reduced bounding wedge (the wedge's silhouette as one strip; the full wedge when the volume reaches the near plane), pixel-shader stochastic test",
+                          false, GpuReducedWedge);
+
+}  // namespace rast5d

@@ -1,0 +1,16 @@
+// GPU_VR_TRIANGLE: the conventional-GPU pipeline (gpu/gpu_pipeline.h) with the 000 §4.6 variable-radius bounding triangle bound.
+#include "gpu/gpu_pipeline.h"
+
+namespace rast5d {
+namespace {
+
+template <class A>
+using GpuVRTriangle = gpu::GpuBounding<A, gpu::Method::kVRTriangle>;
+
+}  // namespace
+
+RAST5D_REGISTER_TRAVERSAL("gpu_vr_triangle",
+                          "000 §4.6 variable-radius bounding triangle (2D; tangent to the confusion circles; falls back to the parallel-edge triangle), pixel-shader stochastic test",
+                          false, GpuVRTriangle);
+
+}  // namespace rast5d

@@ -1,0 +1,16 @@
+// GPU_WEDGE: the conventional-GPU pipeline (gpu/gpu_pipeline.h) with the 000 §4.5 bounding wedge bound.
+#include "gpu/gpu_pipeline.h"
+
+namespace rast5d {
+namespace {
+
+template <class A>
+using GpuWedge = gpu::GpuBounding<A, gpu::Method::kWedge>;
+
+}  // namespace
+
+RAST5D_REGISTER_TRAVERSAL("gpu_wedge",
+                          "000 §4.5 bounding wedge (3D; 6 vertices, 8 triangles), rasterized, pixel-shader stochastic test",
+                          false, GpuWedge);
+
+}  // namespace rast5d

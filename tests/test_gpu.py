@@ -1,0 +1,370 @@
+"""The conventional-GPU pipeline (000 §3-5, §9.6; 003) and accumulation buffering (000 §2.2, §8):
+bounds conservative against an independent numpy model of the sheared, moving triangle (random and
+hypothesis-drawn triangles, adversarial classes), closed-form bound areas for a disc-of-confusion
+triangle, the paper's orderings, every fallback counted, 000 Table 2's float counts, the pixel
+shader's work, and accumulation against INTERLEAVE counter for counter.
+
+The same image as bruteforce for every gpu_* algorithm (and accumulation) on the hard cases and the
+synthetic scenes comes from the registry-driven tests (test_invariants.py, test_hardcases.py)."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import sim
+from sim import _core
+from tests.reference import make_scene, world_from_pixel
+
+pytestmark = pytest.mark.invariants
+
+METHODS = ("pe_triangle", "vr_triangle", "hexagon2d", "wedge", "reduced_wedge", "hexagon3d", "convex_hull",
+           "adaptive")
+GPU_ALGORITHMS = tuple(f"gpu_{m}" for m in METHODS)
+SIZE = 64
+
+
+def params(kx=6.0, ky=None, focus=4.0, near=0.1, width=SIZE, height=SIZE, **extra):
+    p = _core.RenderParams()
+    p.width, p.height = width, height
+    p.coc_x_px, p.coc_y_px = kx, kx if ky is None else ky
+    p.focus_w, p.near_w = focus, near
+    p.table_has_lens = p.table_has_time = True
+    for k, v in extra.items():
+        setattr(p, k, v)
+    return p
+
+
+def homog(pts):
+    """(3, 3) pixel positions and depths (x, y, W) -> pixel-homogeneous (X, Y, W) float32."""
+    pts = np.asarray(pts, dtype=np.float64)
+    return np.stack([pts[:, 0] * pts[:, 2], pts[:, 1] * pts[:, 2], pts[:, 2]], axis=1).astype(np.float32)
+
+
+def screen_points(v0, v1, kx, ky, focus, near, rng, n=4000, disk=True):
+    """Independent model (float64): screen positions of random points of the triangle at random
+    (u, v, t), the lens point in the unit disk (or square); points behind the near plane dropped."""
+    v0 = np.asarray(v0, dtype=np.float64)
+    v1 = np.asarray(v1, dtype=np.float64)
+    bary = rng.dirichlet((1, 1, 1), size=n)
+    corners = np.eye(3)[rng.integers(0, 3, size=n // 4)]  # vertices and edges matter most
+    bary[: n // 4] = corners
+    edge = rng.uniform(size=n // 4)
+    bary[n // 4: n // 2] = 0.0
+    idx = rng.integers(0, 3, size=n // 4)
+    bary[np.arange(n // 4, n // 2), idx] = edge
+    bary[np.arange(n // 4, n // 2), (idx + 1) % 3] = 1.0 - edge
+    t = rng.uniform(size=n)
+    if disk:
+        r, a = np.sqrt(rng.uniform(size=n)), rng.uniform(0, 2 * np.pi, size=n)
+        r[: n // 2] = 1.0  # the rim
+        u, v = r * np.cos(a), r * np.sin(a)
+    else:
+        u, v = rng.choice([-1.0, 1.0], size=n), rng.uniform(-1, 1, size=n)
+    P = (1 - t)[:, None, None] * v0[None] + t[:, None, None] * v1[None]  # (n, 3 vertices, XYW)
+    q = np.einsum("nj,njc->nc", bary, P)
+    X = q[:, 0] + u * kx * (q[:, 2] - focus)
+    Y = q[:, 1] + v * ky * (q[:, 2] - focus)
+    keep = q[:, 2] >= near
+    return np.stack([X[keep] / q[keep, 2], Y[keep] / q[keep, 2]], axis=1)
+
+
+def assert_contains(bound, pts, what):
+    planes = bound["planes"]
+    assert planes.shape[0] >= 3, what
+    # Pixel-square test of the rasterizer = the point itself is enough here (the square contains it).
+    excess = pts @ planes[:, :2].T - planes[:, 2][None, :]
+    worst = float(excess.max()) if excess.size else -1.0
+    assert worst <= 0.0, f"{what}: a hit lies {worst:.3g} outside the bound ({bound['used']}, {bound['fallback']})"
+
+
+def random_triangle(rng, moving=False, cross_near=False):
+    c = rng.uniform(-10, SIZE + 10, size=2)
+    size = rng.uniform(0.5, 40)
+    pts = np.column_stack([c[0] + size * rng.uniform(-1, 1, 3), c[1] + size * rng.uniform(-1, 1, 3),
+                           4.0 * np.exp(rng.uniform(-1.2, 1.5, 3))])
+    v0 = homog(pts)
+    if cross_near:
+        v0[0, 2] = rng.uniform(-2.0, 0.05)
+    v1 = v0.copy()
+    if moving:
+        v1 = (v0 + rng.uniform(-8, 8, size=(3, 3)) * np.array([v0[:, 2], v0[:, 2], np.full(3, 0.1)]).T).astype(np.float32)
+        v1[:, 2] = np.maximum(v1[:, 2], 0.2)
+    return v0, v1
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_bounds_conservative_random(method, rng):
+    """Every hit of random static, moving and near-crossing triangles at random lens points (disk
+    and square lens sets) lies inside the bound."""
+    kx = 6.0
+    for trial in range(40):
+        moving, cross = trial % 4 == 1, trial % 4 == 2
+        v0, v1 = random_triangle(rng, moving=moving, cross_near=cross)
+        disk = trial % 3 != 0
+        p = params(kx=kx, ky=-kx * 0.75)
+        b = _core.gpu_bound(method, p, v0, v1, disk)
+        if b["culled"]:
+            continue
+        pts = screen_points(v0, v1, kx, -kx * 0.75, 4.0, 0.1, rng, disk=disk)
+        assert_contains(b, pts, f"{method} trial {trial}")
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(xs=st.lists(st.floats(-40, 100), min_size=3, max_size=3), ys=st.lists(st.floats(-40, 100), min_size=3, max_size=3),
+       ws=st.lists(st.floats(0.3, 60.0), min_size=3, max_size=3), kx=st.floats(0.0, 80.0),
+       method=st.sampled_from(METHODS), seed=st.integers(0, 2**31))
+def test_bounds_conservative_hypothesis(xs, ys, ws, kx, method, seed):
+    v0 = homog(np.column_stack([xs, ys, ws]))
+    b = _core.gpu_bound(method, params(kx=kx), v0, v0, True)
+    if b["culled"]:
+        return
+    pts = screen_points(v0, v0, kx, kx, 4.0, 0.1, np.random.default_rng(seed), n=800)
+    assert_contains(b, pts, f"{method} hypothesis")
+
+
+ADVERSARIAL = {
+    # focus crossing: one vertex in front of, one on, one behind the focus plane
+    "focus_crossing": [(5, 6, 2.0), (50, 9, 4.0), (24, 58, 14.0)],
+    "vertex_on_focus_plane": [(30, 4, 4.0), (4, 50, 2.5), (60, 46, 11.0)],
+    "huge_blur_sliver": [(10, 10, 1.0), (54, 11, 1.0), (32, 10.3, 1.0)],
+    "sliver_across_focus": [(2, 30, 1.5), (62, 31, 30.0), (33, 30.2, 4.0)],
+    "tiny_far": [(31, 31, 60.0), (31.4, 31, 60.0), (31, 31.3, 60.0)],
+}
+
+
+@pytest.mark.parametrize("case", sorted(ADVERSARIAL))
+@pytest.mark.parametrize("method", METHODS)
+def test_bounds_conservative_adversarial(method, case, rng):
+    v0 = homog(ADVERSARIAL[case])
+    for kx in (0.5, 8.0, 120.0):
+        for disk in (True, False):
+            b = _core.gpu_bound(method, params(kx=kx), v0, v0, disk)
+            assert not b["culled"]
+            assert_contains(b, screen_points(v0, v0, kx, kx, 4.0, 0.1, rng, disk=disk), f"{method} {case} kx={kx}")
+
+
+def test_behind_camera_and_moving_fallbacks(rng):
+    """000 §4.8: 2D methods fall back to clip-and-box across the near plane, 3D methods clip their
+    volume; 000's methods give moving triangles 003's hull; all counted and conservative."""
+    v0 = homog([(10, 10, 3.0), (50, 14, 5.0), (30, 50, 8.0)])
+    v0[0] = [0.4, -0.3, -1.0]  # behind the camera
+    for method in ("pe_triangle", "vr_triangle", "hexagon2d", "convex_hull"):
+        b = _core.gpu_bound(method, params(), v0, v0, True)
+        assert b["fallback"] == "near" and b["used"] == "box", method
+    for method in ("wedge", "hexagon3d", "reduced_wedge"):
+        b = _core.gpu_bound(method, params(), v0, v0, True)
+        assert b["volume_clipped"] and b["fallback"] in ("none", "reduced"), (method, b["fallback"])
+        assert_contains(b, screen_points(v0, v0, 6.0, 6.0, 4.0, 0.1, rng), method)
+    assert _core.gpu_bound("adaptive", params(), v0, v0, True)["used"] == "hexagon3d"
+    s0 = homog([(10, 10, 3.0), (50, 14, 5.0), (30, 50, 8.0)])
+    s1 = homog([(20, 12, 3.5), (58, 20, 5.0), (36, 60, 7.0)])
+    for method in ("pe_triangle", "hexagon2d", "wedge", "hexagon3d"):
+        b = _core.gpu_bound(method, params(), s0, s1, True)
+        assert b["fallback"] == "motion" and b["used"] == "convex_hull", method
+        assert_contains(b, screen_points(s0, s1, 6.0, 6.0, 4.0, 0.1, rng), method)
+    assert _core.gpu_bound("convex_hull", params(), s0, s1, True)["fallback"] == "none"
+
+
+def test_variable_radius_fallback_when_a_circle_encloses_another():
+    """000 §4.6: no outer tangent when one confusion circle contains the other: the parallel-edge
+    triangle, counted."""
+    v0 = homog([(30, 30, 0.5), (31, 30, 4.0), (30, 31, 4.0)])  # one very blurry vertex next to two sharp
+    b = _core.gpu_bound("vr_triangle", params(kx=10.0), v0, v0, True)
+    assert b["fallback"] == "vr" and b["used"] == "pe_triangle"
+    ok = homog([(10, 10, 3.0), (50, 14, 3.2), (30, 50, 3.4)])
+    assert _core.gpu_bound("vr_triangle", params(kx=4.0), ok, ok, True)["fallback"] == "none"
+
+
+def exterior_angles(q):
+    q = np.asarray(q, dtype=np.float64)
+    out = []
+    for i in range(3):
+        a, b, c = q[i - 1], q[i], q[(i + 1) % 3]
+        d1, d2 = b - a, c - b
+        cosang = d1 @ d2 / np.linalg.norm(d1) / np.linalg.norm(d2)
+        out.append(math.acos(max(-1.0, min(1.0, cosang))))
+    return np.array(out)
+
+
+def test_closed_form_bound_area_disc_of_confusion_triangle():
+    """A triangle parallel to the image plane has one disc of confusion of radius r = kx |1 - F / W|
+    at every vertex. Closed forms: parallel-edge triangle A + P r + r^2 sum tan(phi_i / 2), hexagon
+    A + P r + 2 r^2 sum tan(phi_i / 4) (phi_i the exterior angles); the 3D hexagon and wedge of a
+    fronto-parallel triangle are flat and project to the same polygons."""
+    q = np.array([(12.0, 9.0), (51.0, 17.0), (25.0, 55.0)])
+    W, F, kx = 8.0, 4.0, 6.0
+    v0 = homog(np.column_stack([q, np.full(3, W)]))
+    r = kx * abs(1 - F / W)
+    d1, d2 = q[1] - q[0], q[2] - q[0]
+    A = 0.5 * abs(d1[0] * d2[1] - d1[1] * d2[0])
+    P = sum(np.linalg.norm(q[(i + 1) % 3] - q[i]) for i in range(3))
+    phi = exterior_angles(q)
+    pe = A + P * r + r * r * np.tan(phi / 2).sum()
+    hexa = A + P * r + 2 * r * r * np.tan(phi / 4).sum()
+    got = {m: _core.gpu_bound(m, params(kx=kx, focus=F), v0, v0, True)["area"] for m in METHODS}
+    assert got["pe_triangle"] == pytest.approx(pe, rel=1e-5)
+    assert got["hexagon2d"] == pytest.approx(hexa, rel=1e-5)
+    assert got["wedge"] == pytest.approx(pe, rel=1e-4)
+    assert got["reduced_wedge"] == pytest.approx(pe, rel=1e-4)
+    assert got["hexagon3d"] == pytest.approx(hexa, rel=1e-4)
+    # equal radii: the variable-radius tangents are the parallel edges
+    assert got["vr_triangle"] == pytest.approx(pe, rel=1e-5)
+
+
+def test_paper_orderings(rng):
+    """000's orderings: the hexagon is the tightest of its class (§4.4: inside the parallel-edge
+    triangle in 2D, inside the wedge in 3D); the reduced wedge covers the wedge's screen area with
+    fewer triangles (§4.5); the variable-radius triangle is not always tighter than the parallel-edge
+    one (§4.6: both orders occur); with zero blur every bound fits the triangle exactly (§4.4, §4.5).
+    Focus-crossing triangles around the focus plane (000 Fig. 6's narrow waist)."""
+    vr_smaller = vr_larger = 0
+    n = 0
+    for _ in range(80):
+        c = rng.uniform(10, 54, size=2)
+        sz = rng.uniform(3, 20)
+        pts = np.column_stack([c[0] + rng.uniform(-sz, sz, 3), c[1] + rng.uniform(-sz, sz, 3),
+                               [rng.uniform(2.5, 3.8), rng.uniform(3.8, 4.2), rng.uniform(4.2, 6.0)]])
+        v0 = homog(pts)
+        a = {m: _core.gpu_bound(m, params(kx=10.0), v0, v0, True) for m in METHODS}
+        assert a["hexagon2d"]["area"] <= a["pe_triangle"]["area"] * (1 + 1e-9)
+        if a["reduced_wedge"]["fallback"] == "none":
+            assert a["hexagon3d"]["area"] <= a["wedge"]["area"] * (1 + 1e-9)
+            assert a["reduced_wedge"]["area"] == pytest.approx(a["wedge"]["area"], rel=1e-9)
+            assert a["reduced_wedge"]["out_triangles"] <= 4 < a["wedge"]["out_triangles"]
+        if a["vr_triangle"]["fallback"] == "none":
+            vr_smaller += a["vr_triangle"]["area"] < a["pe_triangle"]["area"]
+            vr_larger += a["vr_triangle"]["area"] > a["pe_triangle"]["area"]
+        n += 1
+        sharp = {m: _core.gpu_bound(m, params(kx=0.0), v0, v0, True)["area"] for m in METHODS}
+        d1, d2 = pts[1, :2] - pts[0, :2], pts[2, :2] - pts[0, :2]
+        area = 0.5 * abs(d1[0] * d2[1] - d1[1] * d2[0])
+        for m in ("pe_triangle", "vr_triangle", "hexagon2d", "wedge", "reduced_wedge", "hexagon3d"):
+            assert sharp[m] == pytest.approx(area, rel=1e-4), m
+    assert n == 80 and vr_smaller > 0 and vr_larger > 0
+
+
+@pytest.mark.parametrize("method,strip_vertices", [("hexagon2d", 6), ("hexagon3d", 22)])
+def test_table2_constants_floats(method, strip_vertices):
+    """000 Table 2 exactly: bump-mapped textured surface (35 constant floats per vertex): 2D hexagon
+    234 / 164 / 59 output floats, 3D hexagon 858 / 788 / 123; interpolated floats per fragment 39
+    without constants, 4 with."""
+    want = {"hexagon2d": (234, 164, 59), "hexagon3d": (858, 788, 123)}[method]
+    cam = sim.Camera(width=32, height=32, coc_px=4.0, focus_distance=5.0)
+    p = world_from_pixel(16, 16, 5.0, 32, 32)
+    tri = np.array([world_from_pixel(6, 6, 3.0, 32, 32), world_from_pixel(26, 8, 3.0, 32, 32),
+                    world_from_pixel(14, 27, 3.0, 32, 32)])
+    del p
+    table = sim.SampleTable.stratified(spp=4, seed=1)
+    got = []
+    for constants in ("none", "triangle", "strip"):
+        res = sim.render(make_scene([tri]), cam, table,
+                         sim.PipelineConfig(algorithm=f"gpu_{method}", gpu_constants=constants, gpu_payload_floats=35,
+                                            threads=1))
+        s = res.flat_stats
+        assert s["gpu.gs_triangles"] + 2 == strip_vertices
+        got.append(s["gpu.gs_floats"])
+        per_fragment = s["gpu.interp_floats"] / s["gpu.fragments"]
+        assert per_fragment == (39 if constants == "none" else 4)
+        if constants == "none":
+            assert s["ops.ps_setup"] == 6 * s["gpu.fragments"]  # the 4D shear constants, per fragment
+        else:
+            assert s["ops.ps_setup"] == 0
+    assert tuple(got) == want
+
+
+def scene_and_camera():
+    rng = np.random.default_rng(7)
+    tris = []
+    for _ in range(8):
+        c = rng.uniform(4, 28, size=2)
+        tris.append([world_from_pixel(*(c + rng.uniform(-9, 9, 2)), rng.uniform(2.0, 12.0), 32, 32) for _ in range(3)])
+    return make_scene(np.array(tris)), sim.Camera(width=32, height=32, coc_px=5.0, focus_distance=5.0)
+
+
+def test_pixel_shader_counts():
+    """Every fragment runs spp sample tests in the pixel shader; fragments never exceed the pixels
+    the rasterizer tested; fragments with a hit plus zero-hit fragments are all fragments; the
+    fixed-function sample-test unit gets none of that work."""
+    scene, cam = scene_and_camera()
+    table = sim.SampleTable.stratified(spp=8, seed=2)
+    for alg in GPU_ALGORITHMS:
+        s = sim.render(scene, cam, table, sim.PipelineConfig(algorithm=alg, threads=1)).flat_stats
+        assert s["gpu.ps_samples_tested"] == 8 * s["gpu.fragments"] == s["raster.samples_tested"], alg
+        assert s["gpu.fragments"] <= s["gpu.raster_pixels_tested"]
+        assert 0 <= s["gpu.fragments_zero_hit"] < s["gpu.fragments"]
+        assert s["gpu.ps_ops"] == s["ops.sample_inside"] + s["ops.ps_setup"]
+        assert s["timing.sample_test.work"] == 0 and s["timing.pixel_shader.work"] == s["gpu.ps_ops"]
+        assert s["timing.geometry_shader.work"] == s["gpu.gs_ops"] > 0
+        assert s["gpu.gs_triangles_in"] == s["setup.class_4d"] + s["setup.class_2d"]
+
+
+def test_fallback_counters_in_renders():
+    """A render counts each fallback cause; nothing is silently missed (same image as bruteforce)."""
+    cam = sim.Camera(width=32, height=32, coc_px=4.0, focus_distance=5.0, near=0.1)
+    front = np.array([world_from_pixel(4, 28, 3.0, 32, 32), world_from_pixel(28, 26, 3.0, 32, 32),
+                      world_from_pixel(16, 4, 4.0, 32, 32)])
+    crossing = front.copy()
+    crossing[0] = [0.3, 0.3, 0.5]  # behind the camera
+    moving0 = np.array([world_from_pixel(6, 6, 3.0, 32, 32), world_from_pixel(20, 8, 3.0, 32, 32),
+                        world_from_pixel(10, 20, 3.0, 32, 32)])
+    scene = make_scene(np.array([crossing, moving0]), np.array([crossing, moving0 + [0.3, 0.1, 0.0]]))
+    table = sim.SampleTable.stratified(spp=8, seed=3)
+    ref = sim.render(scene, cam, table, sim.PipelineConfig(algorithm="bruteforce", threads=1))
+    for alg, want in [("gpu_hexagon2d", {"gpu.fallback_near": 1, "gpu.fallback_motion": 1}),
+                      ("gpu_wedge", {"gpu.volume_clipped": 1, "gpu.fallback_motion": 1}),
+                      ("gpu_convex_hull", {"gpu.fallback_near": 1, "gpu.fallback_motion": 0})]:
+        res = sim.render(scene, cam, table, sim.PipelineConfig(algorithm=alg, threads=1))
+        for k, v in want.items():
+            assert res.flat_stats[k] == v, (alg, k, res.flat_stats[k])
+        assert np.array_equal(res.image, ref.image), alg
+
+
+# ---- accumulation buffering ----
+
+def test_accumulation_table_is_the_same_in_every_pixel():
+    t = sim.SampleTable.accumulation(passes=16, seed=3)
+    assert t.spp == 16 and t.n_lens == 16
+    s = t.samples("disk")
+    assert np.array_equal(s, np.broadcast_to(s[:1, :1], s.shape))  # no per-pixel randomisation
+    assert sorted(np.unique(t.lens_index)) == list(range(16))
+    with pytest.raises(ValueError, match="passes"):
+        sim.SampleTable.create("accumulation", spp=8, passes=4)
+    with pytest.raises(ValueError, match="passes: expected an integer"):
+        sim.SampleTable.accumulation(passes=0)
+    # the time strata: one pass per 1/16 of the shutter
+    assert sorted(np.floor(s[0, 0, :, 4] * 16).astype(int)) == list(range(16))
+
+
+def test_accumulation_equals_interleave_counter_for_counter():
+    """N = spp passes, one lens position per pass: the accumulation algorithm tests exactly
+    INTERLEAVE's samples; every counter agrees except the per-pass pinhole triangle setup it adds
+    (ops.setup: passes x the 2D edge setup per static triangle)."""
+    scene, cam = scene_and_camera()
+    table = sim.SampleTable.accumulation(passes=16, seed=5)
+    a = sim.render(scene, cam, table, sim.PipelineConfig(algorithm="accumulation", threads=1))
+    i = sim.render(scene, cam, table, sim.PipelineConfig(algorithm="interleave", threads=1))
+    assert np.array_equal(a.image, i.image)
+    sa, si = a.flat_stats, i.flat_stats
+    static = si["setup.class_2d"] + si["setup.class_4d"]
+    differ = {k for k in si if isinstance(si[k], (int, float)) and not (isinstance(si[k], float) and math.isnan(si[k]))
+              and sa[k] != si[k] and not k.startswith(("time.", "timing.")) and "ops" not in k}
+    assert differ == set(), differ
+    assert sa["ops.setup"] - si["ops.setup"] == 16 * 28 * static
+    assert sa["raster.samples_tested"] == si["raster.samples_tested"] > 0
+
+
+def test_ghosting_metric_separates_accumulation_from_stochastic():
+    """Accumulation's error is coherent (ghosts: neighbouring pixels err alike); stratified
+    stochastic error at the same spp is noise."""
+    from experiments.run.metrics import ghosting
+
+    scene, cam = scene_and_camera()
+    cfg = sim.PipelineConfig(algorithm="tile", threads=1)
+    ref = sim.render(scene, cam, sim.SampleTable.stratified(spp=512, seed=9), cfg).image
+    acc = sim.render(scene, cam, sim.SampleTable.accumulation(passes=4, seed=9), cfg).image
+    sto = sim.render(scene, cam, sim.SampleTable.stratified(spp=4, seed=9), cfg).image
+    assert ghosting(acc, ref) > ghosting(sto, ref) + 0.08
