@@ -32,7 +32,7 @@ class RenderParams:
     c_tile: float  # Oracle C_tile (one edge's H_j lines vs one tile); null = documented [ops]; default -1.0
     backface_cull: bool  # Cull back-facing triangles; default False
     op_count: str  # 'documented' (charge each kernel's documented cost) or 'exact' (counting scalar type) (op_counts: documented, exact); default 'documented'
-    count_optimal: bool  # Instrument tile.samples_optimal (exact lens region per tile; 001 Table 1); default True
+    count_optimal: bool  # Instrument tile.samples_optimal (exact lens region per tile; 001 Table 1); off by default: it costs more than the traversal it describes; default False
     hinterleave_tile: int  # HINTERLEAVE tile edge: 4, 8 or 16 [px]; default 8
     bin_size: int  # Screen bin edge for threading (multiple of 8 and of hinterleave_tile) [px]; default 64
     shading: str  # What costs a shader lane: 'per_sample' (supersampling), 'msaa' (one per pixel per visit), 'per_lens_cell' (one per pixel and lens-grid cell per visit), 'cache' (memoising shading cache, 002 §2) or 'none' (not modelled: no shade.*/tex.* counts, fastest); the image is the same in every mode (shading_modes: per_sample, msaa, per_lens_cell, cache, none); default 'none'
@@ -88,10 +88,12 @@ def render(
     uvs: npt.NDArray[np.float32] | None = None,  # (N, 3, 2) texture coordinates
     tex_slots: npt.NDArray[np.int32] | None = None,  # (N, 4) texture index per slot, -1 unused
     textures: list[npt.NDArray[np.float32]] = ...,  # (H, W, 1..4) linear images
+    bins: npt.NDArray[np.int32] | None = None,  # render only these screen bins (row-major indices)
 ) -> dict[str, Any]:
     """Returns {'image': (H, W, 3) float32, 'counters': {name: int}}, with params.record_timing
     'timing_records' (timing_record_dtype(), culled triangles then bins in raster order) and, with export_samples,
-    'sample_depth' (H, W, spp) float32 and 'sample_triangle' (H, W, spp) int32. Releases the GIL;
+    'sample_depth' (H, W, spp) float32 and 'sample_triangle' (H, W, spp) int32; with bins, 'bin_counters'
+    (len(bins), counters) uint64 in counter_docs() order, one row per rendered bin. Releases the GIL;
     Ctrl-C raises KeyboardInterrupt. Raises ValueError for invalid parameters."""
 
 def lens_grid_buckets(

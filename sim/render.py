@@ -15,6 +15,8 @@ from . import params as _params
 from .pipeline import PipelineConfig
 from .texturing import texture_inputs
 from .timing import estimate as timing_estimate
+from .timing import docs as timing_docs
+from . import sampling as _sampling
 from .stats import flat_stats, nest
 
 
@@ -30,6 +32,10 @@ class Result:
     timing_records  the timing model's work records (sim.timing.RECORD_DTYPE), None with
                 render(..., timing=False); sim.timing.estimate(result.timing_records, hw) re-times
                 the same render on other hardware
+    ci95        sampled simulation (PipelineConfig.sample_fraction < 1): {figure: 95% confidence
+                half-width} of every counter and derived figure in flat_stats, which then hold
+                frame estimates; NaN for figures not estimable under sampling (sim.sampling).
+                None for a whole-frame render (exact figures)
     """
 
     image: np.ndarray
@@ -38,6 +44,7 @@ class Result:
     sample_depth: np.ndarray | None = None
     sample_triangle: np.ndarray | None = None
     timing_records: np.ndarray | None = None
+    ci95: dict | None = None
 
     @property
     def stats(self) -> dict:
@@ -166,6 +173,14 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     params.table_has_lens = bool(np.any(samples[..., 2:4] != 0))
     params.table_has_time = bool(np.any(samples[..., 4] != 0))
     params.record_timing = bool(timing)
+    n_bins = (-(-camera.width // config.bin_size)) * (-(-camera.height // config.bin_size))
+    sample = _sampling.choose_bins(n_bins, config.sample_fraction, config.sample_seed)
+    if sample is not None:
+        if query is not None:
+            raise ConfigError(f"PipelineConfig.sample_fraction: {config.sample_fraction!r}: an occlusion query "
+                              "stops at the frame's first visible sample and is not estimable from sampled bins; "
+                              "use sample_fraction=1")
+        params.record_timing = False  # the timing model needs the whole frame (sim.sampling)
     if getattr(table, "n_lens", 0):
         lens_index = np.ascontiguousarray(table.lens_index, dtype=np.int32)
         lens_uv = np.ascontiguousarray(table.lens_positions(camera.lens), dtype=np.float32)
@@ -180,11 +195,23 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     t0 = time.perf_counter()
     try:
         out = _core.render(params, v0, v1, col32, samples, lens_index, lens_uv, export_samples,
-                           uvs=uvs, tex_slots=slots, textures=textures)
+                           uvs=uvs, tex_slots=slots, textures=textures,
+                           bins=None if sample is None else sample.bins)
     except ValueError as e:  # invalid_argument from the engine: name it as a config error
         raise ConfigError(str(e)) from None
     wall = time.perf_counter() - t0
-    flat = flat_stats(out["counters"], {"time.wall_s": wall})
+    ci95 = None
+    if sample is None:
+        flat = flat_stats(out["counters"], {"time.wall_s": wall})
+    else:
+        from .stats import DERIVED
+
+        flat, ci95 = _sampling.estimate(sample, out["counters"], out["bin_counters"], DERIVED, list(out["counters"]))
+        if timing:
+            for name in timing_docs():
+                flat[name], ci95[name] = float("nan"), float("nan")
+        flat["time.wall_s"] = wall
+        flat = dict(sorted(flat.items()))
     records = out.get("timing_records")
     if records is not None:
         flat = dict(sorted({**flat, **timing_estimate(records, hardware)}.items()))
@@ -193,4 +220,4 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
             "hardware": hardware_desc}
     return Result(image=out["image"], flat_stats=flat, config=desc,
                   sample_depth=out.get("sample_depth"), sample_triangle=out.get("sample_triangle"),
-                  timing_records=records)
+                  timing_records=records, ci95=ci95)

@@ -19,7 +19,7 @@ void register_render(py::module_& m) {
       "render",
       [](const RenderParams& p, const FArr& v0, const FArr& v1, const FArr& colors, const FArr& samples,
          const IArr& lens_index, const FArr& lens_uv, bool export_samples, std::optional<FArr> uvs,
-         std::optional<IArr> tex_slots, std::vector<FArr> textures) {
+         std::optional<IArr> tex_slots, std::vector<FArr> textures, std::optional<IArr> bins) {
         require_shape(v0, {-1, 3, 3}, "v0");
         const py::ssize_t n = v0.shape(0);
         require_shape(v1, {n, 3, 3}, "v1");
@@ -39,6 +39,11 @@ void register_render(py::module_& m) {
           scene.textures.push_back({t.data(), static_cast<int>(t.shape(0)), static_cast<int>(t.shape(1)),
                                     static_cast<int>(t.shape(2))});
         }
+        std::optional<std::vector<int>> bin_list;
+        if (bins) {
+          require_shape(*bins, {-1}, "bins");
+          bin_list.emplace(bins->data(), bins->data() + bins->shape(0));
+        }
         std::optional<py::error_already_set> pending;
         RenderResult res;
         {
@@ -53,7 +58,7 @@ void register_render(py::module_& m) {
                 }
                 return false;
               },
-              export_samples);
+              export_samples, bin_list ? &*bin_list : nullptr);
         }
         if (pending) throw *pending;
         py::array_t<float> image({p.height, p.width, 3});
@@ -61,6 +66,11 @@ void register_render(py::module_& m) {
         py::dict out;
         out["image"] = image;
         out["counters"] = counters_to_dict(res.counters);
+        if (bin_list) {  // (len(bins), counters) in counter_docs() order
+          py::array_t<std::uint64_t> bc({static_cast<py::ssize_t>(bin_list->size()), static_cast<py::ssize_t>(kNumCounters)});
+          std::copy(res.bin_counters.begin(), res.bin_counters.end(), bc.mutable_data());
+          out["bin_counters"] = bc;
+        }
         if (p.record_timing) {
           py::array_t<TileWork> recs(static_cast<py::ssize_t>(res.timing_records.size()));
           std::copy(res.timing_records.begin(), res.timing_records.end(), recs.mutable_data());
@@ -79,9 +89,11 @@ void register_render(py::module_& m) {
       },
       py::arg("params"), py::arg("v0"), py::arg("v1"), py::arg("colors"), py::arg("samples"),
       py::arg("lens_index"), py::arg("lens_uv"), py::arg("export_samples") = false, py::arg("uvs") = py::none(),
-      py::arg("tex_slots") = py::none(), py::arg("textures") = std::vector<FArr>(),
+      py::arg("tex_slots") = py::none(), py::arg("textures") = std::vector<FArr>(), py::arg("bins") = py::none(),
       "Render pixel-homogeneous triangles; returns {'image', 'counters'[, 'timing_records'][, "
-      "'sample_depth', 'sample_triangle']}. The GIL is released; Ctrl-C interrupts.");
+      "'sample_depth', 'sample_triangle'][, 'bin_counters']}. bins: render only these screen bins "
+      "(row-major) and return their counters, one row per bin in counter_docs() order. The GIL is "
+      "released; Ctrl-C interrupts.");
 
   m.def(
       "lens_grid_buckets",

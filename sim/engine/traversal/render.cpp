@@ -106,7 +106,8 @@ static void build_shade_frame(const RenderParams& p, const SceneArrays& scene, c
 }
 
 RenderResult render(const RenderParams& p, const SceneArrays& scene, const SampleTable& table,
-                    const std::function<bool()>& interrupted, bool export_samples) {
+                    const std::function<bool()>& interrupted, bool export_samples,
+                    const std::vector<int>* bins) {
   validate_params(p, table);
   const FrameConst fc = make_frame_const(p);
   const int n_threads = p.threads > 0
@@ -161,6 +162,19 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
   ShadeFrame shade_frame;
   build_shade_frame(p, scene, setups, alive, n_bins, shade_frame);
 
+  // ---- the bins to render: all, or a subset (sampled simulation) ----
+  if (bins) {
+    std::vector<char> seen(static_cast<std::size_t>(n_bins), 0);
+    for (int b : *bins) {
+      if (b < 0 || b >= n_bins || seen[b])
+        throw std::invalid_argument("bins: expected distinct bin indices in 0.." + std::to_string(n_bins - 1) +
+                                    ", got " + std::to_string(b));
+      seen[b] = 1;
+    }
+    result.bin_counters.assign(bins->size() * static_cast<std::size_t>(kNumCounters), 0);
+  }
+  const int n_work = bins ? static_cast<int>(bins->size()) : n_bins;
+
   // ---- traversal: workers take whole bins ----
   // Timing records per bin: each bin is rasterized by exactly one worker, so its stream is
   // written without locks and its content does not depend on the thread count.
@@ -183,8 +197,10 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
       ThreadState& ts = states[t];
       auto algo = TraversalRegistry::entries().at(p.algorithm).create(frame, ts, p.op_count == OpCount::kExact);
       for (;;) {
-        const int b = next_bin.fetch_add(1);
-        if (b >= n_bins || cancel.load(std::memory_order_relaxed)) break;
+        const int k = next_bin.fetch_add(1);
+        if (k >= n_work || cancel.load(std::memory_order_relaxed)) break;
+        const int b = bins ? (*bins)[k] : k;
+        const Counters at_start = bins ? ts.counters : Counters{};
         const int bx = b % bins_x, by = b / bins_x;
         BinRect r{bx * B, by * B, std::min(p.width, (bx + 1) * B), std::min(p.height, (by + 1) * B)};
         ts.buffers.begin(r, table.spp());
@@ -207,6 +223,10 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
         ts.buffers.resolve(result.image.data(), p.width);
         if (export_samples)
           ts.buffers.export_samples(result.sample_depth.data(), result.sample_triangle.data(), p.width);
+        if (bins) {  // this bin's counters: each row is written by the one worker that owns the bin
+          std::uint64_t* row = &result.bin_counters[static_cast<std::size_t>(k) * kNumCounters];
+          for (int i = 0; i < kNumCounters; ++i) row[i] = ts.counters.v[i] - at_start.v[i];
+        }
       }
     } catch (...) {
       std::lock_guard<std::mutex> lock(mu);

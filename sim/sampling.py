@@ -1,0 +1,166 @@
+"""Sampled simulation: render a stratified random subset of the screen bins and estimate the frame.
+
+``PipelineConfig(sample_fraction=f, sample_seed=s)`` with f < 1: the frame's bins, in row-major order,
+are cut into H strata of neighbouring bins (H = round(f * N_bins) // 2) and 2 bins are drawn per
+stratum without replacement (numpy's default generator seeded with s). Only those bins are traversed;
+triangle setup still runs for every triangle, so its counts are exact. Every counter a bin owns is
+estimated by the stratified expansion estimator
+
+    T = sum_h N_h * mean_h(y),   Var(T) = sum_h N_h^2 (1 - n_h / N_h) s_h^2 / n_h
+
+(N_h bins in stratum h, n_h = 2 of them rendered, y a bin's counter value), and the 95% half-width is
+t_{0.975, H} * sqrt(Var) (H degrees of freedom). Derived figures (ratios, sums) are evaluated on the
+estimated totals; their half-widths come from the same formula applied to each bin's linearised
+contribution (the derivative of the figure along that bin's counter vector).
+
+Not estimable under sampling (reported as NaN with a NaN half-width, never scaled):
+- the texture cache (``tex.cache.*``): it is replayed after the render in bin order, and a bin's
+  misses depend on the lines the bins before it left in the cache;
+- the timing model (``timing.*``): its FIFOs and unit overlap couple the work of consecutive bins, so
+  a frame's cycles are not a sum of per-bin terms.
+HiZ and z-culling, the shading cache and shading visits restart in every bin (backend/hiz.h,
+backend/shading.h), so their counters are per-bin sums and are estimated like the others. Occlusion
+queries stop at the first visible sample of the frame and cannot be sampled (an error).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import ConfigError
+
+# Figures that need the whole frame (prefixes of counter and figure names).
+NOT_ESTIMABLE = ("tex.cache.", "timing.")
+MIN_STRATA = 2  # two strata of two bins: the fewest that give a variance estimate
+
+DOCS = {
+    "sample.fraction": ("ratio", "Share of the screen bins rendered (1 = whole frame; sampled simulation)"),
+    "sample.bins": ("bins", "Screen bins rendered (sampled simulation: 2 per stratum)"),
+    "sample.strata": ("strata", "Strata of neighbouring bins the sampled bins were drawn from (0: whole frame)"),
+}
+
+
+def docs() -> dict[str, tuple[str, str]]:
+    return dict(DOCS)
+
+
+def t_quantile_975(df: int) -> float:
+    """The 0.975 quantile of Student's t with df degrees of freedom (closed form for df 1, 2; the
+    Cornish-Fisher expansion around the normal quantile above, accurate to 1e-3 for df >= 3)."""
+    if df < 1:
+        raise ValueError(f"df: expected >= 1, got {df}")
+    if df == 1:
+        return math.tan(math.pi * 0.475)
+    if df == 2:
+        q = 0.975
+        return (2 * q - 1) / math.sqrt(2 * q * (1 - q))
+    z = 1.959963984540054
+    g1 = (z ** 3 + z) / 4
+    g2 = (5 * z ** 5 + 16 * z ** 3 + 3 * z) / 96
+    g3 = (3 * z ** 7 + 19 * z ** 5 + 17 * z ** 3 - 15 * z) / 384
+    g4 = (79 * z ** 9 + 776 * z ** 7 + 1482 * z ** 5 - 1920 * z ** 3 - 945 * z) / 92160
+    return z + g1 / df + g2 / df ** 2 + g3 / df ** 3 + g4 / df ** 4
+
+
+@dataclass(frozen=True)
+class BinSample:
+    """The bins to render: ``bins`` (int32, row-major indices) and ``stratum`` (the stratum of each),
+    ``sizes`` (bins per stratum), ``n_bins`` (of the frame)."""
+
+    bins: np.ndarray
+    stratum: np.ndarray
+    sizes: np.ndarray
+    n_bins: int
+
+    @property
+    def fraction(self) -> float:
+        return len(self.bins) / self.n_bins
+
+
+def choose_bins(n_bins: int, fraction: float, seed: int, owner: str = "PipelineConfig") -> BinSample | None:
+    """The stratified subset for ``fraction`` of ``n_bins`` bins; None when it is the whole frame.
+    ConfigError when the fraction leaves fewer than MIN_STRATA strata (no interval can be given)."""
+    if not (isinstance(fraction, (int, float)) and not isinstance(fraction, bool) and 0 < fraction <= 1):
+        raise ConfigError(f"{owner}.sample_fraction: expected a number in (0, 1], got {fraction!r}")
+    if fraction == 1:
+        return None
+    n_strata = int(round(fraction * n_bins)) // 2
+    if 2 * n_strata >= n_bins:
+        return None  # every bin: the whole frame, exact
+    if n_strata < MIN_STRATA:
+        raise ConfigError(
+            f"{owner}.sample_fraction: {fraction!r} of {n_bins} screen bins gives {n_strata} strata of 2 bins; "
+            f"a confidence interval needs at least {MIN_STRATA} (at least {2 * MIN_STRATA} bins): raise "
+            f"sample_fraction to >= {2 * MIN_STRATA / n_bins:.3g} or use a smaller bin_size")
+    rng = np.random.default_rng(seed)
+    edges = (np.arange(n_strata + 1) * n_bins) // n_strata
+    bins, stratum = [], []
+    for h in range(n_strata):
+        lo, hi = int(edges[h]), int(edges[h + 1])
+        pick = np.sort(rng.choice(hi - lo, size=2, replace=False)) + lo
+        bins.extend(pick.tolist())
+        stratum.extend([h, h])
+    return BinSample(np.asarray(bins, np.int32), np.asarray(stratum, np.int64), np.diff(edges), n_bins)
+
+
+def stratified_total(sample: BinSample, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(estimated frame totals, variances) of per-bin values y (rows: the sampled bins; columns:
+    figures), by the stratified expansion estimator with 2 bins per stratum."""
+    y = np.asarray(y, dtype=np.float64)
+    if y.ndim == 1:
+        y = y[:, None]
+    H = len(sample.sizes)
+    Nh = sample.sizes.astype(np.float64)
+    sums = np.zeros((H, y.shape[1]))
+    np.add.at(sums, sample.stratum, y)
+    nh = np.bincount(sample.stratum, minlength=H).astype(np.float64)
+    means = sums / nh[:, None]
+    dev = y - means[sample.stratum]
+    ss = np.zeros((H, y.shape[1]))
+    np.add.at(ss, sample.stratum, dev * dev)
+    s2 = ss / (nh - 1)[:, None]
+    total = (Nh[:, None] * means).sum(axis=0)
+    var = (Nh ** 2 * (1 - nh / Nh) / nh)[:, None] * s2
+    return total, var.sum(axis=0)
+
+
+def estimate(sample: BinSample, counters: dict, bin_counters: np.ndarray, derived, names: list[str]
+             ) -> tuple[dict, dict]:
+    """(flat figures, 95% half-widths) of the frame from a sampled render.
+
+    counters: the engine's totals (setup of every triangle + the rendered bins + frame facts);
+    bin_counters: (len(bins), len(names)) the rendered bins' own counters; derived: sim.stats.DERIVED."""
+    from .derived import evaluate
+
+    bc = np.asarray(bin_counters, dtype=np.float64)
+    totals = np.array([float(counters[n]) for n in names])
+    exact_part = totals - bc.sum(axis=0)  # setup (every triangle) and the frame facts
+    est, var = stratified_total(sample, bc)
+    tq = t_quantile_975(len(sample.sizes))
+    raw = exact_part + est
+    half = tq * np.sqrt(var)
+    flat, ci = {}, {}
+    for i, n in enumerate(names):
+        if n.startswith(NOT_ESTIMABLE):
+            flat[n], ci[n] = math.nan, math.nan
+        else:
+            flat[n], ci[n] = float(raw[i]), float(half[i])
+    # Derived figures: evaluated on the estimates; half-widths by linearisation per bin.
+    base = evaluate(derived, dict(flat))
+    dnames = [d.name for d in derived]
+    z = np.empty((len(bc), len(dnames)))
+    step = 1e-6  # a bin's counters are at most the frame's: a relative perturbation <= 1e-6
+    for r in range(len(bc)):
+        plus = evaluate(derived, {n: flat[n] + step * bc[r, i] for i, n in enumerate(names)})
+        minus = evaluate(derived, {n: flat[n] - step * bc[r, i] for i, n in enumerate(names)})
+        z[r] = [(plus[d] - minus[d]) / (2 * step) for d in dnames]
+    _, dvar = stratified_total(sample, np.nan_to_num(z, nan=0.0))
+    for j, d in enumerate(dnames):
+        flat[d] = base[d]
+        bad = not np.isfinite(base[d]) or not np.all(np.isfinite(z[:, j]))
+        ci[d] = math.nan if bad else float(tq * math.sqrt(dvar[j]))
+    flat.update({"sample.fraction": sample.fraction, "sample.bins": len(sample.bins),
+                 "sample.strata": len(sample.sizes)})
+    return flat, ci
