@@ -33,6 +33,7 @@ class RenderParams:
     backface_cull: bool  # Cull back-facing triangles; default False
     op_count: str  # 'documented' (charge each kernel's documented cost) or 'exact' (counting scalar type) (op_counts: documented, exact); default 'documented'
     count_optimal: bool  # Instrument tile.samples_optimal (exact lens region per tile; 001 Table 1); off by default: it costs more than the traversal it describes; default False
+    simd: bool  # Fast path: the 4D/5D sample tests in explicit SIMD (bit-identical results and counts; false = the auto-vectorised kernels, for benchmarks); default True
     hinterleave_tile: int  # HINTERLEAVE tile edge: 4, 8 or 16 [px]; default 8
     bin_size: int  # Screen bin edge for threading (multiple of 8 and of hinterleave_tile) [px]; default 64
     shading: str  # What costs a shader lane: 'per_sample' (supersampling), 'msaa' (one per pixel per visit), 'per_lens_cell' (one per pixel and lens-grid cell per visit), 'cache' (memoising shading cache, 002 §2) or 'none' (not modelled: no shade.*/tex.* counts, fastest); the image is the same in every mode (shading_modes: per_sample, msaa, per_lens_cell, cache, none); default 'none'
@@ -61,6 +62,7 @@ class RenderParams:
     table_has_lens: bool  # The sample table has lens coordinates (else u = v = 0 is exact); default True
     table_has_time: bool  # The sample table has time coordinates (else t = 0 is exact); default True
     record_timing: bool  # Record one timing work record per (triangle, bin) visit (docs/timing.md); default True
+    timing_per_visit: bool  # Timing records per shading visit instead of per (triangle, bin) (hardware.timing.granularity 'visit'); default False
     query_first: int  # Occlusion query: triangles from this index are the query (no writes); -1 none; default -1
     query_mode: str  # Occlusion query: 'none', 'samples' (sample-based) or 'intervals' (ẑ vs HiZ, abort) (query_modes: none, samples, intervals); default 'none'
     # ---- end of the generated fields ----

@@ -173,6 +173,7 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     params.table_has_lens = bool(np.any(samples[..., 2:4] != 0))
     params.table_has_time = bool(np.any(samples[..., 4] != 0))
     params.record_timing = bool(timing)
+    params.timing_per_visit = hardware.timing.granularity == "visit"
     n_bins = (-(-camera.width // config.bin_size)) * (-(-camera.height // config.bin_size))
     sample = _sampling.choose_bins(n_bins, config.sample_fraction, config.sample_seed)
     if sample is not None:

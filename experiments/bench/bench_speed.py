@@ -9,6 +9,8 @@
 2. Sampled simulation (PipelineConfig.sample_fraction): for fractions 1 ... 0.01 on three scenes,
    the speed-up over the whole frame and the error of the estimated frame totals against the
    whole-frame values (median over seeds), with the 95% half-width and how often it covered.
+3. The timing model's granularity (hardware.timing.granularity): cycles and utilisation with records
+   per (triangle, bin) against records per shading visit, and the simulator time of each.
 
 Writes reports/bench/bench_speed.md. `python -m experiments.bench.bench_speed --help`."""
 from __future__ import annotations
@@ -128,6 +130,48 @@ def sampling_table(threads: int, seeds: int, spp: int, quick: bool, bin_size: in
     return rows
 
 
+UNITS = ("setup", "tile_test", "sample_test", "depth", "shader", "texture", "memory")
+
+
+def granularity_table(spp: int, quick: bool, threads: int = 1):
+    """Rows: the timing model with records per (triangle, bin) against records per shading visit
+    (hardware.timing.granularity), on three scenes: cycles, per-unit utilisation, records, and the
+    simulator time (render + timing model) each costs."""
+    import time
+
+    import models
+    import sim
+
+    table = sim.SampleTable.stratified(spp=spp, seed=1)
+    size = 256 if quick else 512
+    cases = [("bunny", models.named("bunny"), size, size), ("spot", models.named("spot"), size, size),
+             ("modern_hall", models.named("modern_hall"), 2 * size, size * 9 // 8)]
+    cfg = sim.PipelineConfig(algorithm="tile", shading="msaa", texture_count=1, threads=threads)
+    rows = []
+    for name, scene, w, h in cases:
+        cam = _camera(scene, w, h, 10.0)
+        out = {}
+        for gran in ("bin", "visit", "bin", "visit"):  # interleaved twice; minimum time kept
+            hw = sim.HardwareConfig(timing={"granularity": gran})
+            t0 = time.perf_counter()
+            r = sim.render(scene, cam, table, cfg, hardware=hw)
+            wall = time.perf_counter() - t0
+            prev = out.get(gran)
+            out[gran] = (min(wall, prev[0]) if prev else wall, r.flat_stats, len(r.timing_records))
+        (tb, fb, nb), (tv, fv, nv) = out["bin"], out["visit"]
+        util = {u: fb[f"timing.{u}.utilization"] - fv[f"timing.{u}.utilization"] for u in UNITS}
+        worst = max(util, key=lambda u: abs(util[u]))
+        row = dict(scene=name, size=f"{w}x{h}", cycles_bin=fb["timing.cycles"], cycles_visit=fv["timing.cycles"],
+                   err=fb["timing.cycles"] / fv["timing.cycles"] - 1, util_unit=worst, util_diff=util[worst],
+                   bottleneck_bin=fb["timing.bottleneck"], bottleneck_visit=fv["timing.bottleneck"],
+                   records_bin=nb, records_visit=nv, time_bin=tb, time_visit=tv)
+        rows.append(row)
+        print(f"{name:12} cycles bin {row['cycles_bin']:,.0f} visit {row['cycles_visit']:,.0f} ({row['err']:+.2%}); "
+              f"largest utilisation change {worst} {util[worst]:+.3f}; records {nb:,} / {nv:,}; "
+              f"time x{tv / tb:.2f}")
+    return rows
+
+
 def run(hall_scale: float = 0.5, threads=(1, 2), repeats: int = 3, seeds: int = 5, spp: int = 64,
         quick: bool = False, out=REPO / "reports" / "bench") -> dict:
     if quick:
@@ -166,11 +210,23 @@ def run(hall_scale: float = 0.5, threads=(1, 2), repeats: int = 3, seeds: int = 
         lines.append(f"| {r['scene']} | {r['size']} | {r['bins']} | {r['fraction']:g} | {r['speedup']:.1f} | "
                      + " | ".join(f"{r['err ' + k]:.2%} | {r['ci ' + k]:.2%}" for k in FIGURES)
                      + f" | {r['coverage']:.0%} |")
+    grows = granularity_table(spp, quick)
+    lines += ["", f"## Timing-model granularity ({spp} spp, tile, msaa, 1 texture, CoC 10 px, 1 core)", "",
+              "`hardware.timing.granularity`: `bin` = one work record per (triangle, 64-px bin); `visit` = one per "
+              "shading visit (per triangle and tile for tile). Error: bin cycles / visit cycles - 1 (visit is the "
+              "detailed reference). Utilisation: busy / cycles per unit; the largest change between the two is shown. "
+              "Time: render plus timing model, minimum of 2 interleaved runs.", "",
+              "| scene | size | cycles (bin) | cycles (visit) | error | bottleneck bin / visit | largest utilisation change | "
+              "records bin / visit | sim time visit / bin |", "|---|---|---|---|---|---|---|---|---|"]
+    for r in grows:
+        lines.append(f"| {r['scene']} | {r['size']} | {r['cycles_bin']:,.0f} | {r['cycles_visit']:,.0f} | {r['err']:+.2%} | "
+                     f"{r['bottleneck_bin']} / {r['bottleneck_visit']} | {r['util_unit']} {r['util_diff']:+.3f} | "
+                     f"{r['records_bin']:,} / {r['records_visit']:,} | {r['time_visit'] / r['time_bin']:.2f} |")
     page = Path(out) / "bench_speed.md"
     page.parent.mkdir(parents=True, exist_ok=True)
     page.write_text("\n".join(lines) + "\n")
     print(f"\nwrote {page}")
-    return {"page": page, "rows": rows, "sampling": srows}
+    return {"page": page, "rows": rows, "sampling": srows, "granularity": grows}
 
 
 def main(argv=None) -> int:

@@ -65,5 +65,6 @@ void register_render(py::module_& m);        // render.cpp: render, sample-table
 void register_timing(py::module_& m);        // timing.cpp: timing records and the timing model
 void register_conservative(py::module_& m);  // conservative.cpp: conservative rasterization mode
 void register_selftest(py::module_& m);      // selftest.cpp: probes and unit checks for the tests
+void register_simd(py::module_& m);          // simd.cpp: the SIMD sample tests beside the scalar ones
 
 }  // namespace rast5d::bindings

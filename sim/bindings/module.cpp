@@ -11,4 +11,5 @@ PYBIND11_MODULE(_core, m) {
   register_timing(m);
   register_conservative(m);
   register_selftest(m);
+  register_simd(m);
 }

@@ -196,6 +196,9 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
     try {
       ThreadState& ts = states[t];
       auto algo = TraversalRegistry::entries().at(p.algorithm).create(frame, ts, p.op_count == OpCount::kExact);
+      const bool per_visit = p.record_timing && p.timing_per_visit;
+      std::vector<TileWork> visit_recs;
+      std::vector<std::uint32_t> visit_ends;
       for (;;) {
         const int k = next_bin.fetch_add(1);
         if (k >= n_work || cancel.load(std::memory_order_relaxed)) break;
@@ -210,8 +213,35 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
           const TriSetup& tri = setups[i];
           const bool home = (tri.by0 / B) * bins_x + (tri.bx0 / B) == b;
           const TileWork before = p.record_timing ? work_from_counters(ts.counters) : TileWork{};
+          if (per_visit) {  // hardware.timing.granularity 'visit': end_visit() records (sample_pipeline.h)
+            visit_recs.clear(), visit_ends.clear();
+            ts.visit_mark = before;
+            ts.visit_records = &visit_recs;
+            ts.visit_stream = track_stream_ends ? &shade_frame.streams[b] : nullptr;
+            ts.visit_stream_ends = track_stream_ends ? &visit_ends : nullptr;
+          }
           algo->rasterize(tri, r, home);
           if (!p.record_timing) continue;
+          if (per_visit) {
+            ts.visit_records = nullptr;
+            // The visits' records, then what the triangle did after its last visit (if anything);
+            // the triangle's setup goes with its first record.
+            const TileWork rest = work_from_counters(ts.counters).since(ts.visit_mark);
+            const bool rest_empty = rest.tile_tests == 0 && rest.sample_tests == 0 && rest.depth_tests == 0 &&
+                                    rest.quads == 0 && rest.texel_fetches == 0 && rest.memory_bytes == 0;
+            if (!rest_empty || visit_recs.empty()) {
+              visit_recs.push_back(rest);
+              if (track_stream_ends) visit_ends.push_back(static_cast<std::uint32_t>(shade_frame.streams[b].size()));
+            }
+            for (std::size_t k = 0; k < visit_recs.size(); ++k) {
+              TileWork w = visit_recs[k];
+              w.bin = b;
+              w.triangles = (k == 0 && home) ? 1u : 0u;
+              bin_records[b].push_back(w);
+              if (track_stream_ends) bin_stream_ends[b].push_back(visit_ends[k]);
+            }
+            continue;
+          }
           TileWork w = work_from_counters(ts.counters).since(before);
           w.bin = b;
           w.triangles = home ? 1u : 0u;  // setup is done once, charged in the triangle's first bin
