@@ -36,6 +36,8 @@ class RenderParams:
     simd: bool  # Fast path: the 4D/5D sample tests in explicit SIMD (bit-identical results and counts; false = the auto-vectorised kernels, for benchmarks); default True
     hinterleave_tile: int  # HINTERLEAVE tile edge: 4, 8 or 16 [px]; default 8
     bin_size: int  # Screen bin edge for threading (multiple of 8 and of hinterleave_tile) [px]; default 64
+    sample_fraction: float  # Sampled simulation: traverse this fraction of the screen bins that hold triangles (2 per stratum of bins with similar brute-force work), scale the counters to the frame and give 95% confidence half-widths (Result.ci95); 1 = the whole frame, exact; default 1.0
+    sample_seed: int  # Seed of the sampled bins (sample_fraction < 1); default 0
     shading: str  # What costs a shader lane: 'per_sample' (supersampling), 'msaa' (one per pixel per visit), 'per_lens_cell' (one per pixel and lens-grid cell per visit), 'cache' (memoising shading cache, 002 §2) or 'none' (not modelled: no shade.*/tex.* counts, fastest); the image is the same in every mode (shading_modes: per_sample, msaa, per_lens_cell, cache, none); default 'none'
     shading_cache_entries: int  # Shading cache (shading: cache): LRU entries, key (triangle, shading-grid point) [entries]; default 1024
     shading_grid: int  # Shading cache: shading-grid points per pixel edge (1 = pixel grid, 2 = 2x2 per pixel, ...) [points/px]; default 1

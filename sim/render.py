@@ -93,7 +93,8 @@ def _scene_arrays(scene) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def memory_estimate(camera: Camera, spp: int, n_triangles: int, config: PipelineConfig, threads: int,
-                    export_samples: bool = False, timing: bool = True, period: int = 0) -> int:
+                    export_samples: bool = False, timing: bool = True, period: int = 0,
+                    timing_per_visit: bool = False) -> int:
     """Bytes the engine will allocate (image, per-thread bin buffers, setup, bin lists, exports,
     timing records, and with the table's period the (lens cell, time stratum) sample index)."""
     b = config.bin_size
@@ -107,6 +108,8 @@ def memory_estimate(camera: Camera, spp: int, n_triangles: int, config: Pipeline
     # One 64-byte record per (triangle, bin) visit (about 4 bins per triangle, as for the bin
     # lists), held per bin, concatenated and copied to numpy: three copies.
     timing_records = n_triangles * 4 * 64 * 3 if timing else 0
+    if timing and timing_per_visit:  # about one record per (triangle, tile): 4x overdraw of the tiles
+        timing_records = max(timing_records, camera.width * camera.height // config.tile_size ** 2 * 4 * 64 * 3)
     grid = config.resolved_lens_grid(spp)
     sample_index = period * period * (grid * grid * config.time_strata + 1 + spp) * 4
     return int(image + bins + setup + bin_lists + export + timing_records + sample_index)
@@ -152,7 +155,7 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     grid = config.resolved_lens_grid(spp)
     threads = config.threads or (os.cpu_count() or 1)
     need = memory_estimate(camera, spp, p0.shape[0], config, threads, export_samples, timing,
-                           period=samples.shape[0])
+                           period=samples.shape[0], timing_per_visit=hardware.timing.granularity == "visit")
     if need > config.memory_limit_bytes:
         raise ConfigError(
             f"memory: estimated {need / 2**30:.2f} GiB exceeds PipelineConfig.memory_limit_bytes="
@@ -174,9 +177,8 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     params.table_has_time = bool(np.any(samples[..., 4] != 0))
     params.record_timing = bool(timing)
     params.timing_per_visit = hardware.timing.granularity == "visit"
-    n_bins = (-(-camera.width // config.bin_size)) * (-(-camera.height // config.bin_size))
-    sample = _sampling.choose_bins(n_bins, config.sample_fraction, config.sample_seed)
-    if sample is not None:
+    sampled = config.sample_fraction < 1
+    if sampled:
         if query is not None:
             raise ConfigError(f"PipelineConfig.sample_fraction: {config.sample_fraction!r}: an occlusion query "
                               "stops at the frame's first visible sample and is not estimable from sampled bins; "
@@ -196,18 +198,19 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     t0 = time.perf_counter()
     try:
         out = _core.render(params, v0, v1, col32, samples, lens_index, lens_uv, export_samples,
-                           uvs=uvs, tex_slots=slots, textures=textures,
-                           bins=None if sample is None else sample.bins)
+                           uvs=uvs, tex_slots=slots, textures=textures)
     except ValueError as e:  # invalid_argument from the engine: name it as a config error
-        raise ConfigError(str(e)) from None
+        msg = str(e)
+        raise ConfigError(f"PipelineConfig.{msg}" if msg.startswith("sample_fraction:") else msg) from None
     wall = time.perf_counter() - t0
     ci95 = None
-    if sample is None:
+    if not sampled:
         flat = flat_stats(out["counters"], {"time.wall_s": wall})
     else:
         from .stats import DERIVED
 
-        flat, ci95 = _sampling.estimate(sample, out["counters"], out["bin_counters"], DERIVED, list(out["counters"]))
+        flat, ci95 = _sampling.estimate(_sampling.from_engine(out), out["counters"], out["bin_counters"], DERIVED,
+                                        list(out["counters"]))
         if timing:
             for name in timing_docs():
                 flat[name], ci95[name] = float("nan"), float("nan")

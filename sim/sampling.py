@@ -1,15 +1,17 @@
 """Sampled simulation: render a stratified random subset of the screen bins and estimate the frame.
 
-``PipelineConfig(sample_fraction=f, sample_seed=s)`` with f < 1: the frame's bins, in row-major order,
-are cut into H strata of neighbouring bins (H = round(f * N_bins) // 2) and 2 bins are drawn per
-stratum without replacement (numpy's default generator seeded with s). Only those bins are traversed;
-triangle setup still runs for every triangle, so its counts are exact. Every counter a bin owns is
-estimated by the stratified expansion estimator
+``PipelineConfig(sample_fraction=f, sample_seed=s)`` with f < 1: the engine sorts the K screen bins that
+hold triangles by their brute-force work (the pixels of their triangles' bounds in the bin times spp),
+cuts them into H = round(f * K) // 2 strata of similar work and draws 2 bins per stratum
+(traversal/bin_sample.h, seeded with s). Only those bins are traversed; bins without triangles do no
+traversal work (their counters are exactly 0), and triangle setup still runs for every triangle, so
+its counts are exact. Every counter a bin owns is estimated by the stratified expansion estimator
 
     T = sum_h N_h * mean_h(y),   Var(T) = sum_h N_h^2 (1 - n_h / N_h) s_h^2 / n_h
 
 (N_h bins in stratum h, n_h = 2 of them rendered, y a bin's counter value), and the 95% half-width is
-t_{0.975, H} * sqrt(Var) (H degrees of freedom). Derived figures (ratios, sums) are evaluated on the
+t_{0.975, H} * sqrt(Var) (H degrees of freedom). Bins heavier than a stratum's share of the work form
+a take-all stratum (all traversed, no variance). Derived figures (ratios, sums) are evaluated on the
 estimated totals; their half-widths come from the same formula applied to each bin's linearised
 contribution (the derivative of the figure along that bin's counter vector).
 
@@ -36,9 +38,10 @@ NOT_ESTIMABLE = ("tex.cache.", "timing.")
 MIN_STRATA = 2  # two strata of two bins: the fewest that give a variance estimate
 
 DOCS = {
-    "sample.fraction": ("ratio", "Share of the screen bins rendered (1 = whole frame; sampled simulation)"),
-    "sample.bins": ("bins", "Screen bins rendered (sampled simulation: 2 per stratum)"),
-    "sample.strata": ("strata", "Strata of neighbouring bins the sampled bins were drawn from (0: whole frame)"),
+    "sample.fraction": ("ratio", "Sampled simulation: sample.bins / sample.candidates"),
+    "sample.bins": ("bins", "Sampled simulation: screen bins traversed (2 per stratum)"),
+    "sample.strata": ("strata", "Sampled simulation: strata the bins were drawn from (0: every bin with triangles, exact)"),
+    "sample.candidates": ("bins", "Sampled simulation: screen bins that hold triangles (the others do no traversal work)"),
 }
 
 
@@ -66,43 +69,50 @@ def t_quantile_975(df: int) -> float:
 
 @dataclass(frozen=True)
 class BinSample:
-    """The bins to render: ``bins`` (int32, row-major indices) and ``stratum`` (the stratum of each),
-    ``sizes`` (bins per stratum), ``n_bins`` (of the frame)."""
+    """The traversed bins: ``bins`` (row-major indices), ``stratum`` (the stratum of each), ``sizes``
+    (bins per stratum), ``candidates`` (bins that hold triangles; the others do no traversal work)."""
 
     bins: np.ndarray
     stratum: np.ndarray
     sizes: np.ndarray
-    n_bins: int
+    candidates: int
 
     @property
     def fraction(self) -> float:
-        return len(self.bins) / self.n_bins
+        return len(self.bins) / self.candidates if self.candidates else 1.0
+
+    @property
+    def exact(self) -> bool:
+        """Every bin with triangles was traversed: the figures are exact."""
+        return len(self.sizes) == 0
 
 
-def choose_bins(n_bins: int, fraction: float, seed: int, owner: str = "PipelineConfig") -> BinSample | None:
-    """The stratified subset for ``fraction`` of ``n_bins`` bins; None when it is the whole frame.
-    ConfigError when the fraction leaves fewer than MIN_STRATA strata (no interval can be given)."""
-    if not (isinstance(fraction, (int, float)) and not isinstance(fraction, bool) and 0 < fraction <= 1):
+def check_fraction(fraction, owner: str = "PipelineConfig") -> None:
+    if isinstance(fraction, bool) or not isinstance(fraction, (int, float)) or not 0 < fraction <= 1:
         raise ConfigError(f"{owner}.sample_fraction: expected a number in (0, 1], got {fraction!r}")
-    if fraction == 1:
-        return None
-    n_strata = int(round(fraction * n_bins)) // 2
-    if 2 * n_strata >= n_bins:
-        return None  # every bin: the whole frame, exact
-    if n_strata < MIN_STRATA:
-        raise ConfigError(
-            f"{owner}.sample_fraction: {fraction!r} of {n_bins} screen bins gives {n_strata} strata of 2 bins; "
-            f"a confidence interval needs at least {MIN_STRATA} (at least {2 * MIN_STRATA} bins): raise "
-            f"sample_fraction to >= {2 * MIN_STRATA / n_bins:.3g} or use a smaller bin_size")
-    rng = np.random.default_rng(seed)
-    edges = (np.arange(n_strata + 1) * n_bins) // n_strata
-    bins, stratum = [], []
-    for h in range(n_strata):
-        lo, hi = int(edges[h]), int(edges[h + 1])
-        pick = np.sort(rng.choice(hi - lo, size=2, replace=False)) + lo
-        bins.extend(pick.tolist())
-        stratum.extend([h, h])
-    return BinSample(np.asarray(bins, np.int32), np.asarray(stratum, np.int64), np.diff(edges), n_bins)
+
+
+def choose_bins(work, fraction: float, seed: int) -> BinSample:
+    """The engine's draw (traversal/bin_sample.h) for per-bin brute-force work ``work``: the bins
+    with work sorted by it, cut into round(fraction * K) // 2 strata, 2 bins drawn per stratum.
+    ConfigError when fewer than 2 strata remain (no interval can be given)."""
+    check_fraction(fraction)
+    from . import _core
+
+    work = np.asarray(work, dtype=np.int64)
+    try:
+        bins, stratum, sizes = _core.stratify_bins(work.tolist(), float(fraction), int(seed))
+    except ValueError as e:
+        raise ConfigError(f"PipelineConfig.{e}") from None
+    return BinSample(np.asarray(bins, np.int64), np.asarray(stratum, np.int64), np.asarray(sizes, np.int64),
+                     int((work > 0).sum()))
+
+
+def from_engine(out: dict) -> BinSample:
+    """The BinSample of a sampled engine render (sim._core.render's output)."""
+    work = np.asarray(out["bin_work"])
+    return BinSample(np.asarray(out["bins"], np.int64), np.asarray(out["bin_stratum"], np.int64),
+                     np.asarray(out["strata_sizes"], np.int64), int((work > 0).sum()))
 
 
 def stratified_total(sample: BinSample, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -120,10 +130,17 @@ def stratified_total(sample: BinSample, y: np.ndarray) -> tuple[np.ndarray, np.n
     dev = y - means[sample.stratum]
     ss = np.zeros((H, y.shape[1]))
     np.add.at(ss, sample.stratum, dev * dev)
-    s2 = ss / (nh - 1)[:, None]
+    full = nh >= Nh  # a take-all stratum: every bin traversed, no sampling variance
+    s2 = np.where(full[:, None], 0.0, ss / np.maximum(nh - 1, 1)[:, None])
     total = (Nh[:, None] * means).sum(axis=0)
     var = (Nh ** 2 * (1 - nh / Nh) / nh)[:, None] * s2
     return total, var.sum(axis=0)
+
+
+def sampled_strata(sample: BinSample) -> int:
+    """Strata whose bins were drawn (not the take-all stratum): the degrees of freedom."""
+    nh = np.bincount(sample.stratum, minlength=len(sample.sizes))
+    return int((nh < sample.sizes).sum())
 
 
 def estimate(sample: BinSample, counters: dict, bin_counters: np.ndarray, derived, names: list[str]
@@ -137,8 +154,11 @@ def estimate(sample: BinSample, counters: dict, bin_counters: np.ndarray, derive
     bc = np.asarray(bin_counters, dtype=np.float64)
     totals = np.array([float(counters[n]) for n in names])
     exact_part = totals - bc.sum(axis=0)  # setup (every triangle) and the frame facts
-    est, var = stratified_total(sample, bc)
-    tq = t_quantile_975(len(sample.sizes))
+    if sample.exact:  # every bin with triangles traversed: the totals are the frame's
+        est, var, tq = bc.sum(axis=0), np.zeros(len(names)), 0.0
+    else:
+        est, var = stratified_total(sample, bc)
+        tq = t_quantile_975(max(1, sampled_strata(sample)))
     raw = exact_part + est
     half = tq * np.sqrt(var)
     flat, ci = {}, {}
@@ -156,11 +176,11 @@ def estimate(sample: BinSample, counters: dict, bin_counters: np.ndarray, derive
         plus = evaluate(derived, {n: flat[n] + step * bc[r, i] for i, n in enumerate(names)})
         minus = evaluate(derived, {n: flat[n] - step * bc[r, i] for i, n in enumerate(names)})
         z[r] = [(plus[d] - minus[d]) / (2 * step) for d in dnames]
-    _, dvar = stratified_total(sample, np.nan_to_num(z, nan=0.0))
+    dvar = np.zeros(len(dnames)) if sample.exact else stratified_total(sample, np.nan_to_num(z, nan=0.0))[1]
     for j, d in enumerate(dnames):
         flat[d] = base[d]
         bad = not np.isfinite(base[d]) or not np.all(np.isfinite(z[:, j]))
         ci[d] = math.nan if bad else float(tq * math.sqrt(dvar[j]))
     flat.update({"sample.fraction": sample.fraction, "sample.bins": len(sample.bins),
-                 "sample.strata": len(sample.sizes)})
+                 "sample.strata": len(sample.sizes), "sample.candidates": sample.candidates})
     return flat, ci

@@ -1,7 +1,8 @@
-"""Sampled simulation (sim/sampling.py, PipelineConfig.sample_fraction): the engine renders exactly the
-chosen bins and reports their own counters; the stratified estimator's 95% intervals cover the
-whole-frame value at the stated rate over many seeds; figures that need the whole frame are NaN; bad
-fractions are errors naming the field."""
+"""Sampled simulation (sim/sampling.py, traversal/bin_sample.h, PipelineConfig.sample_fraction): the
+engine renders exactly the chosen bins and reports their own counters; the draw is stratified by
+brute-force work; the stratified estimator's 95% intervals cover the whole-frame value at the stated
+rate over many seeds; figures that need the whole frame are NaN; bad fractions are errors naming
+the field."""
 import math
 
 import numpy as np
@@ -90,6 +91,27 @@ def test_t_quantile_against_scipy():
         assert sampling.t_quantile_975(df) == pytest.approx(stats.t.ppf(0.975, df), rel=2e-3), df
 
 
+def test_draw_is_stratified_by_work(setup, full):
+    """2 distinct bins per stratum, strata are runs of the bins with work sorted by work, and only
+    bins with work are drawn; the same seed gives the same draw."""
+    res, n_bins = full
+    work = np.asarray(_engine_bins(setup, np.arange(n_bins))["bin_work"])
+    K = int((work > 0).sum())
+    s = sampling.choose_bins(work, 0.2, 11)
+    assert len(s.bins) <= 2 * (round(0.2 * K) // 2) and s.sizes.sum() == K
+    assert (work[s.bins] > 0).all() and len(set(s.bins.tolist())) == len(s.bins)
+    order = sorted(np.flatnonzero(work > 0).tolist(), key=lambda b: work[b])  # stable, as the engine
+    edges = np.concatenate([[0], np.cumsum(s.sizes)])
+    drawn = np.bincount(s.stratum, minlength=len(s.sizes))
+    for h in range(len(s.sizes)):
+        members = set(order[edges[h]:edges[h + 1]])
+        assert set(s.bins[s.stratum == h].tolist()) <= members
+        # 2 drawn per stratum, or the take-all stratum (the heaviest bins, all traversed) last
+        assert drawn[h] == 2 or (h == len(s.sizes) - 1 and drawn[h] == s.sizes[h])
+    assert np.array_equal(sampling.choose_bins(work, 0.2, 11).bins, s.bins)
+    assert not np.array_equal(sampling.choose_bins(work, 0.2, 12).bins, s.bins)
+
+
 def test_intervals_cover_the_frame_value_at_the_stated_rate(setup, full):
     """Over 400 seeds at fractions 0.1 and 0.3, the 95% interval of raster.samples_tested, ops.total
     and raster.samples_hit covers the whole-frame value in >= 90% of the draws (binomial: 95% nominal
@@ -98,22 +120,25 @@ def test_intervals_cover_the_frame_value_at_the_stated_rate(setup, full):
     allb = _engine_bins(setup, np.arange(n_bins))
     names = list(allb["counters"])
     rows = allb["bin_counters"]
+    work = allb["bin_work"]
     from sim.stats import DERIVED
 
     for fraction in (0.1, 0.3):
-        for figure in ("raster.samples_tested", "raster.samples_hit", "ops.total"):
-            hits, errs = 0, []
-            for seed in range(400):
-                s = sampling.choose_bins(n_bins, fraction, seed)
-                flat, ci = sampling.estimate(s, _counters_with_setup(allb["counters"], rows, s, names),
-                                             rows[s.bins], DERIVED, names)
+        hits = {k: 0 for k in ("raster.samples_tested", "raster.samples_hit", "ops.total")}
+        errs = {k: [] for k in hits}
+        for seed in range(400):
+            s = sampling.choose_bins(work, fraction, seed)
+            flat, ci = sampling.estimate(s, _counters_with_setup(allb["counters"], rows, s, names), rows[s.bins],
+                                         DERIVED, names)
+            for figure in hits:
                 truth = res.flat_stats[figure]
-                hits += abs(flat[figure] - truth) <= ci[figure]
-                errs.append(flat[figure] - truth)
-            rate = hits / 400
+                hits[figure] += abs(flat[figure] - truth) <= ci[figure]
+                errs[figure].append(flat[figure] - truth)
+        for figure in hits:
+            rate = hits[figure] / 400
             assert rate >= 0.90, (fraction, figure, rate)
-            errs = np.asarray(errs)
-            assert abs(errs.mean()) <= 4 * errs.std() / math.sqrt(len(errs)), (fraction, figure, errs.mean())
+            e = np.asarray(errs[figure])
+            assert abs(e.mean()) <= 4 * e.std() / math.sqrt(len(e)), (fraction, figure, e.mean())
 
 
 def _counters_with_setup(total, rows, s, names):
@@ -130,7 +155,8 @@ def test_sampled_render_matches_the_estimator_on_the_same_bins(setup, full):
     res, n_bins = full
     r = sim.render(scene, camera, table, config(sample_fraction=0.25, sample_seed=5))
     assert r.ci95 is not None and r.timing_records is None
-    assert r.flat_stats["sample.bins"] == 2 * (round(0.25 * n_bins) // 2)
+    K = r.flat_stats["sample.candidates"]
+    assert 0 < K <= n_bins and 4 <= r.flat_stats["sample.bins"] <= 2 * (round(0.25 * K) // 2)
     for k in ("tex.cache.hits", "timing.cycles"):
         assert math.isnan(r.flat_stats[k]) and math.isnan(r.ci95[k])
     for k in ("raster.samples_tested", "ops.total", "raster.ste"):
@@ -146,7 +172,7 @@ def test_bad_fraction(fraction):
 
 def test_too_few_bins_is_an_error(setup):
     scene, camera, table = setup
-    with pytest.raises(sim.ConfigError, match=r"sample_fraction: 0.02 of 144 screen bins"):
+    with pytest.raises(sim.ConfigError, match=r"PipelineConfig.sample_fraction: 0.02.* screen bins that hold triangles"):
         sim.render(scene, camera, table, config(sample_fraction=0.02))
 
 
@@ -155,3 +181,6 @@ def test_whole_frame_fraction_is_exact(setup, full):
     res, _ = full
     r = sim.render(scene, camera, table, config(sample_fraction=1.0), timing=False)
     assert r.ci95 is None and r.flat_stats["raster.samples_tested"] == res.flat_stats["raster.samples_tested"]
+    r = sim.render(scene, camera, table, config(sample_fraction=0.99), timing=False)  # every bin with work
+    assert r.flat_stats["sample.strata"] == 0 and r.ci95["raster.samples_tested"] == 0
+    assert r.flat_stats["raster.samples_tested"] == res.flat_stats["raster.samples_tested"]

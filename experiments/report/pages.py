@@ -31,9 +31,9 @@ QUICK_SIZE = 64
 
 
 # --quick also samples (pipeline.sample_fraction, sim/sampling.py) the render points whose outputs
-# need no whole-frame figure: QUICK_FRACTION of 16-px bins. Configs that read image metrics, the
+# need no whole-frame figure: QUICK_FRACTION of the 8-px bins that hold triangles. Configs that read image metrics, the
 # timing model, the texture cache or bin sizes, and other point kinds, render whole frames.
-QUICK_FRACTION, QUICK_BIN = 0.5, 16
+QUICK_FRACTION, QUICK_BIN = 0.5, 8
 _WHOLE_FRAME = ("timing", "tex.cache", "metrics", "bin_size", "sample_fraction", "hinterleave_tile")
 
 

@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "setup/setup.h"
+#include "traversal/bin_sample.h"
 #include "traversal/traversal.h"
 
 namespace rast5d {
@@ -162,8 +163,31 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
   ShadeFrame shade_frame;
   build_shade_frame(p, scene, setups, alive, n_bins, shade_frame);
 
-  // ---- the bins to render: all, or a subset (sampled simulation) ----
+  // ---- the bins to render: all, or a subset (a list, or sampled simulation) ----
+  std::vector<int> drawn;
+  if (bins || p.sample_fraction < 1.0) {
+    result.bin_work.assign(static_cast<std::size_t>(n_bins), 0);
+    for (int b = 0; b < n_bins; ++b) {
+      const int bx = b % bins_x, by = b / bins_x;
+      const int x0 = bx * B, y0 = by * B, x1 = std::min(p.width, x0 + B), y1 = std::min(p.height, y0 + B);
+      std::int64_t w = 0;
+      for (std::uint32_t i : bin_lists[b]) {
+        const TriSetup& t = setups[i];
+        const std::int64_t dx = std::min(t.bx1, x1) - std::max(t.bx0, x0), dy = std::min(t.by1, y1) - std::max(t.by0, y0);
+        if (dx > 0 && dy > 0) w += dx * dy;
+      }
+      result.bin_work[b] = w * table.spp();
+    }
+  }
+  if (!bins && p.sample_fraction < 1.0) {
+    BinSample s = stratify_bins(result.bin_work, p.sample_fraction, static_cast<std::uint64_t>(p.sample_seed));
+    drawn = std::move(s.bins);
+    result.sampled_stratum = std::move(s.stratum);
+    result.strata_sizes = std::move(s.sizes);
+    bins = &drawn;
+  }
   if (bins) {
+    result.sampled_bins = *bins;
     std::vector<char> seen(static_cast<std::size_t>(n_bins), 0);
     for (int b : *bins) {
       if (b < 0 || b >= n_bins || seen[b])

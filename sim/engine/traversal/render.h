@@ -47,6 +47,12 @@ struct RenderResult {
   // per entry of `bins` in its order (traversal work only; setup and whole-frame figures are in
   // `counters`, which then holds the setup plus the rendered bins' sum).
   std::vector<std::uint64_t> bin_counters;
+  // With a bin list or pipeline.sample_fraction < 1: every bin's brute-force work (sum over its
+  // triangles of their bounds' pixels in the bin, times spp), the traversed bins (the list, or the
+  // stratified draw of traversal/bin_sample.h), the stratum of each and the strata sizes (empty:
+  // every bin with triangles was traversed).
+  std::vector<std::int64_t> bin_work;
+  std::vector<int> sampled_bins, sampled_stratum, strata_sizes;
 };
 
 // Throws std::invalid_argument for bad parameters. `interrupted` is polled from the calling
