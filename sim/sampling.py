@@ -11,7 +11,9 @@ its counts are exact. Every counter a bin owns is estimated by the stratified ex
 
 (N_h bins in stratum h, n_h = 2 of them rendered, y a bin's counter value), and the 95% half-width is
 t_{0.975, H} * sqrt(Var) (H degrees of freedom). Bins heavier than a stratum's share of the work form
-a take-all stratum (all traversed, no variance). Derived figures (ratios, sums) are evaluated on the
+a take-all stratum (all traversed, no variance). The frame's brute-force work X is known for every
+bin, so the totals use the combined ratio estimator T = X * T_y / T_x, whose variance is that of the
+residuals y - (T_y / T_x) x: counters that follow brute-force work are estimated far more tightly. Derived figures (ratios, sums) are evaluated on the
 estimated totals; their half-widths come from the same formula applied to each bin's linearised
 contribution (the derivative of the figure along that bin's counter vector).
 
@@ -76,6 +78,7 @@ class BinSample:
     stratum: np.ndarray
     sizes: np.ndarray
     candidates: int
+    work: np.ndarray | None = None  # brute-force work of every bin of the frame (the auxiliary variable)
 
     @property
     def fraction(self) -> float:
@@ -105,14 +108,14 @@ def choose_bins(work, fraction: float, seed: int) -> BinSample:
     except ValueError as e:
         raise ConfigError(f"PipelineConfig.{e}") from None
     return BinSample(np.asarray(bins, np.int64), np.asarray(stratum, np.int64), np.asarray(sizes, np.int64),
-                     int((work > 0).sum()))
+                     int((work > 0).sum()), work)
 
 
 def from_engine(out: dict) -> BinSample:
     """The BinSample of a sampled engine render (sim._core.render's output)."""
     work = np.asarray(out["bin_work"])
     return BinSample(np.asarray(out["bins"], np.int64), np.asarray(out["bin_stratum"], np.int64),
-                     np.asarray(out["strata_sizes"], np.int64), int((work > 0).sum()))
+                     np.asarray(out["strata_sizes"], np.int64), int((work > 0).sum()), work)
 
 
 def stratified_total(sample: BinSample, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -137,6 +140,23 @@ def stratified_total(sample: BinSample, y: np.ndarray) -> tuple[np.ndarray, np.n
     return total, var.sum(axis=0)
 
 
+def ratio_total(sample: BinSample, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(estimated totals, variances) by the combined ratio estimator on brute-force work x, known for
+    every bin: T = X * T_y / T_x with T_y, T_x the stratified estimates, and the variance of the
+    stratified estimator applied to the residuals y - (T_y / T_x) x. Without work: stratified_total."""
+    if sample.work is None:
+        return stratified_total(sample, y)
+    y = np.asarray(y, dtype=np.float64)
+    y = y[:, None] if y.ndim == 1 else y
+    x = np.asarray(sample.work, dtype=np.float64)[sample.bins]
+    X = float(np.asarray(sample.work, dtype=np.float64).sum())
+    ty, _ = stratified_total(sample, y)
+    tx, _ = stratified_total(sample, x)
+    r = ty / tx[0]
+    _, var = stratified_total(sample, y - x[:, None] * r[None, :])
+    return X * r, var
+
+
 def sampled_strata(sample: BinSample) -> int:
     """Strata whose bins were drawn (not the take-all stratum): the degrees of freedom."""
     nh = np.bincount(sample.stratum, minlength=len(sample.sizes))
@@ -157,7 +177,7 @@ def estimate(sample: BinSample, counters: dict, bin_counters: np.ndarray, derive
     if sample.exact:  # every bin with triangles traversed: the totals are the frame's
         est, var, tq = bc.sum(axis=0), np.zeros(len(names)), 0.0
     else:
-        est, var = stratified_total(sample, bc)
+        est, var = ratio_total(sample, bc)
         tq = t_quantile_975(max(1, sampled_strata(sample)))
     raw = exact_part + est
     half = tq * np.sqrt(var)
@@ -176,7 +196,7 @@ def estimate(sample: BinSample, counters: dict, bin_counters: np.ndarray, derive
         plus = evaluate(derived, {n: flat[n] + step * bc[r, i] for i, n in enumerate(names)})
         minus = evaluate(derived, {n: flat[n] - step * bc[r, i] for i, n in enumerate(names)})
         z[r] = [(plus[d] - minus[d]) / (2 * step) for d in dnames]
-    dvar = np.zeros(len(dnames)) if sample.exact else stratified_total(sample, np.nan_to_num(z, nan=0.0))[1]
+    dvar = np.zeros(len(dnames)) if sample.exact else ratio_total(sample, np.nan_to_num(z, nan=0.0))[1]
     for j, d in enumerate(dnames):
         flat[d] = base[d]
         bad = not np.isfinite(base[d]) or not np.all(np.isfinite(z[:, j]))
