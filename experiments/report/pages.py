@@ -31,7 +31,8 @@ QUICK_SIZE = 64
 
 
 # --quick also samples (pipeline.sample_fraction, sim/sampling.py) the render points whose outputs
-# need no whole-frame figure: QUICK_FRACTION of the 8-px bins that hold triangles. Configs that read image metrics, the
+# need no whole-frame figure and whose quick frame has at least 8 x 8 bins: QUICK_FRACTION of the
+# 8-px bins that hold triangles. Configs that read image metrics, the
 # timing model, the texture cache or bin sizes, and other point kinds, render whole frames.
 QUICK_FRACTION, QUICK_BIN = 0.5, 8
 _WHOLE_FRAME = ("timing", "tex.cache", "metrics", "bin_size", "sample_fraction", "hinterleave_tile")
@@ -46,7 +47,10 @@ def quick_overrides(data: dict) -> list[str]:
     else:
         out = [f"camera.width={QUICK_SIZE}", f"camera.height={QUICK_SIZE}"]
     text = json.dumps(data, default=str)
-    if (data.get("point") or {}).get("kind", "render") == "render" and not any(k in text for k in _WHOLE_FRAME):
+    size = [int(o.split("=")[1]) for o in out]
+    # Sample only frames of at least 8 x 8 bins: fewer bins with triangles leave no interval.
+    if (data.get("point") or {}).get("kind", "render") == "render" and not any(k in text for k in _WHOLE_FRAME) \
+            and min(size) >= 8 * QUICK_BIN:
         out += [f"pipeline.bin_size={QUICK_BIN}", f"pipeline.sample_fraction={QUICK_FRACTION}"]
     return out
 
