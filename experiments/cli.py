@@ -93,19 +93,23 @@ def list_items(what: str) -> list[tuple[str, str]]:
         from .config import REPO, load_dict, sweep_points
 
         rows = []
-        for path in sorted((REPO / "configs").rglob("*.yaml")):
-            if "scenes" in path.relative_to(REPO / "configs").parts:
+        root = next((r for r in (Path.cwd(), REPO) if (r / "configs").is_dir()), REPO)
+        for path in sorted((root / "configs").rglob("*.yaml")):
+            if "scenes" in path.relative_to(root / "configs").parts:
                 continue
             data, _ = load_dict(path)
             about = (data.get("outputs") or {}).get("title") or data.get("description") or ""
             points = len(sweep_points(data["sweep"])) if isinstance(data.get("sweep"), dict) else 1
-            rows.append((str(path.relative_to(REPO)), f"{' '.join(str(about).split())} ({points} points)".strip()))
+            rows.append((str(path.relative_to(root)), f"{' '.join(str(about).split())} ({points} points)".strip()))
         return rows
     raise ValueError(f"list: unknown kind {what!r}")
 
 
 def cmd_list(args) -> int:
     rows = list_items(args.what)
+    if not rows:
+        print(f"no {args.what} found (configs: a configs/ folder in the working directory or the checkout)")
+        return 0
     width = max(len(n) for n, _ in rows)
     for name, description in rows:
         print(f"{name:<{width}}  {description}")

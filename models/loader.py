@@ -257,7 +257,10 @@ def load(name_or_path: str | Path, **overrides: Any) -> Scene:
     text = str(name_or_path)
     suffix = Path(text).suffix.lower()
     if isinstance(name_or_path, Path) or suffix in YAML_SUFFIXES + MESH_SUFFIXES + XML_SUFFIXES:
-        path = resolve_path(text, what="scene")
+        tried = candidate_paths(text)
+        path = next((p for p in tried if p.exists()), None)
+        if path is None:
+            raise SceneError(f"scene file: not found: {text} (tried {', '.join(map(str, tried))})")
         if suffix in YAML_SUFFIXES:
             if overrides:
                 raise SceneError(

@@ -26,6 +26,9 @@ def main() -> int:
     bin_dir = Path(sys.executable).parent
     out = subprocess.run([bin_dir / "rast5d", "--version"], capture_output=True, text=True, check=True).stdout
     assert out.startswith(f"rast5d {expected}"), out
+    for what, needle in (("algorithms", "tile"), ("scenes", "spot_wall"), ("counters", "raster.samples_tested")):
+        out = subprocess.run([bin_dir / "rast5d", "list", what], capture_output=True, text=True, check=True).stdout
+        assert needle in out, (what, out)
 
     scene = models.named("quad")
     camera = sim.Camera(width=32, height=32, coc_px=4, **{k: v for k, v in scene.camera_hint.items()

@@ -145,7 +145,7 @@ def resolve_scene_paths(data: dict, lines: dict, path: Path) -> None:
         node = data
         for part in section:
             node = node.get(part) if isinstance(node, dict) else None
-        if isinstance(node, dict) and "path" in node:
+        if isinstance(node, dict) and "path" in node and node.get("name") is None:  # both: the schema says so
             key = section + ("path",)
             node["path"] = _resolve_one(node["path"], lines.get(key, str(path)), _defining_file(lines, key, path))
     sweep = data.get("sweep")

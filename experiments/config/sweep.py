@@ -79,7 +79,7 @@ def _point_lines(lines: dict | None, point: dict) -> dict | None:
     for k in point:
         where = lines.get(("sweep", k))
         if where:
-            out[tuple(k.split("."))] = where
+            out[tuple(k.split("."))] = f"{where} (sweep point {point})"
     return out or None
 
 
