@@ -34,11 +34,18 @@ def _json_safe(x):
     return x
 
 
+def _sampling_overrides(args) -> list[str]:
+    """--sample-fraction F as the --set override it stands for (validated by the pipeline schema)."""
+    if getattr(args, "sample_fraction", None) is None:
+        return []
+    return [f"pipeline.sample_fraction={args.sample_fraction!r}"]
+
+
 def cmd_render(args) -> int:
     from .config import load_config
     from .run import render_point
 
-    config = load_config(args.config, args.set or [])
+    config = load_config(args.config, (args.set or []) + _sampling_overrides(args))
     if config.sweep:
         print(f"{args.config}: has a sweep ({', '.join(k for k in config.sweep if k != 'zip')}); use `rast5d run` "
               "for sweeps", file=sys.stderr)
@@ -64,12 +71,13 @@ def cmd_run(args) -> int:
     from .report.pages import write_config_page
     from .run import run_sweep
 
-    data, lines = load_dict(args.config, args.set or [])
+    overrides = (args.set or []) + _sampling_overrides(args)
+    data, lines = load_dict(args.config, overrides)
     config = validate(data, str(args.config), lines)
     df = run_sweep(config, source=str(args.config), workers=args.workers, scheduler=args.scheduler,
                    force=args.force, lines=lines, retry_failed=args.retry_failed)
     if config.outputs.plots and not args.no_report:
-        page = write_config_page(config, args.config, df, overrides=args.set or [])
+        page = write_config_page(config, args.config, df, overrides=overrides)
         print(f"report -> {page}")
     return 0 if len(df) and (df["status"] == "ok").all() else 1
 
@@ -137,6 +145,9 @@ def main(argv: list[str] | None = None) -> int:
                    help="override a key, e.g. --set camera.coc_px=10 (repeatable)")
     p.add_argument("-o", "--output", help="PNG image path")
     p.add_argument("--stats", help="JSON statistics path")
+    p.add_argument("--sample-fraction", type=float, metavar="F",
+                   help="sampled simulation: render a stratified share F in (0, 1] of the screen bins and "
+                        "estimate the frame with 95%% intervals (pipeline.sample_fraction)")
     p.set_defaults(func=cmd_render)
 
     p = sub.add_parser("run", help="run a sweep (config.sweep) into the result store (results/<name>.parquet)")
@@ -149,6 +160,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--retry-failed", action="store_true",
                    help="re-render stored failed points (otherwise served from the store with their error)")
     p.add_argument("--no-report", action="store_true", help="do not write the config's report page")
+    p.add_argument("--sample-fraction", type=float, metavar="F",
+                   help="sampled simulation for every point: a stratified share F in (0, 1] of the screen bins, "
+                        "counters scaled to the frame with 95%% intervals in '<figure>.ci95' columns "
+                        "(pipeline.sample_fraction)")
     p.set_defaults(func=cmd_run)
 
     p = sub.add_parser("report", help="run the report configs of configs/ (cached) and regenerate reports/")

@@ -32,7 +32,8 @@ class RenderParams:
     c_tile: float  # Oracle C_tile (one edge's H_j lines vs one tile); null = documented [ops]; default -1.0
     backface_cull: bool  # Cull back-facing triangles; default False
     op_count: str  # 'documented' (charge each kernel's documented cost) or 'exact' (counting scalar type) (op_counts: documented, exact); default 'documented'
-    count_optimal: bool  # Instrument tile.samples_optimal (exact lens region per tile; 001 Table 1); default True
+    count_optimal: bool  # Instrument tile.samples_optimal (exact lens region per tile; 001 Table 1); off by default: it costs more than the traversal it describes; default False
+    simd: bool  # Fast path: the 4D/5D sample tests in explicit SIMD (bit-identical results and counts; false = the auto-vectorised kernels, for benchmarks); default True
     hinterleave_tile: int  # HINTERLEAVE tile edge: 4, 8 or 16 [px]; default 8
     bin_size: int  # Screen bin edge for threading (multiple of 8 and of hinterleave_tile) [px]; default 64
     lines_buffer_size: int  # Segment-buffer capacity per line sample; 0 = unlimited (004 does not state its size; 8 overflows by 27% on modern_hall at CoC 40 and darkens it, 32 does not) [segments]; default 32
@@ -43,6 +44,8 @@ class RenderParams:
     lines_merge_color: float  # Merge: largest Euclidean distance of linear RGB colours; default 0.05
     lines_merge_gap: float  # Merge: largest gap between the two intervals along the line (0: touching or overlapping); default 0.0
     lines_tile_clip: bool  # Skip line-triangle tests of lines that miss the tile's h_i lens region (same image); default False
+    sample_fraction: float  # Sampled simulation: traverse this fraction of the screen bins that hold triangles (2 per stratum of bins with similar brute-force work), scale the counters to the frame and give 95% confidence half-widths (Result.ci95); 1 = the whole frame, exact; default 1.0
+    sample_seed: int  # Seed of the sampled bins (sample_fraction < 1); default 0
     shading: str  # What costs a shader lane: 'per_sample' (supersampling), 'msaa' (one per pixel per visit), 'per_lens_cell' (one per pixel and lens-grid cell per visit), 'cache' (memoising shading cache, 002 §2) or 'none' (not modelled: no shade.*/tex.* counts, fastest); the image is the same in every mode (shading_modes: per_sample, msaa, per_lens_cell, cache, none); default 'none'
     shading_cache_entries: int  # Shading cache (shading: cache): LRU entries, key (triangle, shading-grid point) [entries]; default 1024
     shading_grid: int  # Shading cache: shading-grid points per pixel edge (1 = pixel grid, 2 = 2x2 per pixel, ...) [points/px]; default 1
@@ -73,6 +76,7 @@ class RenderParams:
     table_has_time: bool  # The sample table has time coordinates (else t = 0 is exact); default True
     record_timing: bool  # Record one timing work record per (triangle, bin) visit (docs/timing.md); default True
     table_lines: bool  # The sample table holds line samples (SampleTable.lines): (x, y) a screen point, (u, v) the line direction; default False
+    timing_per_visit: bool  # Timing records per shading visit instead of per (triangle, bin) (hardware.timing.granularity 'visit'); default False
     query_first: int  # Occlusion query: triangles from this index are the query (no writes); -1 none; default -1
     query_mode: str  # Occlusion query: 'none', 'samples' (sample-based) or 'intervals' (ẑ vs HiZ, abort) (query_modes: none, samples, intervals); default 'none'
     # ---- end of the generated fields ----
@@ -100,10 +104,12 @@ def render(
     uvs: npt.NDArray[np.float32] | None = None,  # (N, 3, 2) texture coordinates
     tex_slots: npt.NDArray[np.int32] | None = None,  # (N, 4) texture index per slot, -1 unused
     textures: list[npt.NDArray[np.float32]] = ...,  # (H, W, 1..4) linear images
+    bins: npt.NDArray[np.int32] | None = None,  # render only these screen bins (row-major indices)
 ) -> dict[str, Any]:
     """Returns {'image': (H, W, 3) float32, 'counters': {name: int}}, with params.record_timing
     'timing_records' (timing_record_dtype(), culled triangles then bins in raster order) and, with export_samples,
-    'sample_depth' (H, W, spp) float32 and 'sample_triangle' (H, W, spp) int32. Releases the GIL;
+    'sample_depth' (H, W, spp) float32 and 'sample_triangle' (H, W, spp) int32; with bins, 'bin_counters'
+    (len(bins), counters) uint64 in counter_docs() order, one row per rendered bin. Releases the GIL;
     Ctrl-C raises KeyboardInterrupt. Raises ValueError for invalid parameters."""
 
 def lens_grid_buckets(

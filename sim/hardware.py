@@ -67,6 +67,23 @@ class TextureCacheConfig:
                               f"{self.ways} x {self.line_bytes}-byte lines")
 
 
+TIMING_GRANULARITIES = ("bin", "visit")
+
+
+@dataclass(frozen=True)
+class TimingRecordsConfig:
+    """What one work record of the timing model covers (docs/timing.md)."""
+
+    granularity: str = field(default="bin", metadata={
+        "doc": "Timing records: 'bin' (one per triangle and 64-px screen bin) or 'visit' (one per shading "
+               "visit: per triangle and tile for tile and laine, per pass for interval and interleave, per "
+               "triangle and bin for bruteforce); finer records cost simulator time"})
+
+    def validate(self, owner: str) -> None:
+        if self.granularity not in TIMING_GRANULARITIES:
+            raise ConfigError(f"{owner}.granularity: expected 'bin' or 'visit', got {self.granularity!r}")
+
+
 _UNIT_DEFAULTS = {
     # unit: (throughput, latency, fifo, currency)
     # The conventional-GPU units (gpu_* algorithms; docs/gpu.md): a GeForce 8800-class part, 128
@@ -119,6 +136,8 @@ class HardwareConfig:
     cores: int = field(default=1, metadata={
         "unit": "pipelines", "doc": "Timing model: parallel pipelines; screen bins are dealt round-robin, "
                                     "memory bandwidth is split evenly (docs/timing.md)"})
+    timing: TimingRecordsConfig = field(default_factory=TimingRecordsConfig, metadata={
+        "doc": TimingRecordsConfig.__doc__, "section": True})
 
     def __post_init__(self):
         # Nested sections: a dict completes the section's own defaults; each section validates itself.

@@ -15,6 +15,8 @@ from . import params as _params
 from .pipeline import PipelineConfig
 from .texturing import texture_inputs
 from .timing import estimate as timing_estimate
+from .timing import docs as timing_docs
+from . import sampling as _sampling
 from .stats import flat_stats, nest
 
 
@@ -30,6 +32,10 @@ class Result:
     timing_records  the timing model's work records (sim.timing.RECORD_DTYPE), None with
                 render(..., timing=False); sim.timing.estimate(result.timing_records, hw) re-times
                 the same render on other hardware
+    ci95        sampled simulation (PipelineConfig.sample_fraction < 1): {figure: 95% confidence
+                half-width} of every counter and derived figure in flat_stats, which then hold
+                frame estimates; NaN for figures not estimable under sampling (sim.sampling).
+                None for a whole-frame render (exact figures)
     """
 
     image: np.ndarray
@@ -38,6 +44,7 @@ class Result:
     sample_depth: np.ndarray | None = None
     sample_triangle: np.ndarray | None = None
     timing_records: np.ndarray | None = None
+    ci95: dict | None = None
 
     @property
     def stats(self) -> dict:
@@ -86,7 +93,8 @@ def _scene_arrays(scene) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def memory_parts(camera: Camera, spp: int, n_triangles: int, config: PipelineConfig, threads: int,
-                 export_samples: bool = False, timing: bool = True, period: int = 0) -> dict[str, int]:
+                 export_samples: bool = False, timing: bool = True, period: int = 0,
+                 timing_per_visit: bool = False) -> dict[str, int]:
     """Bytes the engine will allocate, by part: {part: bytes}; ``memory_estimate`` is their sum.
     Each part's name says what it grows with (docs/errors.md, tests/test_memory.py)."""
     b = config.bin_size
@@ -102,17 +110,21 @@ def memory_parts(camera: Camera, spp: int, n_triangles: int, config: PipelineCon
         # One 96-byte record per (triangle, bin) visit (about 4 bins per triangle, as for the bin
         # lists), held per bin, concatenated and copied to numpy: three copies.
         "timing records (triangles)": n_triangles * 4 * 96 * 3 if timing else 0,
+        # hardware.timing.granularity 'visit': about one record per (triangle, tile), 4x overdraw.
+        "timing records per visit (width x height / tile_size^2)":
+            camera.width * camera.height // config.tile_size ** 2 * 4 * 96 * 3 if timing and timing_per_visit else 0,
         "sample index (period^2 x lens cells x time strata)":
             period * period * (grid * grid * config.time_strata + 1 + spp) * 4,
     }
 
 
 def memory_estimate(camera: Camera, spp: int, n_triangles: int, config: PipelineConfig, threads: int,
-                    export_samples: bool = False, timing: bool = True, period: int = 0) -> int:
+                    export_samples: bool = False, timing: bool = True, period: int = 0,
+                    timing_per_visit: bool = False) -> int:
     """Bytes the engine will allocate (image, per-thread bin buffers, setup, bin lists, exports,
     timing records, and with the table's period the (lens cell, time stratum) sample index)."""
     return int(sum(memory_parts(camera, spp, n_triangles, config, threads, export_samples, timing,
-                                period).values()))
+                                period, timing_per_visit).values()))
 
 
 def _memory_message(need: int, parts: dict, camera: Camera, spp: int, n: int, config: PipelineConfig,
@@ -187,7 +199,7 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     grid = config.resolved_lens_grid(spp)
     threads = config.threads or (os.cpu_count() or 1)
     parts = memory_parts(camera, spp, p0.shape[0], config, threads, export_samples, timing,
-                         period=samples.shape[0])
+                         period=samples.shape[0], timing_per_visit=hardware.timing.granularity == "visit")
     need = int(sum(parts.values()))
     if need > config.memory_limit_bytes:
         raise ConfigError(_memory_message(need, parts, camera, spp, p0.shape[0], config, threads))
@@ -207,6 +219,14 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     params.table_has_time = bool(np.any(samples[..., 4] != 0))
     params.record_timing = bool(timing)
     params.table_lines = is_lines
+    params.timing_per_visit = hardware.timing.granularity == "visit"
+    sampled = config.sample_fraction < 1
+    if sampled:
+        if query is not None:
+            raise ConfigError(f"PipelineConfig.sample_fraction: {config.sample_fraction!r}: an occlusion query "
+                              "stops at the frame's first visible sample and is not estimable from sampled bins; "
+                              "use sample_fraction=1")
+        params.record_timing = False  # the timing model needs the whole frame (sim.sampling)
     if getattr(table, "n_lens", 0):
         lens_index = np.ascontiguousarray(table.lens_index, dtype=np.int32)
         lens_uv = np.ascontiguousarray(table.lens_positions(camera.lens), dtype=np.float32)
@@ -223,9 +243,23 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
         out = _core.render(params, v0, v1, col32, samples, lens_index, lens_uv, export_samples,
                            uvs=uvs, tex_slots=slots, textures=textures)
     except ValueError as e:  # invalid_argument from the engine: name it as a config error
-        raise ConfigError(str(e)) from None
+        msg = str(e)
+        raise ConfigError(f"PipelineConfig.{msg}" if msg.startswith("sample_fraction:") else msg) from None
     wall = time.perf_counter() - t0
-    flat = flat_stats(out["counters"], {"time.wall_s": wall, **(lod_report.stats if lod_report else {})})
+    ci95 = None
+    if not sampled:
+        flat = flat_stats(out["counters"], {"time.wall_s": wall, **(lod_report.stats if lod_report else {})})
+    else:
+        from .stats import DERIVED
+
+        flat, ci95 = _sampling.estimate(_sampling.from_engine(out), out["counters"], out["bin_counters"], DERIVED,
+                                        list(out["counters"]))
+        if timing:
+            for name in timing_docs():
+                flat[name], ci95[name] = float("nan"), float("nan")
+        flat["time.wall_s"] = wall
+        flat.update(lod_report.stats if lod_report else {})
+        flat = dict(sorted(flat.items()))
     records = out.get("timing_records")
     if records is not None:
         flat = dict(sorted({**flat, **timing_estimate(records, hardware)}.items()))
@@ -238,7 +272,7 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
         _warn_empty_frame(flat, camera)
     return Result(image=out["image"], flat_stats=flat, config=desc,
                   sample_depth=out.get("sample_depth"), sample_triangle=out.get("sample_triangle"),
-                  timing_records=records)
+                  timing_records=records, ci95=ci95)
 
 
 def _warn_empty_frame(flat: dict, camera: Camera) -> None:

@@ -1,6 +1,7 @@
 """Engine throughput benchmark (`make bench`, i.e. `pytest -m bench`), never part of `make test`.
 
-Runs experiments/bench/bench_core.py and writes reports/bench/bench_core.md. Its figures are rates
+Runs experiments/bench/bench_core.py and bench_speed.py and writes reports/bench/bench_core.md and
+bench_speed.md. Its figures are rates
 and ratios measured in one run; nothing here compares a time against a threshold. With
 RAST5D_BENCH_QUICK=1 it runs the quick variant (smaller mixed_sizes) and writes the page to a
 temporary directory instead, so the reviewed page only ever holds the full benchmark.
@@ -26,3 +27,23 @@ def test_bench_core(tmp_path):
         assert section in page
     # exact counting is a second way to count the same work: it must agree with the documented costs
     assert got["counts_equal"] == {"bruteforce": True, "tile": True}
+
+
+def test_bench_speed(tmp_path):
+    """experiments/bench/bench_speed.py: wall time against operations, sampled simulation, the SIMD
+    sample tests and the timing granularity, as ratios measured in one run (reports/bench/bench_speed.md).
+    Checks only what does not depend on timing: the sections, the operation ratios, and that the
+    sampled estimates' intervals were computed."""
+    from experiments.bench import bench_speed
+
+    quick = os.environ.get("RAST5D_BENCH_QUICK", "") not in ("", "0")
+    out = tmp_path if quick else bench_speed.REPO / "reports" / "bench"
+    got = bench_speed.run(quick=quick, out=out)
+    page = got["page"].read_text()
+    for section in ("## Wall time against operations", "## Sampled simulation", "## Explicit-SIMD sample tests",
+                    "## Timing-model granularity"):
+        assert section in page
+    for r in got["rows"]:
+        if r["algorithm"] == "bruteforce":
+            assert r["ops_ratio"] == 1.0
+    assert all(0.0 <= r["coverage"] <= 1.0 for r in got["sampling"])

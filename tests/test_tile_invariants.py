@@ -107,7 +107,7 @@ class Case:
 
 
 def render(case: Case, algorithm: str, tbl, **overrides):
-    cfg = sim.PipelineConfig(algorithm=algorithm, threads=1, **{**(case.cfg or {}), **overrides})
+    cfg = sim.PipelineConfig(algorithm=algorithm, threads=1, **{"count_optimal": True, **(case.cfg or {}), **overrides})
     return sim.render(make_scene(case.p0, case.p1), case.camera(), tbl, cfg, export_samples=True)
 
 

@@ -9,6 +9,7 @@ Configs whose file name starts with `_` are bases for `extends:` and are not run
 """
 from __future__ import annotations
 
+import json
 import os
 import shlex
 import sys
@@ -29,13 +30,29 @@ REPORTS = REPO / "reports"
 QUICK_SIZE = 64
 
 
+# --quick also samples (pipeline.sample_fraction, sim/sampling.py) the render points whose outputs
+# need no whole-frame figure and whose quick frame has at least 8 x 8 bins: QUICK_FRACTION of the
+# 8-px bins that hold triangles. Configs that read image metrics, the
+# timing model, the texture cache or bin sizes, and other point kinds, render whole frames.
+QUICK_FRACTION, QUICK_BIN = 0.5, 8
+_WHOLE_FRAME = ("timing", "tex.cache", "metrics", "bin_size", "sample_fraction", "hinterleave_tile")
+
+
 def quick_overrides(data: dict) -> list[str]:
     cam = data.get("camera") or {}
     w, h = cam.get("width"), cam.get("height")
     if w and h:
         s = min(1.0, QUICK_SIZE / max(w, h))
-        return [f"camera.width={max(8, round(w * s))}", f"camera.height={max(8, round(h * s))}"]
-    return [f"camera.width={QUICK_SIZE}", f"camera.height={QUICK_SIZE}"]
+        out = [f"camera.width={max(8, round(w * s))}", f"camera.height={max(8, round(h * s))}"]
+    else:
+        out = [f"camera.width={QUICK_SIZE}", f"camera.height={QUICK_SIZE}"]
+    text = json.dumps(data, default=str)
+    size = [int(o.split("=")[1]) for o in out]
+    # Sample only frames of at least 8 x 8 bins: fewer bins with triangles leave no interval.
+    if (data.get("point") or {}).get("kind", "render") == "render" and not any(k in text for k in _WHOLE_FRAME) \
+            and min(size) >= 8 * QUICK_BIN:
+        out += [f"pipeline.bin_size={QUICK_BIN}", f"pipeline.sample_fraction={QUICK_FRACTION}"]
+    return out
 
 
 def _command(name: str, quick: bool) -> str:

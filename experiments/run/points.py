@@ -63,11 +63,16 @@ def _rendered(config, row: dict, threads):
     result = sim.render(scene, camera, table, pipeline, hardware=config.hardware_config())
     row["resolved.lens_grid"] = result.config.get("lens_grid")
     row.update(result.flat_stats)
+    if result.ci95 is not None:  # sampled simulation: 95% half-widths beside the estimates
+        row.update({f"{k}.ci95": v for k, v in result.ci95.items()})
     return result
 
 
 def _render(config, row, image_path, threads):
     result = _rendered(config, row, threads)
+    if config.outputs.metrics is not None and result.ci95 is not None:
+        raise ValueError(f"outputs.metrics: image metrics need the whole frame; pipeline.sample_fraction="
+                         f"{config.pipeline.sample_fraction!r} renders only sampled bins (not estimable)")
     if config.outputs.metrics is not None:
         from .references import point_metrics
 
@@ -92,6 +97,10 @@ def _occlusion_query(config, row, image_path, threads):
 
 def _conservative(config, row, image_path, threads):
     import sim
+
+    if config.pipeline.sample_fraction < 1:
+        raise ValueError(f"pipeline.sample_fraction: {config.pipeline.sample_fraction!r}: conservative "
+                         "rasterization is not sampled; use sample_fraction=1")
 
     scene, camera, _, pipeline = _build(config, row, threads)
     t0 = time.perf_counter()
@@ -125,6 +134,9 @@ def stored_render(config: RenderConfig, threads: int | None = None):
 def _retime(config, row, image_path, threads):
     import sim
 
+    if config.pipeline.sample_fraction < 1:
+        raise ValueError(f"pipeline.sample_fraction: {config.pipeline.sample_fraction!r}: re-timing needs the whole "
+                         "frame's work records (the timing model is not estimable from sampled bins)")
     records, stats = stored_render(config, threads)
     t0 = time.perf_counter()
     timing = sim.timing.estimate(records, config.retime_hardware())

@@ -110,5 +110,6 @@ void register_timing(py::module_& m);        // timing.cpp: timing records and t
 void register_conservative(py::module_& m);  // conservative.cpp: conservative rasterization mode
 void register_selftest(py::module_& m);      // selftest.cpp: probes and unit checks for the tests
 void register_gpu(py::module_& m);           // gpu.cpp: the conventional-GPU geometry shader probe
+void register_simd(py::module_& m);          // simd.cpp: the SIMD sample tests beside the scalar ones
 
 }  // namespace rast5d::bindings

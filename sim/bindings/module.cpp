@@ -12,4 +12,5 @@ PYBIND11_MODULE(_core, m) {
   register_conservative(m);
   register_selftest(m);
   register_gpu(m);
+  register_simd(m);
 }

@@ -10,6 +10,7 @@
 
 #include "backend/shading.h"
 #include "timing/timing.h"
+#include "traversal/bin_sample.h"
 #include "traversal/render.h"
 
 namespace rast5d::bindings {
@@ -19,7 +20,7 @@ void register_render(py::module_& m) {
       "render",
       [](const RenderParams& p, const FArr& v0, const FArr& v1, const FArr& colors, const FArr& samples,
          const IArr& lens_index, const FArr& lens_uv, bool export_samples, std::optional<FArr> uvs,
-         std::optional<IArr> tex_slots, std::vector<FArr> textures) {
+         std::optional<IArr> tex_slots, std::vector<FArr> textures, std::optional<IArr> bins) {
         require_shape(v0, {-1, 3, 3}, "v0");
         const py::ssize_t n = v0.shape(0);
         require_shape(v1, {n, 3, 3}, "v1");
@@ -46,6 +47,11 @@ void register_render(py::module_& m) {
           scene.textures.push_back({t.data(), static_cast<int>(t.shape(0)), static_cast<int>(t.shape(1)),
                                     static_cast<int>(t.shape(2))});
         }
+        std::optional<std::vector<int>> bin_list;
+        if (bins) {
+          require_shape(*bins, {-1}, "bins");
+          bin_list.emplace(bins->data(), bins->data() + bins->shape(0));
+        }
         std::optional<py::error_already_set> pending;
         RenderResult res;
         {
@@ -60,7 +66,7 @@ void register_render(py::module_& m) {
                 }
                 return false;
               },
-              export_samples);
+              export_samples, bin_list ? &*bin_list : nullptr);
         }
         if (pending) throw *pending;
         py::array_t<float> image({p.height, p.width, 3});
@@ -68,6 +74,19 @@ void register_render(py::module_& m) {
         py::dict out;
         out["image"] = image;
         out["counters"] = counters_to_dict(res.counters);
+        if (!res.bin_work.empty()) {  // a bin list or sampled simulation
+          const auto n_rows = static_cast<py::ssize_t>(res.sampled_bins.size());
+          py::array_t<std::uint64_t> bc({n_rows, static_cast<py::ssize_t>(kNumCounters)});
+          std::copy(res.bin_counters.begin(), res.bin_counters.end(), bc.mutable_data());
+          out["bin_counters"] = bc;  // (len(bins), counters) in counter_docs() order
+          out["bins"] = py::array_t<int>(n_rows, res.sampled_bins.data());
+          out["bin_stratum"] = py::array_t<int>(static_cast<py::ssize_t>(res.sampled_stratum.size()),
+                                                res.sampled_stratum.data());
+          out["strata_sizes"] = py::array_t<int>(static_cast<py::ssize_t>(res.strata_sizes.size()),
+                                                 res.strata_sizes.data());
+          out["bin_work"] = py::array_t<std::int64_t>(static_cast<py::ssize_t>(res.bin_work.size()),
+                                                      res.bin_work.data());
+        }
         if (p.record_timing) {
           py::array_t<TileWork> recs(static_cast<py::ssize_t>(res.timing_records.size()));
           std::copy(res.timing_records.begin(), res.timing_records.end(), recs.mutable_data());
@@ -86,9 +105,22 @@ void register_render(py::module_& m) {
       },
       py::arg("params"), py::arg("v0"), py::arg("v1"), py::arg("colors"), py::arg("samples"),
       py::arg("lens_index"), py::arg("lens_uv"), py::arg("export_samples") = false, py::arg("uvs") = py::none(),
-      py::arg("tex_slots") = py::none(), py::arg("textures") = std::vector<FArr>(),
+      py::arg("tex_slots") = py::none(), py::arg("textures") = std::vector<FArr>(), py::arg("bins") = py::none(),
       "Render pixel-homogeneous triangles; returns {'image', 'counters'[, 'timing_records'][, "
-      "'sample_depth', 'sample_triangle']}. The GIL is released; Ctrl-C interrupts.");
+      "'sample_depth', 'sample_triangle'][, 'bin_counters', 'bins', 'bin_stratum', 'strata_sizes', "
+      "'bin_work']}. bins (or params.sample_fraction < 1: a stratified draw): render only these screen bins "
+      "(row-major) and return their counters, one row per bin in counter_docs() order. The GIL is "
+      "released; Ctrl-C interrupts.");
+
+  m.def(
+      "stratify_bins",
+      [](const std::vector<std::int64_t>& work, double fraction, std::uint64_t seed) {
+        const BinSample s = stratify_bins(work, fraction, seed);
+        return py::make_tuple(s.bins, s.stratum, s.sizes);
+      },
+      py::arg("work"), py::arg("fraction"), py::arg("seed"),
+      "The sampled bins of pipeline.sample_fraction (traversal/bin_sample.h) for per-bin brute-force work: "
+      "(bins, stratum of each, strata sizes); sizes empty when every bin with work is drawn.");
 
   m.def(
       "lens_grid_buckets",

@@ -126,7 +126,7 @@ def compute(case: Case) -> dict[str, int]:
     else:
         table = sim.SampleTable.interleaved(spp=case.spp, n_lens=64, seed=7)
     config = sim.PipelineConfig(algorithm=case.algorithm, tile_size=case.tile, lens_grid=case.grid, threads=2,
-                                **VARIANTS.get(variant, {}))
+                                count_optimal=True, **VARIANTS.get(variant, {}))
     result = sim.render(scene, camera, table, config)
     raw = set(sim._core.counter_docs())
     out = {k: int(v) for k, v in result.flat_stats.items() if k in raw}

@@ -25,6 +25,7 @@ SampleTable::SampleTable(int period, int spp, const float* samples, int grid,
                          const std::int32_t* lens_index, int n_lens, const float* lens_uv)
     : period_(period), spp_(spp), grid_(grid), n_lens_(lens_index ? n_lens : 0) {
   if (period < 1 || spp < 1 || grid < 1) throw std::invalid_argument("SampleTable: bad dimensions");
+  if ((period & (period - 1)) == 0) pow2_mask_ = period - 1;
   const std::size_t npix = static_cast<std::size_t>(period) * period;
   const std::size_t n = npix * spp;
   x_.resize(n), y_.resize(n), u_.resize(n), v_.resize(n), t_.resize(n);

@@ -54,7 +54,9 @@ class SampleTable {
 
   PixelSamples pixel(int px, int py) const {
     const int P = period_;
-    const int mx = ((px % P) + P) % P, my = ((py % P) + P) % P;
+    // A power-of-two period (the usual tables): a mask, exact for negative coordinates too.
+    const int mx = pow2_mask_ >= 0 ? (px & pow2_mask_) : ((px % P) + P) % P;
+    const int my = pow2_mask_ >= 0 ? (py & pow2_mask_) : ((py % P) + P) % P;
     const std::size_t pi = static_cast<std::size_t>(my) * P + mx;
     const std::size_t base = pi * spp_;
     PixelSamples ps{};
@@ -102,6 +104,7 @@ class SampleTable {
 
  private:
   int period_, spp_, grid_, n_lens_;
+  int pow2_mask_ = -1;  // period - 1 when the period is a power of two, else -1
   int strata_ = 0;
   std::vector<std::int32_t> ct_order_, ct_offsets_;
   std::vector<float> x_, y_, u_, v_, t_;

@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "setup/setup.h"
+#include "traversal/bin_sample.h"
 #include "traversal/traversal.h"
 
 namespace rast5d {
@@ -118,7 +119,8 @@ static void build_shade_frame(const RenderParams& p, const SceneArrays& scene, c
 }
 
 RenderResult render(const RenderParams& p, const SceneArrays& scene, const SampleTable& table,
-                    const std::function<bool()>& interrupted, bool export_samples) {
+                    const std::function<bool()>& interrupted, bool export_samples,
+                    const std::vector<int>* bins) {
   validate_params(p, table);
   const FrameConst fc = make_frame_const(p);
   const int n_threads = p.threads > 0
@@ -173,6 +175,42 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
   ShadeFrame shade_frame;
   build_shade_frame(p, scene, setups, alive, n_bins, shade_frame);
 
+  // ---- the bins to render: all, or a subset (a list, or sampled simulation) ----
+  std::vector<int> drawn;
+  if (bins || p.sample_fraction < 1.0) {
+    result.bin_work.assign(static_cast<std::size_t>(n_bins), 0);
+    for (int b = 0; b < n_bins; ++b) {
+      const int bx = b % bins_x, by = b / bins_x;
+      const int x0 = bx * B, y0 = by * B, x1 = std::min(p.width, x0 + B), y1 = std::min(p.height, y0 + B);
+      std::int64_t w = 0;
+      for (std::uint32_t i : bin_lists[b]) {
+        const TriSetup& t = setups[i];
+        const std::int64_t dx = std::min(t.bx1, x1) - std::max(t.bx0, x0), dy = std::min(t.by1, y1) - std::max(t.by0, y0);
+        if (dx > 0 && dy > 0) w += dx * dy;
+      }
+      result.bin_work[b] = w * table.spp();
+    }
+  }
+  if (!bins && p.sample_fraction < 1.0) {
+    BinSample s = stratify_bins(result.bin_work, p.sample_fraction, static_cast<std::uint64_t>(p.sample_seed));
+    drawn = std::move(s.bins);
+    result.sampled_stratum = std::move(s.stratum);
+    result.strata_sizes = std::move(s.sizes);
+    bins = &drawn;
+  }
+  if (bins) {
+    result.sampled_bins = *bins;
+    std::vector<char> seen(static_cast<std::size_t>(n_bins), 0);
+    for (int b : *bins) {
+      if (b < 0 || b >= n_bins || seen[b])
+        throw std::invalid_argument("bins: expected distinct bin indices in 0.." + std::to_string(n_bins - 1) +
+                                    ", got " + std::to_string(b));
+      seen[b] = 1;
+    }
+    result.bin_counters.assign(bins->size() * static_cast<std::size_t>(kNumCounters), 0);
+  }
+  const int n_work = bins ? static_cast<int>(bins->size()) : n_bins;
+
   // ---- traversal: workers take whole bins ----
   // Timing records per bin: each bin is rasterized by exactly one worker, so its stream is
   // written without locks and its content does not depend on the thread count.
@@ -194,9 +232,14 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
     try {
       ThreadState& ts = states[t];
       auto algo = TraversalRegistry::entries().at(p.algorithm).create(frame, ts, p.op_count == OpCount::kExact);
+      const bool per_visit = p.record_timing && p.timing_per_visit;
+      std::vector<TileWork> visit_recs;
+      std::vector<std::uint32_t> visit_ends;
       for (;;) {
-        const int b = next_bin.fetch_add(1);
-        if (b >= n_bins || cancel.load(std::memory_order_relaxed)) break;
+        const int k = next_bin.fetch_add(1);
+        if (k >= n_work || cancel.load(std::memory_order_relaxed)) break;
+        const int b = bins ? (*bins)[k] : k;
+        const Counters at_start = bins ? ts.counters : Counters{};
         const int bx = b % bins_x, by = b / bins_x;
         BinRect r{bx * B, by * B, std::min(p.width, (bx + 1) * B), std::min(p.height, (by + 1) * B)};
         ts.buffers.begin(r, table.spp());
@@ -206,8 +249,35 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
           const TriSetup& tri = setups[i];
           const bool home = (tri.by0 / B) * bins_x + (tri.bx0 / B) == b;
           const TileWork before = p.record_timing ? work_from_counters(ts.counters) : TileWork{};
+          if (per_visit) {  // hardware.timing.granularity 'visit': end_visit() records (sample_pipeline.h)
+            visit_recs.clear(), visit_ends.clear();
+            ts.visit_mark = before;
+            ts.visit_records = &visit_recs;
+            ts.visit_stream = track_stream_ends ? &shade_frame.streams[b] : nullptr;
+            ts.visit_stream_ends = track_stream_ends ? &visit_ends : nullptr;
+          }
           algo->rasterize(tri, r, home);
           if (!p.record_timing) continue;
+          if (per_visit) {
+            ts.visit_records = nullptr;
+            // The visits' records, then what the triangle did after its last visit (if anything);
+            // the triangle's setup goes with its first record.
+            const TileWork rest = work_from_counters(ts.counters).since(ts.visit_mark);
+            const bool rest_empty = rest.tile_tests == 0 && rest.sample_tests == 0 && rest.depth_tests == 0 &&
+                                    rest.quads == 0 && rest.texel_fetches == 0 && rest.memory_bytes == 0;
+            if (!rest_empty || visit_recs.empty()) {
+              visit_recs.push_back(rest);
+              if (track_stream_ends) visit_ends.push_back(static_cast<std::uint32_t>(shade_frame.streams[b].size()));
+            }
+            for (std::size_t k = 0; k < visit_recs.size(); ++k) {
+              TileWork w = visit_recs[k];
+              w.bin = b;
+              w.triangles = (k == 0 && home) ? 1u : 0u;
+              bin_records[b].push_back(w);
+              if (track_stream_ends) bin_stream_ends[b].push_back(visit_ends[k]);
+            }
+            continue;
+          }
           TileWork w = work_from_counters(ts.counters).since(before);
           w.bin = b;
           w.triangles = home ? 1u : 0u;  // setup is done once, charged in the triangle's first bin
@@ -220,6 +290,10 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
         ts.buffers.resolve(result.image.data(), p.width);
         if (export_samples)
           ts.buffers.export_samples(result.sample_depth.data(), result.sample_triangle.data(), p.width);
+        if (bins) {  // this bin's counters: each row is written by the one worker that owns the bin
+          std::uint64_t* row = &result.bin_counters[static_cast<std::size_t>(k) * kNumCounters];
+          for (int i = 0; i < kNumCounters; ++i) row[i] = ts.counters.v[i] - at_start.v[i];
+        }
       }
     } catch (...) {
       std::lock_guard<std::mutex> lock(mu);

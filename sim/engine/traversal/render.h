@@ -43,13 +43,26 @@ struct RenderResult {
   // then per screen bin in raster order one record per (triangle, bin) visit in submission order.
   // Independent of the thread count.
   std::vector<TileWork> timing_records;
+  // Sampled simulation (render(..., bins)): the rendered bins' counters, one row of kNumCounters
+  // per entry of `bins` in its order (traversal work only; setup and whole-frame figures are in
+  // `counters`, which then holds the setup plus the rendered bins' sum).
+  std::vector<std::uint64_t> bin_counters;
+  // With a bin list or pipeline.sample_fraction < 1: every bin's brute-force work (sum over its
+  // triangles of their bounds' pixels in the bin, times spp), the traversed bins (the list, or the
+  // stratified draw of traversal/bin_sample.h), the stratum of each and the strata sizes (empty:
+  // every bin with triangles was traversed).
+  std::vector<std::int64_t> bin_work;
+  std::vector<int> sampled_bins, sampled_stratum, strata_sizes;
 };
 
 // Throws std::invalid_argument for bad parameters. `interrupted` is polled from the calling
 // thread every few milliseconds while workers run; when it returns true the render stops and
 // RenderResult::interrupted is set.
+// bins (optional): render only these screen bins (row-major indices, distinct, in range) and
+// return each one's counters in RenderResult::bin_counters; the other bins stay empty.
 RenderResult render(const RenderParams& p, const SceneArrays& scene, const SampleTable& table,
-                    const std::function<bool()>& interrupted, bool export_samples = false);
+                    const std::function<bool()>& interrupted, bool export_samples = false,
+                    const std::vector<int>* bins = nullptr);
 
 void validate_params(const RenderParams& p, const SampleTable& table);
 // The checks that need no sample table (image size, tile and bin sizes, intervals, shading...).

@@ -25,7 +25,9 @@
 #include "core/sample_table.h"
 #include "sampletest/inside.h"
 #include "sampletest/sample_test.h"
+#include "sampletest/simd_batch.h"
 #include "setup/setup.h"
+#include "timing/timing.h"
 
 namespace rast5d {
 
@@ -34,6 +36,13 @@ struct ThreadState {
   Counters counters;
   BinBuffers buffers;
   ShadeState shade;  // the open shading visit, shading cache, texture stream (backend/shading.h)
+  // Timing records per shading visit (hardware.timing.granularity 'visit', traversal/render.cpp):
+  // while visit_records is set, every end_visit() appends the work since visit_mark (and, with a
+  // texture stream, its length after the visit to visit_stream_ends).
+  std::vector<TileWork>* visit_records = nullptr;
+  const std::vector<std::uint32_t>* visit_stream = nullptr;
+  std::vector<std::uint32_t>* visit_stream_ends = nullptr;
+  TileWork visit_mark;
 };
 
 // Two ways in: test() / test_sheared() for one sample, or the batch protocol
@@ -48,7 +57,7 @@ class SamplePipeline {
   using F = typename A::f32;
 
   SamplePipeline(const Frame& f, ThreadState& ts)
-      : f_(f), c_(ts.counters), sh_(ts.shade), backend_(f, ts.counters, ts.buffers, ts.shade), cap_(std::max(kBatch, f.table.spp())) {
+      : f_(f), c_(ts.counters), sh_(ts.shade), ts_(ts), backend_(f, ts.counters, ts.buffers, ts.shade), cap_(std::max(kBatch, f.table.spp())) {
     for (auto* v : {&gx_, &gy_, &gu_, &gv_, &gt_, &bdet_}) v->resize(cap_);
     for (auto* v : {&bpx_, &bpy_, &bs_, &bl_}) v->resize(cap_);
     be_.resize(3 * static_cast<std::size_t>(cap_));
@@ -157,6 +166,16 @@ class SamplePipeline {
   // screen tile (or finish a pass) for the current triangle, and always before rasterize() returns.
   // Without a shading model (mode none) it does nothing, not even flush(): callers still flush.
   inline void end_visit() {
+    if (ts_.visit_records) {  // the per-visit timing hook: close the visit, then record its work
+      flush();
+      if (sh_.counting()) sh_.close_visit();
+      const TileWork now = work_from_counters(c_);
+      ts_.visit_records->push_back(now.since(ts_.visit_mark));
+      ts_.visit_mark = now;
+      if (ts_.visit_stream_ends)
+        ts_.visit_stream_ends->push_back(static_cast<std::uint32_t>(ts_.visit_stream ? ts_.visit_stream->size() : 0));
+      return;
+    }
     if (!sh_.counting()) return;
     flush();
     sh_.close_visit();
@@ -234,6 +253,7 @@ class SamplePipeline {
     float* e = be_.data();
     float* d = bdet_.data();
     std::uint64_t inside_cost;
+    bool have_flags = false;  // the kernel computed the flags too
     const float* bu = uniform ? uniform_ps_->u : gu_.data();
     const float* bv = uniform ? uniform_ps_->v : gv_.data();
     const float* bt = uniform ? uniform_ps_->t : gt_.data();
@@ -244,11 +264,26 @@ class SamplePipeline {
                        tri.W[1],  tri.W[2],  tri.cx[0], tri.cx[1], tri.cx[2], tri.cy[0], tri.cy[1],
                        tri.cy[2], tri.dX[0], tri.dX[1], tri.dX[2], tri.dY[0], tri.dY[1], tri.dY[2],
                        tri.dW[0], tri.dW[1], tri.dW[2], fc.kx,     fc.neg_kx_f, fc.ky, fc.neg_ky_f};
-      switch (cls) {
+      const bool bfc = f_.p.backface_cull;
+      switch (cls) {  // 4D and 5D: edges and flags in one explicit-SIMD pass (sampletest/simd_batch.h)
         case 0: batch_edges_2d(n, T, gx_.data(), gy_.data(), e, e + n, e + 2 * n, d); break;
-        case 2: batch_edges_4d(n, T, gx_.data(), gy_.data(), bu, bv, e, e + n, e + 2 * n, d); break;
+        case 2:
+          if (f_.p.simd) {
+            simd::batch_test_4d(n, T, gx_.data(), gy_.data(), bu, bv, e, e + n, e + 2 * n, d, bfc, flags_.data());
+            have_flags = true;
+          } else {
+            batch_edges_4d(n, T, gx_.data(), gy_.data(), bu, bv, e, e + n, e + 2 * n, d);
+          }
+          break;
         case 1: batch_edges_3d(n, T, gx_.data(), gy_.data(), bt, e, e + n, e + 2 * n, d); break;
-        default: batch_edges_5d(n, T, gx_.data(), gy_.data(), bu, bv, bt, e, e + n, e + 2 * n, d); break;
+        default:
+          if (f_.p.simd) {
+            simd::batch_test_5d(n, T, gx_.data(), gy_.data(), bu, bv, bt, e, e + n, e + 2 * n, d, bfc, flags_.data());
+            have_flags = true;
+          } else {
+            batch_edges_5d(n, T, gx_.data(), gy_.data(), bu, bv, bt, e, e + n, e + 2 * n, d);
+          }
+          break;
       }
       c_[kTestedByClass[cls]] += static_cast<std::uint64_t>(sel ? n_sel : n);
       inside_cost = kInsideCost[cls];
@@ -271,8 +306,7 @@ class SamplePipeline {
     }
     // Flags: 1 = covered, 2 = an e_i is exactly zero (scalar top-left path). Then skip 8 flags at a
     // time (most batches are mostly misses).
-    const bool bfc = f_.p.backface_cull;
-    batch_flags(n, e, e + n, e + 2 * n, d, bfc, flags_.data());
+    if (!have_flags) batch_flags(n, e, e + n, e + 2 * n, d, f_.p.backface_cull, flags_.data());
     if (sel) mask_flags(n, sel, flags_.data());
     const int tested = sel ? n_sel : n;
     c_[Counter::raster_samples_tested] += static_cast<std::uint64_t>(tested);
@@ -332,6 +366,7 @@ class SamplePipeline {
   const Frame& f_;
   Counters& c_;
   ShadeState& sh_;
+  ThreadState& ts_;
   SampleBackend<A> backend_;
   // Pending batch (fast path).
   const TriSetup* tri_ = nullptr;

@@ -226,6 +226,7 @@ class Tile final : public Traversal {
       const int spp = f_.table.spp();
       const std::uint64_t active_bits = active.bits64;
       const bool fast_select = !A::counting && active.small;
+      std::uint64_t region_checked = 0;  // fast path: ops.sample_region charged once per tile
       for (int py = py0; py < ty1; ++py)
         for (int px = px0; px < tx1; ++px) {
           const PixelSamples ps = f_.table.pixel(px, py);
@@ -244,7 +245,11 @@ class Tile final : public Traversal {
                 n += region_cost == 0 || (tiletest::axis_pass(sx, F(ps.u[s])) & tiletest::axis_pass(sy, F(ps.v[s])));
               }
           }
-          if (region_cost) charge<A>(c_[Counter::ops_sample_region], region_cost * checked);
+          if constexpr (A::counting) {  // the tally of this pixel's comparisons is taken here
+            if (region_cost) charge<A>(c_[Counter::ops_sample_region], region_cost * checked);
+          } else {
+            region_checked += static_cast<std::uint64_t>(checked);
+          }
           if (count_opt)
             for (int i = 0; i < n; ++i)
               c_[Counter::tile_samples_optimal] += tiletest::in_exact_region(tri, fp, f_.fc, ps, cand_[i], tx, ty, T);
@@ -253,6 +258,7 @@ class Tile final : public Traversal {
           else
             for (int i = 0; i < n; ++i) pipe_.push(px, py, ps, cand_[i]);
         }
+      if constexpr (!A::counting) c_[Counter::ops_sample_region] += region_cost * region_checked;
     });
     pipe_.flush();
   }

@@ -1,0 +1,206 @@
+"""Sampled simulation: render a stratified random subset of the screen bins and estimate the frame.
+
+``PipelineConfig(sample_fraction=f, sample_seed=s)`` with f < 1: the engine sorts the K screen bins that
+hold triangles by their brute-force work (the pixels of their triangles' bounds in the bin times spp),
+cuts them into H = round(f * K) // 2 strata of similar work and draws 2 bins per stratum
+(traversal/bin_sample.h, seeded with s). Only those bins are traversed; bins without triangles do no
+traversal work (their counters are exactly 0), and triangle setup still runs for every triangle, so
+its counts are exact. Every counter a bin owns is estimated by the stratified expansion estimator
+
+    T = sum_h N_h * mean_h(y),   Var(T) = sum_h N_h^2 (1 - n_h / N_h) s_h^2 / n_h
+
+(N_h bins in stratum h, n_h = 2 of them rendered, y a bin's counter value), and the 95% half-width is
+t_{0.975, H} * sqrt(Var) (H degrees of freedom). Bins heavier than a stratum's share of the work form
+a take-all stratum (all traversed, no variance). The frame's brute-force work X is known for every
+bin, so the totals use the combined ratio estimator T = X * T_y / T_x, whose variance is that of the
+residuals y - (T_y / T_x) x: counters that follow brute-force work are estimated far more tightly. Derived figures (ratios, sums) are evaluated on the
+estimated totals; their half-widths come from the same formula applied to each bin's linearised
+contribution (the derivative of the figure along that bin's counter vector).
+
+Not estimable under sampling (reported as NaN with a NaN half-width, never scaled):
+- the texture cache (``tex.cache.*``): it is replayed after the render in bin order, and a bin's
+  misses depend on the lines the bins before it left in the cache;
+- the timing model (``timing.*``): its FIFOs and unit overlap couple the work of consecutive bins, so
+  a frame's cycles are not a sum of per-bin terms.
+HiZ and z-culling, the shading cache and shading visits restart in every bin (backend/hiz.h,
+backend/shading.h), so their counters are per-bin sums and are estimated like the others. Occlusion
+queries stop at the first visible sample of the frame and cannot be sampled (an error).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import ConfigError
+
+# Figures that need the whole frame (prefixes of counter and figure names).
+NOT_ESTIMABLE = ("tex.cache.", "timing.")
+MIN_STRATA = 2  # two strata of two bins: the fewest that give a variance estimate
+
+DOCS = {
+    "sample.fraction": ("ratio", "Sampled simulation: sample.bins / sample.candidates"),
+    "sample.bins": ("bins", "Sampled simulation: screen bins traversed (2 per stratum)"),
+    "sample.strata": ("strata", "Sampled simulation: strata the bins were drawn from (0: every bin with triangles, exact)"),
+    "sample.candidates": ("bins", "Sampled simulation: screen bins that hold triangles (the others do no traversal work)"),
+}
+
+
+def docs() -> dict[str, tuple[str, str]]:
+    return dict(DOCS)
+
+
+def t_quantile_975(df: int) -> float:
+    """The 0.975 quantile of Student's t with df degrees of freedom (closed form for df 1, 2; the
+    Cornish-Fisher expansion around the normal quantile above, accurate to 1e-3 for df >= 3)."""
+    if df < 1:
+        raise ValueError(f"df: expected >= 1, got {df}")
+    if df == 1:
+        return math.tan(math.pi * 0.475)
+    if df == 2:
+        q = 0.975
+        return (2 * q - 1) / math.sqrt(2 * q * (1 - q))
+    z = 1.959963984540054
+    g1 = (z ** 3 + z) / 4
+    g2 = (5 * z ** 5 + 16 * z ** 3 + 3 * z) / 96
+    g3 = (3 * z ** 7 + 19 * z ** 5 + 17 * z ** 3 - 15 * z) / 384
+    g4 = (79 * z ** 9 + 776 * z ** 7 + 1482 * z ** 5 - 1920 * z ** 3 - 945 * z) / 92160
+    return z + g1 / df + g2 / df ** 2 + g3 / df ** 3 + g4 / df ** 4
+
+
+@dataclass(frozen=True)
+class BinSample:
+    """The traversed bins: ``bins`` (row-major indices), ``stratum`` (the stratum of each), ``sizes``
+    (bins per stratum), ``candidates`` (bins that hold triangles; the others do no traversal work)."""
+
+    bins: np.ndarray
+    stratum: np.ndarray
+    sizes: np.ndarray
+    candidates: int
+    work: np.ndarray | None = None  # brute-force work of every bin of the frame (the auxiliary variable)
+
+    @property
+    def fraction(self) -> float:
+        return len(self.bins) / self.candidates if self.candidates else 1.0
+
+    @property
+    def exact(self) -> bool:
+        """Every bin with triangles was traversed: the figures are exact."""
+        return len(self.sizes) == 0
+
+
+def check_fraction(fraction, owner: str = "PipelineConfig") -> None:
+    if isinstance(fraction, bool) or not isinstance(fraction, (int, float)) or not 0 < fraction <= 1:
+        raise ConfigError(f"{owner}.sample_fraction: expected a number in (0, 1], got {fraction!r}")
+
+
+def choose_bins(work, fraction: float, seed: int) -> BinSample:
+    """The engine's draw (traversal/bin_sample.h) for per-bin brute-force work ``work``: the bins
+    with work sorted by it, cut into round(fraction * K) // 2 strata, 2 bins drawn per stratum.
+    ConfigError when fewer than 2 strata remain (no interval can be given)."""
+    check_fraction(fraction)
+    from . import _core
+
+    work = np.asarray(work, dtype=np.int64)
+    try:
+        bins, stratum, sizes = _core.stratify_bins(work.tolist(), float(fraction), int(seed))
+    except ValueError as e:
+        raise ConfigError(f"PipelineConfig.{e}") from None
+    return BinSample(np.asarray(bins, np.int64), np.asarray(stratum, np.int64), np.asarray(sizes, np.int64),
+                     int((work > 0).sum()), work)
+
+
+def from_engine(out: dict) -> BinSample:
+    """The BinSample of a sampled engine render (sim._core.render's output)."""
+    work = np.asarray(out["bin_work"])
+    return BinSample(np.asarray(out["bins"], np.int64), np.asarray(out["bin_stratum"], np.int64),
+                     np.asarray(out["strata_sizes"], np.int64), int((work > 0).sum()), work)
+
+
+def stratified_total(sample: BinSample, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(estimated frame totals, variances) of per-bin values y (rows: the sampled bins; columns:
+    figures), by the stratified expansion estimator with 2 bins per stratum."""
+    y = np.asarray(y, dtype=np.float64)
+    if y.ndim == 1:
+        y = y[:, None]
+    H = len(sample.sizes)
+    Nh = sample.sizes.astype(np.float64)
+    sums = np.zeros((H, y.shape[1]))
+    np.add.at(sums, sample.stratum, y)
+    nh = np.bincount(sample.stratum, minlength=H).astype(np.float64)
+    means = sums / nh[:, None]
+    dev = y - means[sample.stratum]
+    ss = np.zeros((H, y.shape[1]))
+    np.add.at(ss, sample.stratum, dev * dev)
+    full = nh >= Nh  # a take-all stratum: every bin traversed, no sampling variance
+    s2 = np.where(full[:, None], 0.0, ss / np.maximum(nh - 1, 1)[:, None])
+    total = (Nh[:, None] * means).sum(axis=0)
+    var = (Nh ** 2 * (1 - nh / Nh) / nh)[:, None] * s2
+    return total, var.sum(axis=0)
+
+
+def ratio_total(sample: BinSample, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(estimated totals, variances) by the combined ratio estimator on brute-force work x, known for
+    every bin: T = X * T_y / T_x with T_y, T_x the stratified estimates, and the variance of the
+    stratified estimator applied to the residuals y - (T_y / T_x) x. Without work: stratified_total."""
+    if sample.work is None:
+        return stratified_total(sample, y)
+    y = np.asarray(y, dtype=np.float64)
+    y = y[:, None] if y.ndim == 1 else y
+    x = np.asarray(sample.work, dtype=np.float64)[sample.bins]
+    X = float(np.asarray(sample.work, dtype=np.float64).sum())
+    ty, _ = stratified_total(sample, y)
+    tx, _ = stratified_total(sample, x)
+    r = ty / tx[0]
+    _, var = stratified_total(sample, y - x[:, None] * r[None, :])
+    return X * r, var
+
+
+def sampled_strata(sample: BinSample) -> int:
+    """Strata whose bins were drawn (not the take-all stratum): the degrees of freedom."""
+    nh = np.bincount(sample.stratum, minlength=len(sample.sizes))
+    return int((nh < sample.sizes).sum())
+
+
+def estimate(sample: BinSample, counters: dict, bin_counters: np.ndarray, derived, names: list[str]
+             ) -> tuple[dict, dict]:
+    """(flat figures, 95% half-widths) of the frame from a sampled render.
+
+    counters: the engine's totals (setup of every triangle + the rendered bins + frame facts);
+    bin_counters: (len(bins), len(names)) the rendered bins' own counters; derived: sim.stats.DERIVED."""
+    from .derived import evaluate
+
+    bc = np.asarray(bin_counters, dtype=np.float64)
+    totals = np.array([float(counters[n]) for n in names])
+    exact_part = totals - bc.sum(axis=0)  # setup (every triangle) and the frame facts
+    if sample.exact:  # every bin with triangles traversed: the totals are the frame's
+        est, var, tq = bc.sum(axis=0), np.zeros(len(names)), 0.0
+    else:
+        est, var = ratio_total(sample, bc)
+        tq = t_quantile_975(max(1, sampled_strata(sample)))
+    raw = exact_part + est
+    half = tq * np.sqrt(var)
+    flat, ci = {}, {}
+    for i, n in enumerate(names):
+        if n.startswith(NOT_ESTIMABLE):
+            flat[n], ci[n] = math.nan, math.nan
+        else:
+            flat[n], ci[n] = float(raw[i]), float(half[i])
+    # Derived figures: evaluated on the estimates; half-widths by linearisation per bin.
+    base = evaluate(derived, dict(flat))
+    dnames = [d.name for d in derived]
+    z = np.empty((len(bc), len(dnames)))
+    step = 1e-6  # a bin's counters are at most the frame's: a relative perturbation <= 1e-6
+    for r in range(len(bc)):
+        plus = evaluate(derived, {n: flat[n] + step * bc[r, i] for i, n in enumerate(names)})
+        minus = evaluate(derived, {n: flat[n] - step * bc[r, i] for i, n in enumerate(names)})
+        z[r] = [(plus[d] - minus[d]) / (2 * step) for d in dnames]
+    dvar = np.zeros(len(dnames)) if sample.exact else ratio_total(sample, np.nan_to_num(z, nan=0.0))[1]
+    for j, d in enumerate(dnames):
+        flat[d] = base[d]
+        bad = not np.isfinite(base[d]) or not np.all(np.isfinite(z[:, j]))
+        ci[d] = math.nan if bad else float(tq * math.sqrt(dvar[j]))
+    flat.update({"sample.fraction": sample.fraction, "sample.bins": len(sample.bins),
+                 "sample.strata": len(sample.sizes), "sample.candidates": sample.candidates})
+    return flat, ci
