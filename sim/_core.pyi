@@ -28,10 +28,11 @@ class RenderParams:
     halfspace_H: bool  # Use the H_j half-space lines; default True
     selective_H: bool  # 001 Appendix A oracle: disable H_j lines on edges where they are not expected to pay; default True
     oracle: str  # Oracle estimate: 'simplified' (001 Eq. 15, the paper's) or 'full' (Eq. 11-12) (oracle_modes: simplified, full); default 'simplified'
-    c_sample: float  # Oracle C_sample; null = the documented 4D sample-test cost [ops]; default -1.0
+    c_sample: float  # Oracle C_sample; null = the documented 4D sample-test cost of the cost model [ops]; default -1.0
     c_tile: float  # Oracle C_tile (one edge's H_j lines vs one tile); null = documented [ops]; default -1.0
     backface_cull: bool  # Cull back-facing triangles; default False
     op_count: str  # 'documented' (charge each kernel's documented cost) or 'exact' (counting scalar type) (op_counts: documented, exact); default 'documented'
+    cost_model: str  # Operation cost model: 'robust' (float32 sample-relative edge functions, no FMA) or 'hardware' (fixed-point affine edge functions with FMA; 2D edges set up per triangle or lens position); the image is the same in both (cost_models: robust, hardware); default 'robust'
     count_optimal: bool  # Instrument tile.samples_optimal (exact lens region per tile; 001 Table 1); default True
     hinterleave_tile: int  # HINTERLEAVE tile edge: 4, 8 or 16 [px]; default 8
     bin_size: int  # Screen bin edge for threading (multiple of 8 and of hinterleave_tile) [px]; default 64
