@@ -6,6 +6,7 @@ from . import _core
 from .derived import Derived, evaluate, ratio
 from .derived import docs as derived_docs
 from .timing import docs as timing_docs
+from .energy import docs as energy_docs
 
 # By pipeline stage; a formula may use the figures declared before it (sim.derived.evaluate).
 DERIVED: tuple[Derived, ...] = (
@@ -67,6 +68,7 @@ def counter_docs() -> dict[str, tuple[str, str]]:
     docs.update(derived_docs(DERIVED))
     docs.update(MEASURED)
     docs.update(timing_docs())  # the timing model's figures (docs/timing.md)
+    docs.update(energy_docs())  # the energy estimate (sim.energy, docs/energy.md)
     return docs
 
 
