@@ -49,6 +49,7 @@ class RenderParams:
     clip_v: list[float]  # Lens v range kept; default [-1.0, 1.0]
     clip_t: list[float]  # Shutter time range kept; default [0.0, 1.0]
     zhat: str  # Depth interval per (triangle, tile): 'planes' (moving box + moving planes, 002 App. A) or 'vertex' (vertex min/max) (zhat_modes: planes, vertex); default 'planes'
+    zhat_margin: str  # Widening of ẑ before it is compared with float sample depths (HiZ, occlusion queries): 'derived' (each pair's rounding bound) or 'fixed' (12.5 % of W, for comparison) (zhat_margins: derived, fixed); default 'derived'
     zhat_stats: bool  # tile: compute the depth interval of every accepted pair and count its width (zcull.width_zhat, zcull.width_vertex); default False
     hiz_enabled: bool  # zmax/zmin culling against per-tile HiZ; default False
     hiz_tile_size: int  # HiZ tile edge (>= tile_size) [px]; default 8

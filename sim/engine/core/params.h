@@ -30,6 +30,7 @@ enum class MotionTest : int { kIntervals = 0, kBounds = 1 };
 enum class ZhatMode : int { kPlanes = 0, kVertex = 1 };
 enum class QueryMode : int { kNone = 0, kSamples = 1, kIntervals = 2 };
 enum class CostModel : int { kRobust = 0, kHardware = 1 };
+enum class ZhatMargin : int { kDerived = 0, kFixed = 1 };
 
 template <>
 struct ChoiceTraits<LensShape> {
@@ -88,6 +89,15 @@ struct ChoiceTraits<CostModel> {
   static constexpr std::array<ChoiceInfo, 2> table = {{
       {"robust", "float32 sample-relative edge functions without FMA (watertight; docs/op_costs.md)"},
       {"hardware", "fixed-point affine edge functions A x + B y + C set up per triangle or lens position, FMA"},
+  }};
+};
+
+template <>
+struct ChoiceTraits<ZhatMargin> {
+  static constexpr std::string_view registry = "zhat_margins";
+  static constexpr std::array<ChoiceInfo, 2> table = {{
+      {"derived", "per (triangle, tile): a bound on the float sample depth's own rounding error"},
+      {"fixed", "12.5 % of W on both sides (the former fixed margin, for comparison)"},
   }};
 };
 
