@@ -187,11 +187,21 @@ def fewest_int_bits(tris, V, frac_bits, lo=4, hi=None):
     return lo
 
 
+ROWS = REPO / "results" / "precision_rows.json"  # finished (viewport, frac_bits) rows: a rerun resumes
+
+
 def study():
-    rows = []
+    import json
+
+    rows = json.loads(ROWS.read_text()) if ROWS.exists() else []
+    done = {(r["viewport"], r["frac_bits"]) for r in rows}
     for V in VIEWPORTS:
+        if all((V, F) in done for F in FRAC_BITS):
+            continue
         tris = screen_triangles(V)
         for F in FRAC_BITS:
+            if (V, F) in done:
+                continue
             I = fewest_int_bits(tris, V, F)
             at = evaluate(tris, V, I, F)
             below = evaluate(tris, V, I - 2, F)
@@ -202,6 +212,9 @@ def study():
                              below_sample_bad=below["sample_bad"], below_samples=below["samples"],
                              below_tiles=below["tiles"]))
             print(rows[-1], flush=True)
+            ROWS.parent.mkdir(exist_ok=True)
+            ROWS.write_text(json.dumps(rows))
+    rows.sort(key=lambda r: (r["viewport"], r["frac_bits"]))
     return rows
 
 
