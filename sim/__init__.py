@@ -21,7 +21,7 @@ from .render import Result, memory_estimate, render
 from .sample_table import SampleTable
 from .intervals import ConservativeResult, OcclusionResult, conservative_raster, occlusion_query
 from .stats import counter_docs
-from . import timing
+from . import energy, timing
 
 __all__ = [
     "Camera",

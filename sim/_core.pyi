@@ -28,10 +28,11 @@ class RenderParams:
     halfspace_H: bool  # Use the H_j half-space lines; default True
     selective_H: bool  # 001 Appendix A oracle: disable H_j lines on edges where they are not expected to pay; default True
     oracle: str  # Oracle estimate: 'simplified' (001 Eq. 15, the paper's) or 'full' (Eq. 11-12) (oracle_modes: simplified, full); default 'simplified'
-    c_sample: float  # Oracle C_sample; null = the documented 4D sample-test cost [ops]; default -1.0
+    c_sample: float  # Oracle C_sample; null = the documented 4D sample-test cost of the cost model [ops]; default -1.0
     c_tile: float  # Oracle C_tile (one edge's H_j lines vs one tile); null = documented [ops]; default -1.0
     backface_cull: bool  # Cull back-facing triangles; default False
     op_count: str  # 'documented' (charge each kernel's documented cost) or 'exact' (counting scalar type) (op_counts: documented, exact); default 'documented'
+    cost_model: str  # Operation cost model: 'robust' (float32 sample-relative edge functions, no FMA) or 'hardware' (fixed-point affine edge functions with FMA; 2D edges set up per triangle or lens position); the image is the same in both (cost_models: robust, hardware); default 'robust'
     count_optimal: bool  # Instrument tile.samples_optimal (exact lens region per tile; 001 Table 1); off by default: it costs more than the traversal it describes; default False
     simd: bool  # Fast path: the 4D/5D sample tests in explicit SIMD (bit-identical results and counts; false = the auto-vectorised kernels, for benchmarks); default True
     hinterleave_tile: int  # HINTERLEAVE tile edge: 4, 8 or 16 [px]; default 8
@@ -59,6 +60,7 @@ class RenderParams:
     clip_v: list[float]  # Lens v range kept; default [-1.0, 1.0]
     clip_t: list[float]  # Shutter time range kept; default [0.0, 1.0]
     zhat: str  # Depth interval per (triangle, tile): 'planes' (moving box + moving planes, 002 App. A) or 'vertex' (vertex min/max) (zhat_modes: planes, vertex); default 'planes'
+    zhat_margin: str  # Widening of ẑ before it is compared with float sample depths (HiZ, occlusion queries): 'derived' (each pair's rounding bound) or 'fixed' (12.5 % of W, for comparison) (zhat_margins: derived, fixed); default 'derived'
     zhat_stats: bool  # tile: compute the depth interval of every accepted pair and count its width (zcull.width_zhat, zcull.width_vertex); default False
     hiz_enabled: bool  # zmax/zmin culling against per-tile HiZ; default False
     hiz_tile_size: int  # HiZ tile edge (>= tile_size) [px]; default 8
@@ -104,12 +106,10 @@ def render(
     uvs: npt.NDArray[np.float32] | None = None,  # (N, 3, 2) texture coordinates
     tex_slots: npt.NDArray[np.int32] | None = None,  # (N, 4) texture index per slot, -1 unused
     textures: list[npt.NDArray[np.float32]] = ...,  # (H, W, 1..4) linear images
-    bins: npt.NDArray[np.int32] | None = None,  # render only these screen bins (row-major indices)
 ) -> dict[str, Any]:
     """Returns {'image': (H, W, 3) float32, 'counters': {name: int}}, with params.record_timing
     'timing_records' (timing_record_dtype(), culled triangles then bins in raster order) and, with export_samples,
-    'sample_depth' (H, W, spp) float32 and 'sample_triangle' (H, W, spp) int32; with bins, 'bin_counters'
-    (len(bins), counters) uint64 in counter_docs() order, one row per rendered bin. Releases the GIL;
+    'sample_depth' (H, W, spp) float32 and 'sample_triangle' (H, W, spp) int32. Releases the GIL;
     Ctrl-C raises KeyboardInterrupt. Raises ValueError for invalid parameters."""
 
 def lens_grid_buckets(

@@ -14,6 +14,7 @@ from .hardware import HardwareConfig
 from . import params as _params
 from .pipeline import PipelineConfig
 from .texturing import texture_inputs
+from .energy import estimate as energy_estimate
 from .timing import estimate as timing_estimate
 from .timing import docs as timing_docs
 from . import sampling as _sampling
@@ -263,6 +264,7 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     records = out.get("timing_records")
     if records is not None:
         flat = dict(sorted({**flat, **timing_estimate(records, hardware)}.items()))
+    flat = dict(sorted({**flat, **energy_estimate(flat, cost_model=config.cost_model)}.items()))  # sim.energy
     desc = {"camera": camera.describe(), "pipeline": config.describe(),
             "table": table.describe() if hasattr(table, "describe") else {}, "lens_grid": grid,
             "hardware": hardware_desc}

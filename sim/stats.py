@@ -7,6 +7,7 @@ from .derived import Derived, evaluate, ratio
 from .derived import docs as derived_docs
 from .timing import docs as timing_docs
 from .sampling import docs as sampling_docs
+from .energy import docs as energy_docs
 
 # By pipeline stage; a formula may use the figures declared before it (sim.derived.evaluate).
 DERIVED: tuple[Derived, ...] = (
@@ -80,6 +81,7 @@ def counter_docs() -> dict[str, tuple[str, str]]:
     docs.update(LOD)
     docs.update(timing_docs())  # the timing model's figures (docs/timing.md)
     docs.update(sampling_docs())  # sampled simulation (sim/sampling.py)
+    docs.update(energy_docs())  # the energy estimate (sim.energy, docs/energy.md)
     return docs
 
 

@@ -117,7 +117,7 @@ def test_registries_by_name():
 
 def test_interval_parameters_are_the_intervals_stage():
     assert params.stage("pipeline", "intervals") == (
-        "motion_test", "time_splits", "time_strata", "clip", "zhat", "zhat_stats", "hiz")
+        "motion_test", "time_splits", "time_strata", "clip", "zhat", "zhat_margin", "zhat_stats", "hiz")
 
 
 def test_sample_kinds_come_from_the_generator_registry():

@@ -11,6 +11,9 @@
 
 #include "backend/cache_model.h"
 #include "backend/texture.h"
+#include "core/fixed.h"
+#include "sampletest/hardware.h"
+#include "tiletest/edges_2d.h"
 #include "selftest/kernel_costs.h"
 #include "selftest/probe.h"
 
@@ -154,6 +157,50 @@ void register_selftest(py::module_& m) {
       py::arg("height"), py::arg("width"), py::arg("layout"), py::arg("level"), py::arg("x"), py::arg("y"),
       "Byte address of texel (x, y) of a level of a lone height x width texture; layout: a name in "
       "choices()['texture_layouts'].");
+
+  using DArr = py::array_t<double, py::array::c_style | py::array::forcecast>;
+  m.def(
+      "precision_probe_2d",
+      [](const DArr& tri, const DArr& points, const DArr& tiles, int int_bits, int frac_bits) {
+        require_shape(tri, {3, 2}, "tri");
+        require_shape(points, {-1, 2}, "points");
+        require_shape(tiles, {-1, 4}, "tiles");
+        if (int_bits < 1 || frac_bits < 0 || int_bits + 2 * frac_bits > 60)
+          throw std::invalid_argument("int_bits, frac_bits: need int_bits >= 1, frac_bits >= 0, int_bits + 2 frac_bits <= 60");
+        FixedFormat::set(int_bits, frac_bits);
+        float X[3], Y[3];
+        const float W[3] = {1.0f, 1.0f, 1.0f};
+        for (int j = 0; j < 3; ++j) X[j] = static_cast<float>(tri.data()[2 * j]), Y[j] = static_cast<float>(tri.data()[2 * j + 1]);
+        // the templates on Fixed: edge set-up (tiletest/edges_2d.h), the affine sample test
+        // (sampletest/hardware.h), the 2D tile test (tiletest/edges_2d.h)
+        const tiletest::Edges2D e = tiletest::edges_2d<Fixed>(X, Y, W);
+        const bool setup_overflow = FixedFormat::overflow;
+        const int m_pts = static_cast<int>(points.shape(0)), k = static_cast<int>(tiles.shape(0));
+        py::array_t<bool> inside(m_pts), outside(k), ovf_s(m_pts), ovf_t(k);
+        for (int i = 0; i < m_pts; ++i) {
+          FixedFormat::overflow = false;
+          inside.mutable_data()[i] = hw_inside_affine<Fixed>(e, Fixed(points.data()[2 * i]), Fixed(points.data()[2 * i + 1]));
+          ovf_s.mutable_data()[i] = FixedFormat::overflow || setup_overflow;
+        }
+        for (int i = 0; i < k; ++i) {
+          FixedFormat::overflow = false;
+          const double* t = tiles.data() + 4 * i;
+          outside.mutable_data()[i] = tiletest::tile_outside_2d<Fixed>(e, t[0], t[1], t[2], t[3]) || !e.valid;
+          ovf_t.mutable_data()[i] = FixedFormat::overflow || setup_overflow;
+        }
+        py::dict out;
+        out["inside"] = inside;
+        out["tile_outside"] = outside;
+        out["overflow_sample"] = ovf_s;
+        out["overflow_tile"] = ovf_t;
+        out["valid"] = e.valid;
+        return out;
+      },
+      py::arg("tri"), py::arg("points"), py::arg("tiles"), py::arg("int_bits"), py::arg("frac_bits"),
+      "Fixed-point (int_bits integer bits, inputs snapped to frac_bits, registers with 2 frac_bits; "
+      "core/fixed.h) instantiation of the 2D edge set-up, the affine sample test and "
+      "the 2D tile test for one screen-space triangle tri (3, 2) [px]: inside (M,) at points (M, 2), "
+      "tile_outside (K,) for tiles (K, 4) = (x0, x1, y0, y1), and per-query overflow flags.");
 }
 
 }  // namespace rast5d::bindings

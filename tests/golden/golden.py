@@ -56,6 +56,8 @@ VARIANTS = {
     "per_sample": {"shading": "per_sample"},
     "per_lens_cell": {"shading": "per_lens_cell"},
     "cache_tex": {"shading": "cache", "texture_count": 2, "texture_layout": "morton"},
+    # the hardware operation-cost model (fixed-point affine edge functions)
+    "hardware": {"cost_model": "hardware"},
 }
 # Timing-model figures kept in the golden file (rounded to whole clocks), so a change to the timing
 # model or to the work it is fed shows up in review like an operation count.
@@ -101,6 +103,10 @@ def cases() -> list[Case]:
     for variant in ("per_sample", "per_lens_cell", "cache_tex"):
         out.append(Case(f"spot+{variant}", "tile", 10.0))
     out.append(Case("spot+per_lens_cell", "interval", 10.0))
+    for algorithm in arbitrary + interleaved:  # the hardware cost model, every algorithm
+        for coc in (0.0, 10.0):
+            out.append(Case("bunny+hardware", algorithm, coc))
+    out.append(Case("moving_quads+hardware", "tile", 10.0))
     return out
 
 

@@ -64,16 +64,26 @@ class DepthCull {
     const RenderParams& p = f_.p;
     if (!need_z_) return true;
     const bool query_iv = query_ && p.query_mode == QueryMode::kIntervals;
-    const iv::ZHat z = iv::zhat<A>(tri, p.zhat == ZhatMode::kPlanes ? &planes_ : nullptr, f_.fc, lens, x0, x1, y0,
-                                   y1, u0, u1, v0, v1, ta, tb, c_[Counter::ops_zhat]);
+    iv::ZHat z = iv::zhat<A>(tri, p.zhat == ZhatMode::kPlanes ? &planes_ : nullptr, f_.fc, lens, x0, x1, y0, y1, u0,
+                             u1, v0, v1, ta, tb, c_[Counter::ops_zhat]);
+    if (p.zhat_margin == ZhatMargin::kFixed) z.margin = iv::kFixedDepthMargin;
     ++c_[Counter::zcull_pairs];
     const double nr = f_.fc.near_d;
     auto width = [nr](double lo, double hi) {
       const double w = (hi - std::max(lo, nr)) / nr * 1e6;
       return w > 0 ? static_cast<std::uint64_t>(std::llround(std::min(w, 1e15))) : std::uint64_t(0);
     };
-    c_[Counter::zcull_width_zhat] += width(z.wlo, z.whi);
-    c_[Counter::zcull_width_vertex] += width(z.vwlo, z.vwhi);
+    // the intervals actually compared: widened by the pair's rounding bound (iv::zhat_widen); a pair
+    // with an unbounded margin compares [near, inf) and is counted apart
+    if (z.margin < iv::kInfD) {
+      double wl, wh;
+      iv::zhat_widen_w(z, nr, z.wlo, z.whi, wl, wh);
+      c_[Counter::zcull_width_zhat] += width(wl, wh);
+      iv::zhat_widen_w(z, nr, z.vwlo, z.vwhi, wl, wh);
+      c_[Counter::zcull_width_vertex] += width(wl, wh);
+    } else {
+      ++c_[Counter::zcull_pairs_unbounded];
+    }
     if (!(p.hiz_enabled || query_iv)) return true;
     double zlo, zhi;
     iv::zhat_widen(z, nr, zlo, zhi);

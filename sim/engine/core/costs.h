@@ -80,6 +80,27 @@ inline constexpr std::uint64_t kInside3D = kLerp + kEdges + kSigns;             
 inline constexpr std::uint64_t kInside4D = kShear + kEdges + kSigns;               // 28
 inline constexpr std::uint64_t kInside5D = kLerp + kShearMoving + kEdges + kSigns;  // 43
 
+// ---- sample test, hardware cost model (pipeline.cost_model: hardware; sampletest/hardware.h) ----
+// What a fixed-point datapath with fused multiply-add would execute. Vertices snapped to a fixed
+// point grid make every edge function exact, so neither the sample-relative form nor the
+// two-products-and-a-subtraction form of the robust kernels is needed, and the decisions equal
+// the robust kernels' (docs/op_costs.md). 2D (static in focus, or a static triangle at one
+// discrete lens position): affine edge functions e_i = A_i x + B_i y + C_i, set up once per
+// triangle or lens position (cost::kEdges2DSetup, charged to ops.setup), oriented and biased for
+// the top-left rule at setup, so a test is 3 x 2 MADD + 3 CMP and a tie costs nothing.
+inline constexpr std::uint64_t kHwAffine2D = 6;   // 3 x (2 MADD): A x + B y + C
+inline constexpr std::uint64_t kHwSigns2D = 3;    // 3 CMP (det's sign is folded into the setup)
+// 3D/4D/5D (the vertices move with the sample's (u, v, t)): vertices placed as in the robust
+// kernels (kLerp, kShear, kShearMoving), 6 MADD relative coordinates, 3 x (MUL + MADD) edge
+// functions, det MUL + 2 MADD, 4 sign tests.
+inline constexpr std::uint64_t kHwEdges = 6 + 6 + 3;  // 15
+inline constexpr std::uint64_t kHwInside2D = kHwAffine2D + kHwSigns2D;              // 9
+inline constexpr std::uint64_t kHwInside3D = kLerp + kHwEdges + kSigns;               // 28
+inline constexpr std::uint64_t kHwInside4D = kShear + kHwEdges + kSigns;              // 25
+inline constexpr std::uint64_t kHwInside5D = kLerp + kShearMoving + kHwEdges + kSigns;  // 40
+inline constexpr std::uint64_t kHwTieBreak = 6;    // per zero edge: gradient 2 x (MUL + MADD), 2 CMP
+inline constexpr std::uint64_t kHwTieBreak2D = 0;  // folded into the affine set-up's bias
+
 // ---- covered samples (backend/sample_backend.h; same for all algorithms; ops.interp) ----
 inline constexpr std::uint64_t kDepth = 6;      // 2 ADD, RCP, MUL, MADD, CMP (near plane)
 inline constexpr std::uint64_t kDepthTest = 1;  // CMP against the depth buffer

@@ -29,6 +29,8 @@ enum class OpCount : int { kDocumented = 0, kExact = 1 };
 enum class MotionTest : int { kIntervals = 0, kBounds = 1 };
 enum class ZhatMode : int { kPlanes = 0, kVertex = 1 };
 enum class QueryMode : int { kNone = 0, kSamples = 1, kIntervals = 2 };
+enum class CostModel : int { kRobust = 0, kHardware = 1 };
+enum class ZhatMargin : int { kDerived = 0, kFixed = 1 };
 
 template <>
 struct ChoiceTraits<LensShape> {
@@ -78,6 +80,24 @@ struct ChoiceTraits<QueryMode> {
       {"none", "no occlusion query"},
       {"samples", "the query's samples run the depth test (nothing written); visible iff any passes"},
       {"intervals", "ẑ of each (query triangle, tile) against HiZ, abort at the first pair that may be visible"},
+  }};
+};
+
+template <>
+struct ChoiceTraits<CostModel> {
+  static constexpr std::string_view registry = "cost_models";
+  static constexpr std::array<ChoiceInfo, 2> table = {{
+      {"robust", "float32 sample-relative edge functions without FMA (watertight; docs/op_costs.md)"},
+      {"hardware", "fixed-point affine edge functions A x + B y + C set up per triangle or lens position, FMA"},
+  }};
+};
+
+template <>
+struct ChoiceTraits<ZhatMargin> {
+  static constexpr std::string_view registry = "zhat_margins";
+  static constexpr std::array<ChoiceInfo, 2> table = {{
+      {"derived", "per (triangle, tile): a bound on the float sample depth's own rounding error"},
+      {"fixed", "12.5 % of W on both sides (the former fixed margin, for comparison)"},
   }};
 };
 

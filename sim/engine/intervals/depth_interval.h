@@ -3,7 +3,9 @@
 //
 // Contract (tested in tests/test_intervals.py against the brute-force sample test): the depth
 // z = 1 - near / W_hit of every sample of the tile that the exact sample test hits, at a time in
-// [ta, tb] and a lens point in the given box, is inside ẑ widened by kDepthMargin (zhat_widen).
+// [ta, tb] and a lens point in the given box, is inside ẑ (up to the double rounding of ẑ itself),
+// and the depth the float sample test computes for it is inside ẑ widened by the pair's own
+// rounding bound (zhat_margin, zhat_widen).
 #pragma once
 
 #include <algorithm>
@@ -17,15 +19,168 @@
 
 namespace rast5d::iv {
 
-// Relative margin on W applied to ẑ before it is compared with depths computed by the float
-// sample test (docs/conventions.md: float hit depths can be off by several % near the camera).
-inline constexpr double kDepthMargin = 0.125;
+// The former fixed relative margin on W (pipeline.zhat_margin: fixed, kept for comparison).
+inline constexpr double kFixedDepthMargin = 0.125;
 
 struct ZHat {
   double zlo = 0, zhi = 1;      // depth z = 1 - near / W
   double wlo = 0, whi = kInfD;  // view depth W
   double vwlo = 0, vwhi = kInfD;  // vertex min/max only (for the tightness report)
+  double margin = kInfD;        // relative rounding bound rho of the float hit depth W (zhat_margin)
 };
+
+// Bound rho on the relative error of the view depth W_hit = det / sum(e) that the float32 sample
+// kernels compute (sample_test.h: vertex placement, edge_functions, hit_depth) for any sample of
+// the (x, y, u, v, t) box whose exact hit lies at W_hit <= whi: |W_float - W_hit| <= rho W_hit.
+// First-order forward error analysis with unit roundoff u = 2^-24 over interval bounds of every
+// intermediate on the box (each operation adds at most u times its result's magnitude):
+//   placed vertices X', Y', W (lerp, shear: one rounding per MADD, bounded by |value| u each),
+//   relative coordinates r = X' - x W, edge functions e_i = r_j r'_k - r'_j r_k (2 MUL + SUB),
+//   sum = sum e_i, det = sum W_j e_j, then sum / det (RCP, MUL).
+// A covered sample has all e_i of det's sign, so |sum| = sum |e_i| = |det| / W_hit >= D / whi
+// with D a lower bound of |det| over the box (the determinant of the placed vertices: bilinear in
+// (u, v), so the lens-box corners bound it, and a cubic in t, bounded at its critical points).
+// rho = inf when D = 0 (the triangle is seen edge-on from part of the box): no depth culling.
+// Robustness of the float simulator, not hardware work: not charged (a fixed-point datapath
+// computes exact depths). Plain double; its own rounding is covered by the slack.
+inline double zhat_margin(const TriSetup& tri, const FrameConst& fc, bool lens, double x0, double x1, double y0,
+                          double y1, double u0, double u1, double v0, double v1, double ta, double tb, double whi) {
+  constexpr double u = 0x1p-24;
+  if (!(whi < kInfD)) return kInfD;
+  if (!lens) u0 = u1 = v0 = v1 = 0.0;
+  const bool moving = tri.moving;
+  if (!moving) ta = tb = 0.0;
+  struct Iv {
+    double lo, hi;
+    double mag() const { return std::max(std::fabs(lo), std::fabs(hi)); }
+  };
+  auto add = [](Iv a, Iv b) { return Iv{a.lo + b.lo, a.hi + b.hi}; };
+  auto mul = [](Iv a, Iv b) {
+    const double p[4] = {a.lo * b.lo, a.lo * b.hi, a.hi * b.lo, a.hi * b.hi};
+    return Iv{std::min({p[0], p[1], p[2], p[3]}), std::max({p[0], p[1], p[2], p[3]})};
+  };
+  auto neg = [](Iv a) { return Iv{-a.hi, -a.lo}; };
+  const Iv T{ta, tb}, U{u0, u1}, V{v0, v1}, SX{x0, x1}, SY{y0, y1};
+  Iv Xp[3], Yp[3], Wp[3];
+  double ex[3], ey[3], ew[3];  // absolute error bounds of the placed vertices
+  for (int j = 0; j < 3; ++j) {
+    const Iv X0{tri.X[j], tri.X[j]}, Y0{tri.Y[j], tri.Y[j]}, W0{tri.W[j], tri.W[j]};
+    Iv Xt = X0, Yt = Y0, Wt = W0;
+    ex[j] = ey[j] = ew[j] = 0.0;
+    if (moving) {
+      Xt = add(X0, mul(T, Iv{tri.dX[j], tri.dX[j]}));
+      Yt = add(Y0, mul(T, Iv{tri.dY[j], tri.dY[j]}));
+      Wt = add(W0, mul(T, Iv{tri.dW[j], tri.dW[j]}));
+      ex[j] = u * Xt.mag(), ey[j] = u * Yt.mag(), ew[j] = u * Wt.mag();
+    }
+    Xp[j] = Xt, Yp[j] = Yt, Wp[j] = Wt;
+    if (lens) {
+      Iv cx{tri.cx[j], tri.cx[j]}, cy{tri.cy[j], tri.cy[j]};
+      double ecx = 0.0, ecy = 0.0;
+      if (moving) {  // cx = Wt kx + (-kx F) in float
+        cx = add(mul(Wt, Iv{fc.kx, fc.kx}), Iv{fc.neg_kx_f, fc.neg_kx_f});
+        cy = add(mul(Wt, Iv{fc.ky, fc.ky}), Iv{fc.neg_ky_f, fc.neg_ky_f});
+        ecx = u * cx.mag() + std::fabs(fc.kx) * ew[j];
+        ecy = u * cy.mag() + std::fabs(fc.ky) * ew[j];
+      }
+      Xp[j] = add(Xt, mul(U, cx));
+      Yp[j] = add(Yt, mul(V, cy));
+      ex[j] += u * Xp[j].mag() + U.mag() * ecx;
+      ey[j] += u * Yp[j].mag() + V.mag() * ecy;
+    }
+  }
+  Iv rx[3], ry[3];
+  double erx[3], ery[3];
+  for (int j = 0; j < 3; ++j) {
+    rx[j] = add(Xp[j], neg(mul(SX, Wp[j])));
+    ry[j] = add(Yp[j], neg(mul(SY, Wp[j])));
+    erx[j] = u * rx[j].mag() + ex[j] + SX.mag() * ew[j];
+    ery[j] = u * ry[j].mag() + ey[j] + SY.mag() * ew[j];
+  }
+  double P[3], E[3];  // |e_i| bound and its error bound
+  for (int i = 0; i < 3; ++i) {
+    const int j = (i + 1) % 3, k = (i + 2) % 3;
+    const double a = rx[j].mag() * ry[k].mag(), b = ry[j].mag() * rx[k].mag();
+    P[i] = a + b;
+    E[i] = erx[j] * ry[k].mag() + rx[j].mag() * ery[k] + ery[j] * rx[k].mag() + ry[j].mag() * erx[k] + 2 * u * P[i];
+  }
+  const double e_sum = E[0] + E[1] + E[2] + 2 * u * (P[0] + P[1] + P[2]);
+  double e_det = 0.0;
+  for (int j = 0; j < 3; ++j) e_det += Wp[j].mag() * E[j] + ew[j] * P[j] + 3 * u * Wp[j].mag() * P[j];
+  // Lower bound of |det| over the box.
+  double dmin;
+  auto det3 = [](const double (&m)[3][3]) {
+    return m[0][0] * (m[1][1] * m[2][2] - m[2][1] * m[1][2]) - m[1][0] * (m[0][1] * m[2][2] - m[2][1] * m[0][2]) +
+           m[2][0] * (m[0][1] * m[1][2] - m[1][1] * m[0][2]);
+  };
+  if (!moving) {
+    double lo = kInfD, hi = -kInfD;
+    for (int c = 0; c < 4; ++c) {
+      const double uu = (c & 1) ? u1 : u0, vv = (c & 2) ? v1 : v0;
+      double m[3][3];
+      for (int j = 0; j < 3; ++j) {
+        m[j][0] = double(tri.X[j]) + uu * double(tri.cx[j]);
+        m[j][1] = double(tri.Y[j]) + vv * double(tri.cy[j]);
+        m[j][2] = tri.W[j];
+      }
+      const double d = det3(m);
+      lo = std::min(lo, d), hi = std::max(hi, d);
+    }
+    double mag = 0.0;
+    for (int j = 0; j < 3; ++j) mag = std::max(mag, Xp[j].mag() + Yp[j].mag() + Wp[j].mag());
+    const double slack = 1e-9 * mag * mag * mag;  // the double rounding of the evaluations
+    dmin = lo > slack ? lo - slack : (hi < -slack ? -hi - slack : 0.0);
+  } else {
+    // det of the placed vertices at lens corner (uu, vv) and time t; the multiple of the W column in
+    // the shear X' = Xt + u (kx Wt + c), c = -kx F, cancels, so det(X', Y', W) = det(Xt + u c, Yt +
+    // v c', Wt): bilinear in (u, v) (its extremes over the lens box are at corners) and a cubic in t,
+    // whose extremes over [ta, tb] are at the ends or at the roots of its derivative.
+    auto det_at = [&](double t, double uu, double vv) {
+      double m[3][3];
+      for (int j = 0; j < 3; ++j) {
+        m[j][0] = double(tri.X[j]) + t * double(tri.dX[j]) + uu * double(fc.neg_kx_f);
+        m[j][1] = double(tri.Y[j]) + t * double(tri.dY[j]) + vv * double(fc.neg_ky_f);
+        m[j][2] = double(tri.W[j]) + t * double(tri.dW[j]);
+      }
+      return det3(m);
+    };
+    double lo = kInfD, hi = -kInfD;
+    const int nl = lens ? 2 : 1;
+    for (int c = 0; c < nl * nl; ++c) {
+      const double uu = lens ? ((c & 1) ? u1 : u0) : 0.0, vv = lens ? ((c & 2) ? v1 : v0) : 0.0;
+      const double f0 = det_at(0, uu, vv), f1 = det_at(1, uu, vv), f2 = det_at(2, uu, vv), f3 = det_at(3, uu, vv);
+      const double d1 = f1 - f0, d2 = f2 - 2 * f1 + f0, d3 = f3 - 3 * f2 + 3 * f1 - f0;
+      const double a3 = d3 / 6, a2 = d2 / 2 - d3 / 2, a1 = d1 - d2 / 2 + d3 / 3;
+      double ts[4] = {ta, tb, ta, ta};
+      int nt = 2;
+      const double qa = 3 * a3, qb = 2 * a2, qc = a1;  // p'(t) = qa t^2 + qb t + qc
+      if (qa != 0.0) {
+        const double disc = qb * qb - 4 * qa * qc;
+        if (disc >= 0) {
+          const double r = std::sqrt(disc);
+          ts[nt++] = (-qb - r) / (2 * qa), ts[nt++] = (-qb + r) / (2 * qa);
+        }
+      } else if (qb != 0.0) {
+        ts[nt++] = -qc / qb;
+      }
+      for (int k = 0; k < nt; ++k) {
+        const double t = std::min(tb, std::max(ta, ts[k]));
+        const double d = det_at(t, uu, vv);
+        lo = std::min(lo, d), hi = std::max(hi, d);
+      }
+    }
+    double mag = 0.0;
+    for (int j = 0; j < 3; ++j) mag = std::max(mag, Xp[j].mag() + Yp[j].mag() + Wp[j].mag());
+    const double slack = 1e-9 * mag * mag * mag;  // the double rounding of the evaluations
+    dmin = lo > slack ? lo - slack : (hi < -slack ? -hi - slack : 0.0);
+  }
+  dmin *= 1.0 - 0x1p-40;
+  if (!(dmin > 0.0)) return kInfD;
+  // x2: the second-order terms, and samples the float test covers within rounding of an edge
+  // (their exact hit is on the plane just outside the triangle).
+  const double rho = 2.0 * (e_det / dmin + e_sum * whi / dmin + 2 * u) + 0x1p-40;
+  return std::isfinite(rho) ? rho : kInfD;
+}
 
 // Per-triangle moving planes (002 App. A Eq. 1): for base time tau in {0, 1} the triangle's plane
 // n . P + d = 0 at tau, pushed along its normal by v so that the whole moving triangle stays on
@@ -145,16 +300,25 @@ inline ZHat zhat(const TriSetup& tri, const MovingPlanes* planes, const FrameCon
   const D nn(-fc.near_d), one(1.0);
   z.zlo = raw(madd(nn, rcp(wlo), one));
   z.zhi = raw(whi) >= kInfD ? 1.0 : raw(madd(nn, rcp(whi), one));
+  z.margin = zhat_margin(tri, fc, lens, x0, x1, y0, y1, u0, u1, v0, v1, ta, tb, z.vwhi);
   charge<A>(ops, cost::kZhatVertex + (planes ? cost::zhat_plane_cost(lens) : 0));
   return z;
 }
 
-// ẑ widened for comparisons with float sample depths (kDepthMargin on W).
+// The W interval actually compared: ẑ widened by the pair's rounding bound (margin on W).
+inline void zhat_widen_w(const ZHat& z, double near, double lo, double hi, double& wl, double& wh) {
+  const double rho = z.margin;
+  wl = rho < 1.0 ? std::max(near, lo) * (1.0 - rho) : 0.0;
+  wh = rho < kInfD ? hi * (1.0 + rho) : kInfD;
+}
+// ẑ widened for comparisons with float sample depths: W widened by the pair's margin, then the
+// float rounding of z = 1 - near / W itself (MADD: at most 2 u absolute for W >= near).
 inline void zhat_widen(const ZHat& z, double near, double& zlo, double& zhi) {
-  const double wl = std::max(near, z.wlo) * (1.0 - kDepthMargin);
-  const double wh = z.whi * (1.0 + kDepthMargin);
-  zlo = 1.0 - near / wl;
-  zhi = std::isinf(wh) ? 1.0 : 1.0 - near / wh;
+  constexpr double kZUlp = 2 * 0x1p-24;
+  double wl, wh;
+  zhat_widen_w(z, near, z.wlo, z.whi, wl, wh);
+  zlo = wl > 0.0 ? 1.0 - near / wl - kZUlp : -kInfD;
+  zhi = std::isinf(wh) ? kInfD : 1.0 - near / wh + kZUlp;
 }
 
 }  // namespace rast5d::iv

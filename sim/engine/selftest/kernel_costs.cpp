@@ -4,6 +4,7 @@
 #include "core/arith.h"
 #include "core/costs.h"
 #include "setup/footprint.h"
+#include "sampletest/hardware.h"
 #include "sampletest/inside.h"
 #include "tiletest/box_bounds.h"
 #include "tiletest/edges_2d.h"
@@ -67,6 +68,16 @@ std::uint64_t inside_cost_run(std::mt19937_64& g, DimClass cls) {
   return n - static_cast<std::uint64_t>(n_ties) * cost::kTieBreak;
 }
 
+// The hardware cost model's sample test (sampletest/hardware.h), ties counted separately.
+std::uint64_t hw_inside_cost_run(std::mt19937_64& g, DimClass cls) {
+  const FrameConst fc = frame();
+  const TriSetup t = random_setup(g, fc, cls == DimClass::k3D || cls == DimClass::k5D);
+  OpTally::take();
+  hw_inside_test(t, cls, fc, CF(rnd(g, 0, 512)), CF(rnd(g, 0, 512)), CF(rnd(g, -1, 1)), CF(rnd(g, -1, 1)),
+                 CF(rnd(g, 0, 1)), 0);
+  return OpTally::take();
+}
+
 const bool kRegistered = [] {
   auto& R = KernelCostRegistry::entries();
   R.emplace("sample.edges", KernelCostEntry{cost::kEdges, [](std::mt19937_64& g) {
@@ -124,6 +135,33 @@ const bool kRegistered = [] {
             }});
   R.emplace("sample.inside_5d", KernelCostEntry{cost::kInside5D, [](std::mt19937_64& g) {
               return inside_cost_run(g, DimClass::k5D);
+            }});
+  R.emplace("sample.hw_inside_2d", KernelCostEntry{cost::kHwInside2D, [](std::mt19937_64& g) {
+              return hw_inside_cost_run(g, DimClass::k2D);
+            }});
+  R.emplace("sample.hw_inside_3d", KernelCostEntry{cost::kHwInside3D, [](std::mt19937_64& g) {
+              return hw_inside_cost_run(g, DimClass::k3D);
+            }});
+  R.emplace("sample.hw_inside_4d", KernelCostEntry{cost::kHwInside4D, [](std::mt19937_64& g) {
+              return hw_inside_cost_run(g, DimClass::k4D);
+            }});
+  R.emplace("sample.hw_inside_5d", KernelCostEntry{cost::kHwInside5D, [](std::mt19937_64& g) {
+              return hw_inside_cost_run(g, DimClass::k5D);
+            }});
+  R.emplace("sample.hw_inside_sheared", KernelCostEntry{cost::kHwInside2D, [](std::mt19937_64& g) {
+              float X[3], Y[3], W[3];
+              for (int j = 0; j < 3; ++j) W[j] = rnd(g, 0.5f, 20), X[j] = rnd(g, 0, 500) * W[j], Y[j] = rnd(g, 0, 500) * W[j];
+              OpTally::take();
+              hw_inside_sheared(X, Y, W, CF(rnd(g, 0, 512)), CF(rnd(g, 0, 512)));
+              return OpTally::take();
+            }});
+  R.emplace("sample.hw_tie_break", KernelCostEntry{cost::kHwTieBreak, [](std::mt19937_64& g) {
+              CF X[3], Y[3], W[3], rx[3], ry[3];
+              random_tri(g, X, Y, W);
+              for (int j = 0; j < 3; ++j) rx[j] = X[j], ry[j] = Y[j];
+              OpTally::take();
+              hw_tie_break(W, rx, ry, static_cast<int>(g() % 3), (g() & 1) ? 1 : -1);
+              return OpTally::take();
             }});
   R.emplace("interp.depth", KernelCostEntry{cost::kDepth, [](std::mt19937_64& g) {
               CF e[3] = {CF(rnd(g, 0.1f, 1)), CF(rnd(g, 0.1f, 1)), CF(rnd(g, 0.1f, 1))};

@@ -11,6 +11,7 @@
 #include <cmath>
 
 #include "core/costs.h"
+#include "sampletest/hardware.h"
 #include "setup/setup.h"
 #include "tiletest/halfspace_edges.h"
 #include "tiletest/halfspace_lens.h"
@@ -115,7 +116,7 @@ inline Footprint build_footprint(const TriSetup& tri, const Frame& f, bool with_
   const int T = p.tile_size, G = p.lens_grid;
   const double n_tiles = static_cast<double>((tri.bx1 - 1) / T - tri.bx0 / T + 1) *
                          static_cast<double>((tri.by1 - 1) / T - tri.by0 / T + 1);
-  const double c_sample = p.c_sample >= 0 ? p.c_sample : static_cast<double>(cost::kInside4D);
+  const double c_sample = p.c_sample >= 0 ? p.c_sample : static_cast<double>(sample_test_cost(p.cost_model, DimClass::k4D));
   const double c_tile = p.c_tile >= 0 ? p.c_tile
                                       : static_cast<double>(cost::kTangentCorners +
                                                             2 * (cost::kLineAtCorner + tiletest::line_cells_cost(G, G)));

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "core/costs.h"
+#include "tiletest/edges_2d.h"
 
 namespace rast5d {
 
@@ -274,7 +275,13 @@ bool setup_triangle(const float* v0, const float* v1, const float* col, std::uin
   }
 
   switch (o.cls) {
-    case DimClass::k2D: ++c[Counter::setup_class_2d]; break;
+    case DimClass::k2D:
+      ++c[Counter::setup_class_2d];
+      if (p.cost_model == CostModel::kHardware) {  // the affine sample test's edges (sampletest/hardware.h)
+        tiletest::edges_2d<typename A::f64>(o.X, o.Y, o.W);
+        charge<A>(ops, cost::kEdges2DSetup);
+      }
+      break;
     case DimClass::k3D: ++c[Counter::setup_class_3d]; break;
     case DimClass::k4D: ++c[Counter::setup_class_4d]; break;
     case DimClass::k5D: ++c[Counter::setup_class_5d]; break;

@@ -23,6 +23,7 @@
 #include "core/counters.h"
 #include "core/params.h"
 #include "core/sample_table.h"
+#include "sampletest/hardware.h"
 #include "sampletest/inside.h"
 #include "sampletest/sample_test.h"
 #include "sampletest/simd_batch.h"
@@ -57,7 +58,8 @@ class SamplePipeline {
   using F = typename A::f32;
 
   SamplePipeline(const Frame& f, ThreadState& ts)
-      : f_(f), c_(ts.counters), sh_(ts.shade), ts_(ts), backend_(f, ts.counters, ts.buffers, ts.shade), cap_(std::max(kBatch, f.table.spp())) {
+      : f_(f), c_(ts.counters), sh_(ts.shade), ts_(ts), backend_(f, ts.counters, ts.buffers, ts.shade), cap_(std::max(kBatch, f.table.spp())),
+        model_(f.p.cost_model) {
     for (auto* v : {&gx_, &gy_, &gu_, &gv_, &gt_, &bdet_}) v->resize(cap_);
     for (auto* v : {&bpx_, &bpy_, &bs_, &bl_}) v->resize(cap_);
     be_.resize(3 * static_cast<std::size_t>(cap_));
@@ -192,7 +194,14 @@ class SamplePipeline {
     int n_ties;
     const bool covered = inside_test(tri, tri.cls, f_.fc, sx, sy, u, v, t, f_.p.backface_cull, X, Y, W, e, det, n_ties);
     ++c_[kTestedByClass[static_cast<int>(tri.cls)]];
-    finish(tri, covered, e, det, n_ties, px, py, s, kInsideCost[static_cast<int>(tri.cls)]);
+    if constexpr (A::counting) {
+      if (model_ == CostModel::kHardware) {  // count the hardware form instead (sampletest/hardware.h)
+        OpTally::take();
+        hw_inside_test(tri, tri.cls, f_.fc, sx, sy, u, v, t, n_ties ? tie_mask(e) : 0);
+      }
+    }
+    finish(tri, covered, e, det, n_ties, px, py, s,
+           sample_test_cost(model_, tri.cls) + n_ties * tie_break_cost(model_, tri.cls));
   }
 
   inline void test_sheared_values(const TriSetup& tri, const float Xs[3], const float Ys[3], F sx, F sy, int px,
@@ -202,7 +211,14 @@ class SamplePipeline {
     int n_ties;
     const bool covered = inside_from_vertices(X, Y, W, sx, sy, f_.p.backface_cull, e, det, n_ties);
     ++c_[Counter::raster_samples_tested_2d];
-    finish(tri, covered, e, det, n_ties, px, py, s, cost::kInside2D);
+    if constexpr (A::counting) {
+      if (model_ == CostModel::kHardware) {
+        OpTally::take();
+        hw_inside_sheared(Xs, Ys, tri.W, sx, sy);
+      }
+    }
+    finish(tri, covered, e, det, n_ties, px, py, s,
+           sample_test_cost(model_, DimClass::k2D) + n_ties * tie_break_cost(model_, DimClass::k2D));
   }
 
   // One pixel's samples as a batch of their own (no per-sample pixel/index bookkeeping); with sel,
@@ -286,7 +302,7 @@ class SamplePipeline {
           break;
       }
       c_[kTestedByClass[cls]] += static_cast<std::uint64_t>(sel ? n_sel : n);
-      inside_cost = kInsideCost[cls];
+      inside_cost = sample_test_cost(model_, tri.cls);
     } else {
       const float W[3] = {tri.W[0], tri.W[1], tri.W[2]};
       if (stride_ == 0) {
@@ -302,7 +318,7 @@ class SamplePipeline {
         }
       }
       c_[Counter::raster_samples_tested_2d] += static_cast<std::uint64_t>(sel ? n_sel : n);
-      inside_cost = cost::kInside2D;
+      inside_cost = sample_test_cost(model_, DimClass::k2D);
     }
     // Flags: 1 = covered, 2 = an e_i is exactly zero (scalar top-left path). Then skip 8 flags at a
     // time (most batches are mostly misses).
@@ -344,15 +360,23 @@ class SamplePipeline {
                             u ? uniform_ps_->v[i] : gv_[i], u ? uniform_ps_->t[i] : gt_[i], f_.p.backface_cull, X,
                             Y, W, e, det, n_ties);
     }
-    c_[Counter::ops_sample_inside] += static_cast<std::uint64_t>(n_ties) * cost::kTieBreak;
+    c_[Counter::ops_sample_inside] +=
+        static_cast<std::uint64_t>(n_ties) * tie_break_cost(model_, sheared_ ? DimClass::k2D : tri.cls);
     if (n_ties) ++c_[Counter::raster_tie_breaks];
     if (covered) shade(tri, e, det, px, py, smp);
   }
 
+  // The edges the robust test settled by the top-left rule (exactly zero edge functions).
+  static int tie_mask(const F e[3]) {
+    int m = 0;
+    for (int i = 0; i < 3; ++i) m |= (raw(e[i]) == 0.0f) << i;
+    return m;
+  }
+
   inline void finish(const TriSetup& tri, bool covered, const F e[3], F det, int n_ties, int px, int py,
-                     int s, std::uint64_t inside_cost) {
+                     int s, std::uint64_t test_cost) {
     ++c_[Counter::raster_samples_tested];
-    charge<A>(c_[Counter::ops_sample_inside], inside_cost + n_ties * cost::kTieBreak);
+    charge<A>(c_[Counter::ops_sample_inside], test_cost);
     if (n_ties) ++c_[Counter::raster_tie_breaks];
     if (covered) shade(tri, e, det, px, py, s);
   }
@@ -375,6 +399,7 @@ class SamplePipeline {
   int stride_ = 0;
   int n_ = 0;
   int cap_;
+  CostModel model_;
   int uniform_px_ = 0, uniform_py_ = 0;
   bool uniform_ = false;
   const PixelSamples* uniform_ps_ = nullptr;

@@ -54,7 +54,9 @@ class Interleave final : public Traversal {
         tiletest::pixel_range(ly, hy, by0, by1, y0, y1);
       }
       tiletest::Edges2D e;
-      if (kHier && !tri.moving) {  // per-pass setup, charged whether or not this bin sees the pass
+      // per-pass setup, charged whether or not this bin sees the pass; the hardware cost model's
+      // affine 2D sample test uses these edges too (sampletest/hardware.h), so INTERLEAVE pays them
+      if ((kHier || f_.p.cost_model == CostModel::kHardware) && !tri.moving) {
         e = tiletest::edges_2d<D>(xs, ys, W);
         charge<A>(setup_ops, cost::kEdges2DSetup);
       }

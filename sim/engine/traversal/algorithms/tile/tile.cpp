@@ -60,7 +60,10 @@ class Tile final : public Traversal {
     std::uint64_t setup_ops = 0;
     if (tri.cls == DimClass::k2D) {
       const tiletest::Edges2D e = tiletest::edges_2d<D>(tri.X, tri.Y, tri.W);
-      charge<A>(setup_ops, cost::kEdges2DSetup);
+      if (f_.p.cost_model == CostModel::kHardware)
+        discard<A>();  // the hardware model sets these edges up once in triangle setup (sample test)
+      else
+        charge<A>(setup_ops, cost::kEdges2DSetup);
       if (charge_setup) c_[Counter::ops_setup] += setup_ops;
       raster_2d(tri, e, bin);
       return;
@@ -94,6 +97,10 @@ class Tile final : public Traversal {
       shear_static(X, Y, cx, cy, F(f_.table.lens_u(i)), F(f_.table.lens_v(i)), Xs, Ys);
       charge<A>(ops, cost::kShear);
       for (int j = 0; j < 3; ++j) sx_[3 * i + j] = raw(Xs[j]), sy_[3 * i + j] = raw(Ys[j]);
+      if (f_.p.cost_model == CostModel::kHardware) {  // the affine 2D sample test's edges per lens position
+        tiletest::edges_2d<D>(&sx_[3 * i], &sy_[3 * i], tri.W);
+        charge<A>(ops, cost::kEdges2DSetup);
+      }
     }
   }
 
