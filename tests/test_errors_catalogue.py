@@ -19,10 +19,10 @@ def test_the_catalogue_covers_every_category():
 @pytest.mark.parametrize("case", cat.CASES, ids=lambda c: c.id)
 def test_bad_input_is_refused_clearly(case, tmp_path):
     def hang(signum, frame):
-        raise TimeoutError(f"{case.id}: no answer within 60 s")
+        raise TimeoutError(f"{case.id}: no answer within 300 s")
 
     old = signal.signal(signal.SIGALRM, hang)
-    signal.alarm(60)
+    signal.alarm(300)  # a hang guard, generous for loaded or sanitized runs
     try:
         if case.error is None:
             case.run(tmp_path)  # accepted on purpose: the case checks the outcome itself
