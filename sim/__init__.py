@@ -21,6 +21,7 @@ from .sample_table import SampleTable
 from .intervals import ConservativeResult, OcclusionResult, conservative_raster, occlusion_query
 from .stats import counter_docs
 from . import timing
+from . import uses
 
 __all__ = [
     "Camera",
@@ -47,5 +48,6 @@ __all__ = [
     "texture_filters",
     "texture_layouts",
     "timing",
+    "uses",
     "write_png",
 ]

@@ -67,6 +67,9 @@ def counter_docs() -> dict[str, tuple[str, str]]:
     docs.update(derived_docs(DERIVED))
     docs.update(MEASURED)
     docs.update(timing_docs())  # the timing model's figures (docs/timing.md)
+    from .uses.common import figure_docs
+
+    docs.update(figure_docs())  # the figures of the rasterizer's uses (sim/uses/)
     return docs
 
 
