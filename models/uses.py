@@ -152,3 +152,27 @@ def sampler_voids(
             cols += [(0.2 + 0.6 * i / cells, 0.3 + 0.6 * j / cells, 0.6)] * 2
     scene = Scene.from_arrays(np.array(tris), colors=np.array(cols), name="sampler_voids")
     return scene.with_camera_hint(width=width, height=height, fov_y_deg=fov_y_deg, focus_distance=depth)
+
+
+@register_scene("shadow_planes")
+def shadow_planes(
+    *,
+    occluder_height: float = 0.5,
+    motion: float = 0.0,
+    floor_size: float = 4.0,
+    width: int = 96,
+    height: int = 96,
+) -> Scene:
+    """A floor (y = 0) under a 1 x 1.2 plate at occluder_height whose right edge lies on x = 0, the plate moving by `motion` along +x over the shutter: plane over plane for soft shadows (002 §7)."""
+    h = _positive("occluder_height", occluder_height)
+    f = _positive("floor_size", floor_size) / 2
+    floor = np.array([[(-f, 0, -f), (-f, 0, f), (f, 0, f)], [(-f, 0, -f), (f, 0, f), (f, 0, -f)]], np.float64)
+    plate = np.array([[(-1.0, h, -0.6), (-1.0, h, 0.6), (0.0, h, 0.6)],
+                      [(-1.0, h, -0.6), (0.0, h, 0.6), (0.0, h, -0.6)]], np.float64)
+    p0 = np.concatenate([floor, plate])
+    p1 = p0.copy()
+    p1[2:, :, 0] += float(motion)
+    cols = np.array([(0.8, 0.8, 0.75)] * 2 + [(0.85, 0.3, 0.2)] * 2)
+    scene = Scene.from_arrays(p0, colors=cols, positions_t1=p1, name="shadow_planes")
+    return scene.with_camera_hint(width=width, height=height, fov_y_deg=50.0, focus_distance=4.0,
+                                  eye=(0.3, 3.0, 3.0), target=(0.0, 0.0, 0.0), up=(0.0, 1.0, 0.0), near=0.05)

@@ -101,3 +101,98 @@ def test_transparency_bad_alpha_is_a_clear_error():
         sc.with_alpha([0.5, 1.5])
     with pytest.raises(sim.ConfigError, match="scene.alpha"):
         uses.stochastic_transparency(sc.with_alpha(None), sim.Camera(**CAM), sim.SampleTable.stratified(spp=1))
+
+
+# ---- the rasterizer as a sampler (002 §5) ----------------------------------------------------------
+
+def test_chi2_sf_matches_scipy():
+    from sim.uses.common import chi2_sf
+
+    for x, k in [(0.5, 1), (3.0, 2), (26.0, 26), (40.0, 26), (300.0, 242), (1.0, 80), (120.0, 80)]:
+        assert chi2_sf(x, k) == pytest.approx(stats.chi2.sf(x, k), rel=1e-9, abs=1e-14)
+
+
+@pytest.mark.parametrize("coc, depth, spp", [(0.0, 3.0, 16), (6.0, 2.0, 32)])
+def test_sampler_simploid_points_are_uniform(coc, depth, spp):
+    sc = models.named("sampler_simploids", depth=depth, width=64, height=64)
+    cam = sim.Camera(coc_px=coc, **{**sc.camera_hint, "focus_distance": 3.0})
+    r = uses.sample_simploids(sc, cam, sim.SampleTable.random(spp=spp, seed=11))
+    f = r.flat_stats
+    n, e = f["sampler.points"], f["sampler.expected_points"]
+    assert abs(n - e) < 5 * np.sqrt(e), (n, e)
+    assert f["sampler.chi2_p"] > 1e-3
+    assert f["sampler.chi2_dof"] == (3 ** 5 - 1 if coc else 3 ** 3 - 1)
+
+
+def test_sampler_chi2_rejects_a_non_uniform_table():
+    """The test can fail: samples squeezed into the first half of the shutter are not uniform in xyt."""
+    sc = models.named("sampler_simploids", width=64, height=64)
+    cam = sim.Camera(**sc.camera_hint)
+    s = np.array(sim.SampleTable.random(spp=16, seed=4).samples())
+    s[..., 4] *= 0.5
+    r = uses.sample_simploids(sc, cam, sim.SampleTable.from_array(s))
+    assert r.flat_stats["sampler.chi2_p"] < 1e-6
+
+
+def test_sampler_voids_get_no_points_and_cells_are_uniform():
+    sc = models.named("sampler_voids", width=64, height=64)
+    cam = sim.Camera(**sc.camera_hint)
+    r = uses.sample_simploids(sc, cam, sim.SampleTable.random(spp=8, seed=2), domain="voids")
+    f = r.flat_stats
+    assert f["sampler.void_points"] == 0
+    assert f["sampler.chi2_p"] > 1e-3
+    assert abs(f["sampler.points"] - f["sampler.expected_points"]) < 5 * np.sqrt(f["sampler.expected_points"])
+    with pytest.raises(sim.ConfigError, match="domain"):
+        uses.sample_simploids(sc, cam, sim.SampleTable.random(spp=1), domain="cube")
+
+
+# ---- motion-blurred soft shadows (002 §7) ------------------------------------------------------------
+
+def _shadow_run(motion=0.0, **options):
+    sc = models.named("shadow_planes", motion=motion, width=48, height=48)
+    cam = sim.Camera(**sc.camera_hint)
+    opts = dict(light_resolution=128, light_grid=4, reference_grid=4)
+    opts.update(options)
+    return sc, uses.soft_shadows(sc, cam, sim.SampleTable.stratified(spp=16, seed=1), **opts)
+
+
+@pytest.mark.parametrize("motion", [0.0, 0.6])
+def test_shadow_one_pass_equals_accumulation_passes(motion):
+    _, r = _shadow_run(motion)
+    f = r.flat_stats
+    assert f["shadow.maps_equal"] is True
+    assert f["shadow.accum_setups"] == f["shadow.light_samples"] * f["shadow.onepass_setups"]
+
+
+def test_shadow_lookup_matches_brute_force_rays():
+    """Shadow-map visibility of receiver points against the segment to each light point intersected with the
+    plate analytically (away from one map texel of the plate's shadow edges)."""
+    from sim.uses import shadows
+
+    h, lc, R = 0.5, np.array([-0.8, 2.0, 0.0]), 0.3
+    sc = models.named("shadow_planes", occluder_height=h)
+    light = shadows.light_camera(lc, R, 90.0, 256)
+    uvt = shadows.light_samples(3)
+    maps, _ = shadows.shadow_maps(sc, light, uvt)
+    rng = np.random.default_rng(5)
+    pts = np.stack([rng.uniform(-1.5, 1.5, 4000), np.zeros(4000), rng.uniform(-1.2, 1.2, 4000)], 1)
+    texel = 2 * lc[1] * np.tan(np.radians(45)) / 256
+    for s in range(len(uvt)):
+        lp = lc + np.array([uvt[s, 0] * R, 0.0, -uvt[s, 1] * R])
+        f = h / lp[1]
+        xp, zp = pts[:, 0] + f * (lp[0] - pts[:, 0]), pts[:, 2] + f * (lp[2] - pts[:, 2])
+        blocked = (xp >= -1.0) & (xp <= 0.0) & (np.abs(zp) <= 0.6)
+        margin = 2 * texel  # a texel at the receiver, seen through the plate's edge
+        clear = (np.minimum(np.abs(xp + 1.0), np.abs(xp)) > margin) & (np.abs(np.abs(zp) - 0.6) > margin)
+        lit = shadows.lookup(light, maps, pts, np.full(len(pts), s), uvt)
+        assert np.array_equal(lit[clear], ~blocked[clear]), s
+
+
+def test_shadow_penumbra_width_is_similar_triangles_and_banded():
+    """Plane over plane: the penumbra on the receiver is 2R h_o / (h_l - h_o) wide (within two map texels), and
+    an n x n light grid gives at most n + 1 visibility levels across a straight edge (banding)."""
+    _, r = _shadow_run(light_resolution=512, light_grid=8)
+    f = r.flat_stats
+    texel = 2 * 2.0 * np.tan(np.radians(45)) / 512
+    assert abs(f["shadow.penumbra_measured"] - f["shadow.penumbra_formula"]) < 2 * texel * 8 / 7 + 1e-3
+    assert f["shadow.bands"] == 9
