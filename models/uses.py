@@ -176,3 +176,69 @@ def shadow_planes(
     scene = Scene.from_arrays(p0, colors=cols, positions_t1=p1, name="shadow_planes")
     return scene.with_camera_hint(width=width, height=height, fov_y_deg=50.0, focus_distance=4.0,
                                   eye=(0.3, 3.0, 3.0), target=(0.0, 0.0, 0.0), up=(0.0, 1.0, 0.0), near=0.05)
+
+
+def water_height(x, z, amplitude: float, seed: int = 0):
+    """A procedural water surface: the sum of a few sine waves (height and its x, z derivatives)."""
+    rng = np.random.default_rng(seed)
+    h = np.zeros_like(x, dtype=np.float64)
+    hx = np.zeros_like(h)
+    hz = np.zeros_like(h)
+    for k in range(5):
+        ang = rng.uniform(0, 2 * np.pi)
+        freq = rng.uniform(8.0, 16.0)
+        phase = rng.uniform(0, 2 * np.pi)
+        a = amplitude / (k + 1)
+        kx, kz = freq * np.cos(ang), freq * np.sin(ang)
+        arg = kx * x + kz * z + phase
+        h += a * np.sin(arg)
+        hx += a * kx * np.cos(arg)
+        hz += a * kz * np.cos(arg)
+    return h, hx, hz
+
+
+@register_scene("water_caustics")
+def water_caustics(
+    *,
+    grid: int = 72,
+    size: float = 2.0,
+    water_level: float = 1.0,
+    amplitude: float = 0.025,
+    ior: float = 1.33,
+    seed: int = 0,
+    view: str = "oblique",
+    width: int = 128,
+    height: int = 128,
+) -> Scene:
+    """Caustic volumes (002 §4): generator triangles of a procedural water surface (t = 0) and their ends on the pool floor y = 0 (t = 1), light straight down, refracted per vertex; grid x grid x 2 volumes."""
+    if isinstance(grid, bool) or not isinstance(grid, int) or not 1 <= grid <= 512:
+        raise SceneError(f"grid: expected an integer in 1..512, got {grid!r}")
+    if view not in ("oblique", "top"):
+        raise SceneError(f"view: expected 'oblique' or 'top', got {view!r}")
+    size, water_level, ior = _positive("size", size), _positive("water_level", water_level), _positive("ior", ior)
+    g = np.linspace(-size / 2, size / 2, grid + 1)
+    X, Z = np.meshgrid(g, g, indexing="xy")
+    h, hx, hz = water_height(X, Z, float(amplitude), seed)
+    top = np.stack([X, water_level + h, Z], -1)
+    n = np.stack([-hx, np.ones_like(h), -hz], -1)
+    n /= np.linalg.norm(n, axis=-1, keepdims=True)
+    d = np.array([0.0, -1.0, 0.0])  # light direction
+    eta = 1.0 / ior  # Snell: air into water
+    cos_i = -(n @ d)
+    k = 1.0 - eta ** 2 * (1.0 - cos_i ** 2)
+    r = eta * d + (eta * cos_i - np.sqrt(k))[..., None] * n
+    bottom = top + (top[..., 1] / -r[..., 1])[..., None] * r  # to the floor y = 0
+    bottom[..., 1] = 0.0
+
+    def tris(P):
+        a, b, c, dd = P[:-1, :-1], P[:-1, 1:], P[1:, 1:], P[1:, :-1]
+        return np.concatenate([np.stack([a, b, c], 2).reshape(-1, 3, 3), np.stack([a, c, dd], 2).reshape(-1, 3, 3)])
+
+    p0, p1 = tris(top), tris(bottom)
+    cols = np.full((len(p0), 3), (0.6, 0.8, 1.0))
+    scene = Scene.from_arrays(p0, colors=cols, positions_t1=p1, name="water_caustics")
+    if view == "top":  # looking straight down: the beams run along the view direction
+        hint = dict(eye=(0.0, 4.0, 0.0), target=(0.0, 0.0, 0.0), up=(0.0, 0.0, -1.0), fov_y_deg=35.0)
+    else:
+        hint = dict(eye=(0.0, 2.4, 3.2), target=(0.0, 0.45, 0.0), up=(0.0, 1.0, 0.0), fov_y_deg=45.0)
+    return scene.with_camera_hint(width=width, height=height, focus_distance=3.0, near=0.05, **hint)

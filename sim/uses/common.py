@@ -45,13 +45,17 @@ FIGURES: dict[str, tuple[str, str]] = {
     "shadow.bands": ("levels", "Distinct visibility levels in the penumbra (banding: at most light_samples + 1)"),
     # caustic volumes (002 §4)
     "caustics.volumes": ("volumes", "Caustic volumes (generator triangles)"),
-    "caustics.fill_moving": ("invocations", "Pixel-shader invocations rasterizing the volumes as moving triangles "
-                                            "(conservative 1 x 1 tiles with a non-empty t̂)"),
-    "caustics.fill_exact": ("invocations", "Pixels whose centre has a non-empty exact time interval (the fill of an "
-                                           "exact per-pixel time interval)"),
-    "caustics.fill_prism": ("invocations", "Pixel-shader invocations of the bounding-volume approach: pixels of the "
-                                           "convex hull of the beam's six vertices (a lower bound for a bounding prism)"),
+    "caustics.fill_tiles": ("pairs", "(volume, pixel) pairs the conservative 1 x 1 tile test passes with a non-empty "
+                                     "t̂ (the rasterizer's candidates)"),
+    "caustics.fill_moving": ("invocations", "Pixel-shader invocations of the volumes as moving triangles: (volume, "
+                                            "pixel) pairs whose pixel centre has a non-empty exact time interval"),
+    "caustics.fill_prism": ("invocations", "Pixel-shader invocations of the bounding-volume approach: pixel centres "
+                                           "inside the convex hull of the beam's six vertices (a lower bound for any "
+                                           "bounding prism)"),
+    "caustics.fill_prism_tiles": ("pairs", "(volume, pixel) pairs of that hull under the conservative 1 x 1 tile "
+                                           "test"),
     "caustics.fill_ratio": ("ratio", "caustics.fill_moving / caustics.fill_prism"),
+    "caustics.zhat_misses": ("pixels", "Sampled pixel centres whose ray-marched beam hits fall outside ẑ (must be 0)"),
     "caustics.light_error": ("ratio", "Relative L1 difference of the accumulated surface light and a brute-force "
                                       "photon splat of the same beams (both blurred by 2 px)"),
     "caustics.folded": ("volumes", "Volumes whose end triangle is flipped against the generator (fold over)"),
