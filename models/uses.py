@@ -242,3 +242,33 @@ def water_caustics(
     else:
         hint = dict(eye=(0.0, 2.4, 3.2), target=(0.0, 0.45, 0.0), up=(0.0, 1.0, 0.0), fov_y_deg=45.0)
     return scene.with_camera_hint(width=width, height=height, focus_distance=3.0, near=0.05, **hint)
+
+
+@register_scene("glossy_floor")
+def glossy_floor(
+    *,
+    width: int = 128,
+    height: int = 96,
+) -> Scene:
+    """A glossy floor (y = 0, x in [-1.5, 1.5], z in [-3, 0]) under standing triangles at several heights and a striped back wall: planar glossy reflections (002 §6)."""
+    floor = np.array([[(-1.5, 0, -3.0), (-1.5, 0, 0.0), (1.5, 0, 0.0)],
+                      [(-1.5, 0, -3.0), (1.5, 0, 0.0), (1.5, 0, -3.0)]], np.float64)
+    tris = [floor]
+    cols = [(0.15, 0.15, 0.18)] * 2
+    objects = [  # standing triangles: (x0, x1, z, bottom, top, colour)
+        (-1.1, -0.5, -1.2, 0.0, 0.7, (0.9, 0.2, 0.15)),
+        (-0.2, 0.4, -1.8, 0.25, 0.9, (0.2, 0.8, 0.3)),
+        (0.6, 1.2, -1.0, 0.5, 1.0, (0.2, 0.35, 0.95)),
+    ]
+    for x0, x1, z, b, t, c in objects:
+        tris.append(np.array([[(x0, b, z), (x1, b, z), (0.5 * (x0 + x1), t, z)]], np.float64))
+        cols.append(c)
+    for k in range(6):  # back wall stripes
+        x0 = -1.5 + k * 0.5
+        c = (0.95, 0.85, 0.3) if k % 2 == 0 else (0.3, 0.3, 0.35)
+        tris.append(np.array([[(x0, 0, -3.0), (x0 + 0.5, 0, -3.0), (x0 + 0.5, 1.5, -3.0)],
+                              [(x0, 0, -3.0), (x0 + 0.5, 1.5, -3.0), (x0, 1.5, -3.0)]], np.float64))
+        cols += [c, c]
+    scene = Scene.from_arrays(np.concatenate(tris), colors=np.array(cols), name="glossy_floor")
+    return scene.with_camera_hint(width=width, height=height, fov_y_deg=45.0, focus_distance=3.0,
+                                  eye=(0.0, 1.0, 1.8), target=(0.0, 0.25, -1.5), up=(0.0, 1.0, 0.0), near=0.05)

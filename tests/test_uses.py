@@ -283,3 +283,65 @@ def test_caustic_twisted_beam_fills_less_than_its_hull_and_parallel_beam_equals_
     side = [(x[j] - x[i]) * (py - y[i]) - (y[j] - y[i]) * (px - x[i]) for i, j in ((0, 1), (1, 2), (2, 0))]
     inside = (np.all(np.array(side) > 0, 0) | np.all(np.array(side) < 0, 0)).sum()
     assert straight["caustics.fill_moving"] == straight["caustics.fill_prism"] == inside
+
+
+# ---- planar glossy reflections (002 §6) -----------------------------------------------------------------
+
+def test_glossy_map_with_a_pinhole_lens_is_a_mirror():
+    """Roughness -> 0: the map look-up at each floor point equals the colour of the first triangle hit by the
+    mirror-reflected eye ray (float64 brute force), except near the objects' silhouettes."""
+    from sim.uses.common import pinhole_rays, ray_triangle
+    from sim.uses.glossy import _bilinear, reflection_camera
+
+    sc = models.named("glossy_floor", width=64, height=48)
+    cam = sim.Camera(**sc.camera_hint)
+    objs = ~np.all(np.abs(sc.positions[:, :, 1]) < 1e-9, axis=1)
+    rcam = reflection_camera(cam, (-1.5, 1.5, -3.0, 0.0), 1e-6, 256)
+    rmap = sim.render(models.Scene.from_arrays(sc.positions[objs], colors=sc.colors[objs]), rcam,
+                      sim.SampleTable.stratified(spp=4, seed=1)).image.astype(np.float64)
+    px, py = np.meshgrid(np.arange(64) + 0.5, np.arange(48) + 0.5)
+    o, d = pinhole_rays(cam, px.ravel(), py.ravel())
+    s = -o[:, 1] / d[:, 1]
+    on = (s > 0)
+    P = o[on] + s[on, None] * d[on]
+    on_floor = (np.abs(P[:, 0]) < 1.4) & (P[:, 2] > -2.9) & (P[:, 2] < -0.1)
+    P = P[on_floor]
+    rd = d[on][on_floor] * np.array([1.0, -1.0, 1.0])
+    best = np.full(len(P), np.inf)
+    want = np.zeros((len(P), 3))
+    for tri, c in zip(sc.positions[objs], sc.colors[objs]):
+        hit, t, _ = ray_triangle(P, rd, tri)
+        closer = hit & (t < best)
+        best[closer] = t[closer]
+        want[closer] = c.mean(axis=0)
+    e = rcam.clip_to_engine(rcam.world_to_clip(P))
+    got = _bilinear(rmap, e[:, 0] / e[:, 2], e[:, 1] / e[:, 2])
+    bad = np.any(np.abs(got - want) > 0.05, axis=1)
+    assert len(P) > 500 and bad.mean() < 0.05, bad.mean()
+
+
+def test_glossy_error_falls_with_samples_per_texel():
+    sc = models.named("glossy_floor", width=48, height=32)
+    cam = sim.Camera(**sc.camera_hint)
+    f = {spp: uses.glossy_reflection(sc, cam, sim.SampleTable.stratified(spp=spp, seed=1), map_texels=48,
+                                     roughness=0.15, reference_spp=256).flat_stats for spp in (4, 64)}
+    assert f[64]["glossy.map_rmse"] < 0.5 * f[4]["glossy.map_rmse"]
+    assert f[64]["glossy.tests_per_texel"] > 8 * f[4]["glossy.tests_per_texel"]
+    assert f[4]["glossy.texels"] == 48 * 48
+
+
+def test_camera_shift_moves_the_principal_point():
+    """Off-centre viewport (Camera.shift): the axis point lands shift * (W/2, -H/2) px from the centre; a
+    shifted render covers the same area as an unshifted one (closed form: a fronto-parallel square)."""
+    base = dict(width=64, height=32, fov_y_deg=40.0, focus_distance=3.0)
+    cam = sim.Camera(shift=(0.25, -0.5), **base)
+    e = cam.clip_to_engine(cam.world_to_clip(np.array([[0.0, 0.0, -2.0]])))[0]
+    assert e[0] / e[2] == pytest.approx(32 + 0.25 * 32) and e[1] / e[2] == pytest.approx(16 + 0.5 * 16)
+    quad = models.named("quad", size=0.5, depth=3.0)
+    table = sim.SampleTable.stratified(spp=16, seed=1)
+    a = sim.render(quad, cam, table).flat_stats["raster.samples_hit"]
+    b = sim.render(quad, sim.Camera(**base), table).flat_stats["raster.samples_hit"]
+    side_px = 0.5 / 3.0 / np.tan(np.radians(20.0)) * 16
+    assert a == pytest.approx(b, rel=0.02) and a == pytest.approx(16 * side_px ** 2, rel=0.03)
+    with pytest.raises(sim.ConfigError, match="shift"):
+        sim.Camera(shift=(1.0,), **base)

@@ -43,7 +43,7 @@ def engine_id() -> str:
         import sim
 
         h = hashlib.sha256(Path(sim._core.__file__).read_bytes())
-        for folder in ("sim", "models"):
+        for folder in ("sim", "sim/uses", "models"):
             for f in sorted((REPO / folder).glob("*.py")):
                 h.update(f.read_bytes())
         _ENGINE_ID = h.hexdigest()[:12]

@@ -20,6 +20,7 @@ import inspect
 
 from .common import FIGURES, UseResult, check_options, figure_docs
 from .caustics import caustic_volumes, exact_time_intervals
+from .glossy import glossy_reflection
 from .sampler import sample_simploids
 from .shadows import soft_shadows
 from .transparency import sorted_blend, stochastic_transparency
@@ -28,6 +29,7 @@ USES: dict[str, object] = {
     "transparency": stochastic_transparency,
     "sampler": sample_simploids,
     "caustics": caustic_volumes,
+    "glossy": glossy_reflection,
     "soft_shadows": soft_shadows,
 }
 
@@ -45,5 +47,5 @@ def run_use(kind: str, scene, camera, table, pipeline=None, *, hardware=None, op
     return USES[kind](scene, camera, table, pipeline, hardware=hardware, **opts)
 
 
-__all__ = ["FIGURES", "caustic_volumes", "exact_time_intervals", "USES", "UseResult", "figure_docs", "run_use", "sample_simploids", "soft_shadows", "sorted_blend", "stochastic_transparency",
+__all__ = ["FIGURES", "caustic_volumes", "exact_time_intervals", "glossy_reflection", "USES", "UseResult", "figure_docs", "run_use", "sample_simploids", "soft_shadows", "sorted_blend", "stochastic_transparency",
            "use_options"]
