@@ -345,3 +345,25 @@ def test_camera_shift_moves_the_principal_point():
     assert a == pytest.approx(b, rel=0.02) and a == pytest.approx(16 * side_px ** 2, rel=0.03)
     with pytest.raises(sim.ConfigError, match="shift"):
         sim.Camera(shift=(1.0,), **base)
+
+
+# ---- the uses as point kinds (YAML) ----------------------------------------------------------------------
+
+def test_use_point_kind_from_yaml(tmp_path):
+    from experiments.config import validate
+    from experiments.run import render_point
+
+    cfg = validate({"scene": {"name": "transparent_layers", "params": {"width": 24, "height": 24}},
+                    "samples": {"kind": "stratified", "spp": 4, "seed": 1},
+                    "point": {"kind": "transparency", "options": {"reference": True}}})
+    row, result = render_point(cfg, tmp_path / "t.png")
+    assert (tmp_path / "t.png").exists()
+    assert row["transparency.max_layers"] == 8 and row["point.options.reference"] is True
+    assert result.stats["alpha"]["samples_tested"] > 0
+    with pytest.raises(Exception, match="unknown option 'spp'"):
+        validate({"scene": {"name": "glossy_floor"}, "point": {"kind": "glossy", "options": {"spp": 4}}})
+    with pytest.raises(Exception, match="point.options"):
+        validate({"scene": {"name": "glossy_floor"}, "point": {"kind": "render", "options": {"roughness": 0.1}}})
+    docs = sim.counter_docs()
+    for name, (unit, desc) in uses.FIGURES.items():
+        assert docs[name] == (unit, desc)

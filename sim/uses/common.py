@@ -96,6 +96,12 @@ class UseResult:
     flat_stats: dict
     arrays: dict = field(default_factory=dict)
 
+    @property
+    def stats(self) -> dict:
+        from ..stats import nest
+
+        return nest(self.flat_stats)
+
     def save_png(self, path):
         from ..png import write_png
 
