@@ -42,6 +42,7 @@ class RenderParams:
     texture_filter: str  # 'bilinear' (nearest mip level) or 'trilinear'; level of detail from analytic per-triangle derivatives (texture_filters: bilinear, trilinear); default 'trilinear'
     texture_layout: str  # Texel layout in memory: 'linear' (row-major), 'blocked' (4x4 texel blocks) or 'morton' (4x4 blocks in Morton order) (texture_layouts: linear, blocked, morton); default 'blocked'
     alpha_seed: int  # Seed of the per-sample random alpha masks (scenes with alpha: a covered sample of a triangle survives with probability alpha); default 0
+    alpha_stratified: bool  # Alpha masks stratified over a pixel's samples (one random offset per pixel and triangle: floor or ceil of alpha x spp samples kept) instead of independent per sample; default False
     motion_test: str  # tile, moving triangles: 'intervals' (t̂ and lens sets per time sub-interval, samples indexed by time stratum) or 'bounds' (h_i lines over the shutter ends, no t̂) (motion_tests: intervals, bounds); default 'intervals'
     time_splits: int  # Time sub-intervals S per shutter (1, 2, 4, 8, 16): tile computes t̂ (and 5D lens sets) per sub-interval; default 1
     time_strata: int  # Time strata per lens cell in the sample-table index (1..64, a multiple of time_splits): tile walks only the strata that overlap t̂; default 8

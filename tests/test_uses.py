@@ -50,13 +50,15 @@ def test_transparency_alpha_zero_is_invisible_bit_for_bit():
     assert with_zero.flat_stats["alpha.samples_discarded"] == with_zero.flat_stats["alpha.samples_tested"] == 32 * 32 * 4
 
 
-def test_transparency_winners_follow_the_over_operator_chi2():
+@pytest.mark.parametrize("stratified", [False, True])
+def test_transparency_winners_follow_the_over_operator_chi2(stratified):
     """Per sample the surviving front layer is layer i with probability a_i prod_{j<i} (1 - a_j): chi-square
-    over 16k samples of a constant stack (independent masks across layers and samples)."""
+    over 16k samples of a constant stack (masks uncorrelated across layers, independent or stratified)."""
     alphas = [0.5, 0.25, 0.75]
     sc = _layers_scene(alphas)
     cam = sim.Camera(**CAM)
-    r = sim.render(sc, cam, sim.SampleTable.stratified(spp=16, seed=2), export_samples=True)
+    r = sim.render(sc, cam, sim.SampleTable.stratified(spp=16, seed=2), sim.PipelineConfig(alpha_stratified=stratified),
+                   export_samples=True)
     layer = np.where(r.sample_triangle >= 0, r.sample_triangle // 2, len(alphas)).ravel()
     counts = np.bincount(layer, minlength=len(alphas) + 1)
     p, through = [], 1.0
@@ -66,6 +68,17 @@ def test_transparency_winners_follow_the_over_operator_chi2():
     p.append(through)
     _, pval = stats.chisquare(counts, np.asarray(p) * counts.sum())
     assert pval > 1e-3, (counts, p)
+
+
+def test_stratified_masks_keep_floor_or_ceil_of_alpha_spp_per_pixel():
+    big = [[(-20.0, -20.0, -2.0), (20.0, -20.0, -2.0), (0.0, 20.0, -2.0)]]  # one triangle over the screen
+    sc = models.Scene.from_arrays(np.array(big)).with_alpha([0.3])
+    for spp in (8, 12):
+        r = sim.render(sc, sim.Camera(**CAM), sim.SampleTable.stratified(spp=spp, seed=1),
+                       sim.PipelineConfig(alpha_stratified=True), export_samples=True)
+        kept = (r.sample_triangle >= 0).sum(axis=2)
+        assert set(np.unique(kept)) <= {int(np.floor(0.3 * spp)), int(np.ceil(0.3 * spp))}
+        assert kept.mean() == pytest.approx(0.3 * spp, rel=0.05)
 
 
 def test_transparency_converges_to_sorted_blending():

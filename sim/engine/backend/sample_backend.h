@@ -58,7 +58,7 @@ class SampleBackend {
     ++c_[Counter::raster_samples_hit];
     if (tri.alpha < 1.0f) {  // stochastic transparency: the sample survives with probability alpha
       ++c_[Counter::alpha_samples_tested];
-      if (!alpha_keeps(tri.alpha, px, py, s, tri.index, alpha_seed_)) {
+      if (!alpha_keeps(tri.alpha, px, py, s, f_.table.spp(), f_.p.alpha_stratified, tri.index, alpha_seed_)) {
         ++c_[Counter::alpha_samples_discarded];
         return;
       }
