@@ -10,6 +10,8 @@ import models
 import sim
 from sim import uses
 
+pytestmark = pytest.mark.invariants
+
 
 def _layers_scene(alphas, colors=None, depth0=2.0):
     """Full-screen squares, front to back, with the given alphas."""
