@@ -90,6 +90,7 @@ def render(
     uvs: npt.NDArray[np.float32] | None = None,  # (N, 3, 2) texture coordinates
     tex_slots: npt.NDArray[np.int32] | None = None,  # (N, 4) texture index per slot, -1 unused
     textures: list[npt.NDArray[np.float32]] = ...,  # (H, W, 1..4) linear images
+    alpha: npt.NDArray[np.float32] | None = None,  # (N,) opacity: per-sample alpha coverage (backend/alpha.h)
 ) -> dict[str, Any]:
     """Returns {'image': (H, W, 3) float32, 'counters': {name: int}}, with params.record_timing
     'timing_records' (timing_record_dtype(), culled triangles then bins in raster order) and, with export_samples,
