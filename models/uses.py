@@ -4,7 +4,7 @@ area light, a water surface over a pool floor, and a glossy floor under objects.
 themselves are in sim/uses/ (point kinds in experiments/run/uses.py)."""
 from __future__ import annotations
 
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 

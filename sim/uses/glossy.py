@@ -41,10 +41,7 @@ def reflection_camera(camera: Camera, rect, roughness: float, texels: int) -> Ca
     ya, yb = sorted((-(z1 - e[2]), -(z0 - e[2])))
     s_y = 2 * D / (yb - ya)
     fov = float(np.degrees(2 * np.arctan(1 / s_y)))
-    cam = Camera(width=width, height=height, fov_y_deg=fov, focus_distance=D, aperture_radius=roughness * D,
-                 eye=mirror, target=mirror + np.array([0.0, 1.0, 0.0]), up=(0.0, 0.0, -1.0), near=0.05 * D,
-                 shift=(0.0, 0.0))
-    s_x = cam._s_x
+    s_x = s_y * height / width
     shift = (-s_x * (xa + xb) / (2 * D), -s_y * (ya + yb) / (2 * D))
     return Camera(width=width, height=height, fov_y_deg=fov, focus_distance=D, aperture_radius=roughness * D,
                   eye=mirror, target=mirror + np.array([0.0, 1.0, 0.0]), up=(0.0, 0.0, -1.0), near=0.05 * D,
