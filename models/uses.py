@@ -247,10 +247,11 @@ def water_caustics(
 @register_scene("glossy_floor")
 def glossy_floor(
     *,
+    below: bool = False,
     width: int = 128,
     height: int = 96,
 ) -> Scene:
-    """A glossy floor (y = 0, x in [-1.5, 1.5], z in [-3, 0]) under standing triangles at several heights and a striped back wall: planar glossy reflections (002 §6)."""
+    """A glossy floor (y = 0, x in [-1.5, 1.5], z in [-3, 0]) under standing triangles at several heights and a striped back wall (below: all of it 1.6 under the surface, for refraction): planar glossy reflections and refractions (002 §6)."""
     floor = np.array([[(-1.5, 0, -3.0), (-1.5, 0, 0.0), (1.5, 0, 0.0)],
                       [(-1.5, 0, -3.0), (1.5, 0, 0.0), (1.5, 0, -3.0)]], np.float64)
     tris = [floor]
@@ -269,6 +270,9 @@ def glossy_floor(
         tris.append(np.array([[(x0, 0, -3.0), (x0 + 0.5, 0, -3.0), (x0 + 0.5, 1.5, -3.0)],
                               [(x0, 0, -3.0), (x0 + 0.5, 1.5, -3.0), (x0, 1.5, -3.0)]], np.float64))
         cols += [c, c]
-    scene = Scene.from_arrays(np.concatenate(tris), colors=np.array(cols), name="glossy_floor")
+    p = np.concatenate(tris)
+    if below:  # everything but the surface moved under it (a pool seen through a glossy water surface)
+        p[2:, :, 1] = p[2:, :, 1] - 1.6
+    scene = Scene.from_arrays(p, colors=np.array(cols), name="glossy_floor")
     return scene.with_camera_hint(width=width, height=height, fov_y_deg=45.0, focus_distance=3.0,
                                   eye=(0.0, 1.0, 1.8), target=(0.0, 0.25, -1.5), up=(0.0, 1.0, 0.0), near=0.05)

@@ -396,3 +396,24 @@ def test_alpha_masks_same_image_for_every_algorithm_and_thread_count():
             r = sim.render(sc, cam, table, sim.PipelineConfig(algorithm=algo, threads=threads, bin_size=16))
             assert np.array_equal(r.image, ref.image), (algo, threads)
             assert r.flat_stats["alpha.samples_discarded"] == ref.flat_stats["alpha.samples_discarded"]
+
+
+def test_refraction_camera_sits_on_the_refracted_central_ray():
+    """002 §6: the refraction map's camera is the primary camera moved along the plane normal onto the
+    refracted central ray, so the points of that ray under the plane project onto the central ray's surface
+    point (closed form: Snell's law at the plane y = 0)."""
+    from sim.uses.glossy import reflection_camera
+
+    cam = sim.Camera(width=64, height=48, fov_y_deg=45, eye=(0.3, 1.0, 1.8), target=(0.0, 0.25, -1.5))
+    rc = reflection_camera(cam, (-1.5, 1.5, -3.0, 0.0), 0.1, 64, mode="refraction", ior=1.33)
+    assert rc.eye[0] == cam.eye[0] and rc.eye[2] == cam.eye[2] and rc.eye[1] > cam.eye[1]
+    d = (cam.target - cam.eye) / np.linalg.norm(cam.target - cam.eye)
+    c = cam.eye + (-cam.eye[1] / d[1]) * d
+    sin_t = np.hypot(d[0], d[2]) / 1.33  # Snell
+    horiz = np.array([d[0], 0.0, d[2]]) / np.hypot(d[0], d[2])
+    r = sin_t * horiz + np.array([0.0, -np.sqrt(1 - sin_t ** 2), 0.0])
+    e = rc.clip_to_engine(rc.world_to_clip(np.array([c, c + 0.7 * r, c + 1.5 * r])))
+    xy = e[:, :2] / e[:, 2:]
+    assert np.allclose(xy, xy[0], atol=1e-6)
+    with pytest.raises(sim.ConfigError, match="mode"):
+        reflection_camera(cam, (-1.5, 1.5, -3.0, 0.0), 0.1, 64, mode="diffuse")

@@ -1,4 +1,4 @@
-"""Planar glossy reflections (002_95ea0844b256f75b.txt §6, Fig. 13-14).
+"""Planar glossy reflections and refractions (002_95ea0844b256f75b.txt §6, Fig. 13-14).
 
 The reflection map is rendered by a camera at the primary camera's mirror image under the glossy
 plane, its lens parallel to the plane and its focus plane on the plane (which is also where its near
@@ -8,6 +8,8 @@ position. The lens is the glossy lobe: a disk of radius roughness x (camera-plan
 uniformly and stratified (4D rasterization, no time), so each texel averages the scene over a cone of
 directions in one pass; the resolved map is then looked up (bilinear) where the primary camera sees the
 plane. Error is against a converged map (1024 samples per texel), work per texel is the map pass's.
+Refraction moves the primary camera along the plane normal onto the refracted central ray (exact for
+that ray, progressively approximate towards the edges, as 002 says) and looks down through the plane.
 """
 from __future__ import annotations
 
@@ -25,27 +27,49 @@ class _Sub:
         self.positions, self.positions_t1, self.colors = p0, p1, col
 
 
-def reflection_camera(camera: Camera, rect, roughness: float, texels: int) -> Camera:
-    """The reflection-map camera for the plane y = 0 and the glossy rectangle rect = (x0, x1, z0, z1)."""
+def reflection_camera(camera: Camera, rect, roughness: float, texels: int, mode: str = "reflection",
+                      ior: float = 1.33) -> Camera:
+    """The map camera for the plane y = 0 and the glossy rectangle rect = (x0, x1, z0, z1) (002 Fig. 13):
+    reflection: at the primary camera's mirror image, looking up (+y); refraction: the primary camera
+    translated along the plane normal onto the refracted central ray (the ray through the centre of the
+    image, refracted with index ior), looking down (-y). Either way the lens is parallel to the plane, the
+    plane is the focus plane and an off-centre viewport (shift) encloses rect."""
     x0, x1, z0, z1 = rect
     e = np.asarray(camera.eye, np.float64)
     if e[1] <= 0:
         raise ConfigError(f"camera.eye: the primary camera must be above the glossy plane y = 0, got {e.tolist()}")
-    mirror = np.array([e[0], -e[1], e[2]])
-    D = e[1]
+    if mode == "reflection":
+        eye, look, sign_x = np.array([e[0], -e[1], e[2]]), np.array([0.0, 1.0, 0.0]), -1.0
+    elif mode == "refraction":
+        d = np.asarray(camera.target, np.float64) - e
+        d /= np.linalg.norm(d)
+        if d[1] >= 0:
+            raise ConfigError("camera.target: the central ray must reach the plane y = 0 for a refraction map")
+        c = e + (-e[1] / d[1]) * d  # where the central ray meets the plane
+        n = np.array([0.0, 1.0, 0.0])
+        eta = 1.0 / ior
+        cos_i = -float(n @ d)
+        k = 1.0 - eta ** 2 * (1.0 - cos_i ** 2)
+        r = eta * d + (eta * cos_i - np.sqrt(k)) * n  # the refracted central ray
+        h = np.hypot(d[0], d[2])
+        s_back = np.hypot(c[0] - e[0], c[2] - e[2]) / max(np.hypot(r[0], r[2]), 1e-12) if h > 1e-12 else e[1] / -r[1]
+        eye = np.array([e[0], c[1] - s_back * r[1], e[2]])  # e moved along the normal onto the refracted ray
+        look, sign_x = np.array([0.0, -1.0, 0.0]), 1.0
+    else:
+        raise ConfigError(f"point.options.mode: expected 'reflection' or 'refraction', got {mode!r}")
+    D = abs(eye[1])
     aspect = (x1 - x0) / (z1 - z0)
     width = texels
     height = max(1, int(round(texels / aspect)))
-    # view space of a camera looking +y with up -z: x_v = -(x - e_x), y_v = -(z - e_z), w = y + e_y
-    xa, xb = sorted((-(x1 - e[0]), -(x0 - e[0])))
-    ya, yb = sorted((-(z1 - e[2]), -(z0 - e[2])))
+    # view space (up -z): x_v = sign_x (x - eye_x), y_v = -(z - eye_z), w = |y - eye_y|
+    xa, xb = sorted((sign_x * (x1 - eye[0]), sign_x * (x0 - eye[0])))
+    ya, yb = sorted((-(z1 - eye[2]), -(z0 - eye[2])))
     s_y = 2 * D / (yb - ya)
     fov = float(np.degrees(2 * np.arctan(1 / s_y)))
     s_x = s_y * height / width
     shift = (-s_x * (xa + xb) / (2 * D), -s_y * (ya + yb) / (2 * D))
     return Camera(width=width, height=height, fov_y_deg=fov, focus_distance=D, aperture_radius=roughness * D,
-                  eye=mirror, target=mirror + np.array([0.0, 1.0, 0.0]), up=(0.0, 0.0, -1.0), near=0.05 * D,
-                  shift=shift)
+                  eye=eye, target=eye + look, up=(0.0, 0.0, -1.0), near=0.05 * D, shift=shift)
 
 
 def _bilinear(img, x, y):
@@ -60,9 +84,10 @@ def _bilinear(img, x, y):
 
 def glossy_reflection(scene, camera, table, pipeline=None, *, hardware=None, roughness: float = 0.08,
                       map_texels: int = 96, reflectance: float = 0.6, reference_spp: int = 1024,
-                      seed: int = 1) -> UseResult:
-    """Glossy reflections in the plane y = 0 of the scene's triangles lying in it (the glossy surface;
-    its bounding rectangle is the map's viewport). `table` is the primary pass's; the map's samples per
+                      mode: str = "reflection", ior: float = 1.33, seed: int = 1) -> UseResult:
+    """Glossy reflections (mode "reflection") or refractions ("refraction", index ior) in the plane y = 0
+    of the scene's triangles lying in it (the glossy surface; its bounding rectangle is the map's
+    viewport); the map holds the triangles on the far side of the plane. `table` is the primary pass's; the map's samples per
     texel are table.spp (stratified over the lens disk, seeded). Figures: glossy.texels,
     glossy.samples_per_texel, glossy.ops_per_texel, glossy.tests_per_texel, glossy.map_rmse,
     glossy.image_rmse."""
@@ -74,8 +99,11 @@ def glossy_reflection(scene, camera, table, pipeline=None, *, hardware=None, rou
         raise ConfigError("scene: no triangle lies in the glossy plane y = 0 (models 'glossy_floor')")
     pts = p0[in_plane].reshape(-1, 3)
     rect = (pts[:, 0].min(), pts[:, 0].max(), pts[:, 2].min(), pts[:, 2].max())
-    rcam = reflection_camera(camera, rect, roughness, map_texels)
-    others = _Sub(p0[~in_plane], p1[~in_plane], col[~in_plane])
+    rcam = reflection_camera(camera, rect, roughness, map_texels, mode, ior)
+    # the map sees the far side of the plane only: above it for reflection, below it for refraction
+    side = p0[:, :, 1].mean(axis=1) > 0 if mode == "reflection" else p0[:, :, 1].mean(axis=1) < 0
+    keep = ~in_plane & side
+    others = _Sub(p0[keep], p1[keep], col[keep])
     spp = table.spp
     mtable = SampleTable.stratified(spp=spp, seed=seed)
     rmap = render(others, rcam, mtable, pipeline, hardware=hardware, timing=False)
