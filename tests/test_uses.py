@@ -264,6 +264,10 @@ def test_caustic_intervals_inside_the_conservative_bounds_and_zhat_holds_the_bea
     assert r.flat_stats["caustics.zhat_misses"] == 0
     assert r.flat_stats["caustics.zhat_over_path"] >= 1.0
     assert r.flat_stats["caustics.volumes"] == 200
+    assert r.arrays["fill_moving"].sum() == r.flat_stats["caustics.fill_moving"]
+    assert r.arrays["fill_prism"].sum() == r.flat_stats["caustics.fill_prism"]
+    fill = uses.caustic_volumes(sc, cam, photons=2000, path_samples=10, image="fill")
+    assert fill.image.shape == (48, 96, 3)
 
 
 def test_caustic_light_matches_a_photon_splat():

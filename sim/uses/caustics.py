@@ -116,11 +116,14 @@ class _Tris:
 
 
 def caustic_volumes(scene, camera, table=None, pipeline=None, *, hardware=None, time_splits: int = 4,
-                    photons: int = 400_000, path_samples: int = 1500, seed: int = 0) -> UseResult:
+                    photons: int = 400_000, path_samples: int = 1500, image: str = "light", seed: int = 0
+                    ) -> UseResult:
     """The caustic volumes of ``scene`` (generators at t = 0, ends on the receiver y = 0 at t = 1, e.g.
     models 'water_caustics') through ``camera``. `table` is not used (the conservative mode tests no
     samples). Figures: caustics.volumes, fill_moving, fill_exact, fill_prism, fill_ratio, light_error,
     folded, zhat_over_path."""
+    if image not in ("light", "fill"):
+        raise ConfigError(f"point.options.image: expected 'light' or 'fill', got {image!r}")
     if isinstance(photons, bool) or not isinstance(photons, int) or not 1000 <= photons <= 50_000_000:
         raise ConfigError(f"point.options.photons: expected an integer in 1000..50000000, got {photons!r}")
     p0, p1, _ = _scene_arrays(scene)
@@ -152,7 +155,9 @@ def caustic_volumes(scene, camera, table=None, pipeline=None, *, hardware=None, 
     s0, s1, s2 = side(0, 1), side(1, 2), side(2, 0)
     centre_in = ((s0 >= 0) & (s1 >= 0) & (s2 >= 0)) | ((s0 <= 0) & (s1 <= 0) & (s2 <= 0))
     key = owner[hr["triangle"]].astype(np.int64) * (W * H) + hr["y"].astype(np.int64) * W + hr["x"]
-    fill_prism = int(len(np.unique(key[centre_in])))
+    prism_keys = np.unique(key[centre_in])
+    fill_prism = int(len(prism_keys))
+    prism_px = np.bincount(prism_keys % (W * H), minlength=W * H).reshape(H, W)
     fill_prism_tiles = int(len(np.unique(key)))
     # surface light on the floor: Phi_i / A_i where the pixel centre's floor point is inside end i
     area = lambda P: 0.5 * ((P[:, 1, 0] - P[:, 0, 0]) * (P[:, 2, 2] - P[:, 0, 2])  # noqa: E731
@@ -192,9 +197,13 @@ def caustic_volumes(scene, camera, table=None, pipeline=None, *, hardware=None, 
     np.add.at(vol, (rec["y"].astype(np.int64) * W + rec["x"])[exact],
               ((w_all_hi - w_all_lo) * mean_int[tri])[exact])
     vol = vol.reshape(H, W)
-    image = np.zeros((H, W, 3), np.float32)
-    image[..., 0] = image[..., 1] = image[..., 2] = 0.18 * light
-    image += (0.03 * vol)[..., None] * np.array([0.5, 0.8, 1.0], np.float32)
+    moving_px = np.bincount((rec["y"].astype(np.int64) * W + rec["x"])[exact], minlength=W * H).reshape(H, W)
+    if image == "light":
+        picture = np.zeros((H, W, 3), np.float32)
+        picture[..., 0] = picture[..., 1] = picture[..., 2] = 0.18 * light
+        picture += (0.03 * vol)[..., None] * np.array([0.5, 0.8, 1.0], np.float32)
+    else:  # 002 Fig. 8 in kind: shader invocations per pixel, moving triangles | hull, one heat scale
+        picture = _heat(np.concatenate([moving_px, prism_px], axis=1) / max(1, prism_px.max()))
     fill_moving = int(exact.sum())
     flat.update(figures(caustics__volumes=n_vol, caustics__fill_tiles=int(len(rec)),
                         caustics__fill_moving=fill_moving, caustics__fill_prism=fill_prism,
@@ -202,8 +211,15 @@ def caustic_volumes(scene, camera, table=None, pipeline=None, *, hardware=None, 
                         caustics__fill_ratio=fill_moving / max(fill_prism, 1), caustics__light_error=light_error,
                         caustics__folded=folded, caustics__zhat_over_path=ratio,
                         caustics__zhat_misses=zhat_misses))
-    return UseResult(np.clip(image, 0, None), dict(sorted(flat.items())),
-                     {"records": rec, "t_lo": t_lo, "t_hi": t_hi, "light": light, "splat": splat, "volume": vol})
+    return UseResult(np.clip(picture, 0, None), dict(sorted(flat.items())),
+                     {"records": rec, "t_lo": t_lo, "t_hi": t_hi, "light": light, "splat": splat, "volume": vol,
+                      "fill_moving": moving_px, "fill_prism": prism_px})
+
+
+def _heat(x):
+    """Black -> red -> yellow -> white for x in [0, 1] (linear RGB)."""
+    x = np.clip(np.asarray(x, np.float64), 0, 1)
+    return np.stack([np.clip(3 * x, 0, 1), np.clip(3 * x - 1, 0, 1), np.clip(3 * x - 2, 0, 1)], -1).astype(np.float32)
 
 
 def _inside_xz(T, X):
