@@ -32,11 +32,13 @@ test: install
 
 # The engine with AddressSanitizer + UndefinedBehaviorSanitizer (build/sanitize), loaded in place of the
 # installed module (tests/sanitize/sitecustomize.py) into every Python process of the fast test tier.
+# libstdc++ is preloaded with libasan so ASan's C++ exception interceptor finds the real __cxa_throw
+# (python itself does not link libstdc++; without it the first exception the engine throws aborts).
 # SANITIZE_TESTS narrows the run (default: the whole fast tier).
 SAN_BUILD := build/sanitize
 SANITIZE_TESTS ?=
 SAN_ENV = PYTHONPATH=$(CURDIR)/tests/sanitize RAST5D_CORE_SO=$$(ls $(CURDIR)/$(SAN_BUILD)/_core*.so) \
-	LD_PRELOAD=$$(gcc -print-file-name=libasan.so) \
+	LD_PRELOAD="$$(gcc -print-file-name=libasan.so) $$(gcc -print-file-name=libstdc++.so)" \
 	ASAN_OPTIONS=detect_leaks=0:abort_on_error=1:halt_on_error=1 \
 	UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 RAST5D_SANITIZED=1
 sanitize: install

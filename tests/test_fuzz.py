@@ -11,7 +11,7 @@ wild ones (NaN, inf, huge, negative, wrong shapes and types).
 The fast tier runs a fixed, derandomised set of examples per entry point (RAST5D_FUZZ_EXAMPLES,
 default 25); `-m slow` runs the long variant (RAST5D_FUZZ_SLOW_EXAMPLES per entry point, default
 2000, random). RAST5D_FUZZ_LOG names a JSON file that receives the count of inputs tried per entry
-point (for the record of a long run)."""
+point (per process, `<RAST5D_FUZZ_LOG>.<pid>.json`, for the record of a long run)."""
 from __future__ import annotations
 
 import atexit
@@ -29,22 +29,24 @@ from sim import params as sp
 pytestmark = pytest.mark.smoke
 
 ALLOWED = (ValueError, TypeError)
-TRIED: Counter = Counter()
 
 
 def _log():
+    """This process's counts to <RAST5D_FUZZ_LOG>.<pid>.json (rewritten, so a killed run keeps them)."""
     path = os.environ.get("RAST5D_FUZZ_LOG")
     if path and TRIED:
-        old = {}
-        if os.path.exists(path):
-            with open(path) as f:
-                old = json.load(f)
-        for k, v in TRIED.items():
-            old[k] = old.get(k, 0) + v
-        with open(path, "w") as f:
-            json.dump(old, f, indent=1, sort_keys=True)
+        with open(f"{path}.{os.getpid()}.json", "w") as f:
+            json.dump(dict(TRIED), f, indent=1, sort_keys=True)
 
 
+class _Tried(Counter):
+    def __setitem__(self, key, value):
+        super().__setitem__(key, value)
+        if sum(self.values()) % 50 == 0:
+            _log()
+
+
+TRIED = _Tried()
 atexit.register(_log)
 
 FAST = settings(max_examples=int(os.environ.get("RAST5D_FUZZ_EXAMPLES", 25)), deadline=None, derandomize=True,

@@ -136,7 +136,7 @@ def test_the_engine_version_covers_the_whole_package(monkeypatch):
     assert result_store.engine_id() != before
 
 
-@pytest.mark.parametrize("damage", ["truncate", "flip_byte", "garbage"])
+@pytest.mark.parametrize("damage", ["truncate", "flip_bytes", "garbage"])
 def test_a_damaged_point_file_is_recomputed_with_a_warning(tmp_path, store, damage):
     config = _config(tmp_path, _scene_dir(tmp_path) / "s.yaml")
     first = runner.run_sweep(config, workers=0, progress=False)
@@ -144,8 +144,9 @@ def test_a_damaged_point_file_is_recomputed_with_a_warning(tmp_path, store, dama
     data = bytearray(path.read_bytes())
     if damage == "truncate":
         data = data[: len(data) // 2]
-    elif damage == "flip_byte":  # a byte in the middle of the data pages
-        data[len(data) // 3] ^= 0x55
+    elif damage == "flip_bytes":  # a run of bytes in the middle of the data pages
+        for i in range(len(data) // 3, len(data) // 3 + 64):
+            data[i] ^= 0x55
     else:
         data = bytearray(b"not parquet at all")
     path.write_bytes(bytes(data))
@@ -183,16 +184,16 @@ def test_every_byte_of_a_point_file_is_covered(tmp_path, store):
 def test_a_failed_point_keeps_its_error_and_is_retried_on_request(tmp_path, store):
     d = _scene_dir(tmp_path)
     p = tmp_path / "f.yaml"
-    # a scene parameter's value fails only when the scene is built (spp is checked before any render)
-    p.write_text(f"scene: {{path: {d / 's.yaml'}}}\ncamera: {{width: 16, height: 16}}\n"
-                 "sweep:\n  scene: [{path: " + str(d / "s.yaml") + "}, {name: quad, params: {size: -1.0}}]\n")
+    # the memory limit is checked when the point renders (a valid config, a failing render)
+    p.write_text(f"scene: {{path: {d / 's.yaml'}}}\ncamera: {{width: 256, height: 256}}\nsamples: {{spp: 2}}\n"
+                 "sweep:\n  pipeline.memory_limit_bytes: [4294967296, 1048576]\n")
     config = xc.load_config(p)
     df = runner.run_sweep(config, workers=0, progress=False)
-    assert df["status"].tolist() == ["ok", "error"] and "size" in df["error"].iloc[1]
+    assert df["status"].tolist() == ["ok", "error"] and "memory" in df["error"].iloc[1]
     stored = [result_store.read_point_file(f) for f in (store / "points").glob("*.parquet")]
     failed = [r for r in stored if r["status"] == "error"]
-    assert len(failed) == 1 and "size" in failed[0]["error"] and "Traceback (most recent call last)" in failed[0][
-        "traceback"] and "registry.py" in failed[0]["traceback"]
+    assert len(failed) == 1 and "memory" in failed[0]["error"] and "Traceback (most recent call last)" in failed[0][
+        "traceback"] and "render.py" in failed[0]["traceback"]
     # served from the store, error and all
     again = runner.run_sweep(config, workers=0, progress=False)
     assert again.attrs["summary"]["rendered"] == 0 and again.attrs["summary"]["failed_cached"] == 1

@@ -4,6 +4,7 @@
 
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <random>
 #include <string>
 #include <vector>
@@ -136,11 +137,18 @@ void register_selftest(py::module_& m) {
       "texel_address",
       [](int height, int width, const std::string& layout, int level, int x, int y) {
         const TexLayout lay = choice_value<TexLayout>(layout, "layout");
+        if (height < 1 || height > 16384 || width < 1 || width > 16384)
+          throw std::invalid_argument("height, width: expected 1..16384, got " + std::to_string(height) + " x " +
+                                      std::to_string(width));
         std::vector<float> img(static_cast<std::size_t>(height) * width, 0.0f);
         TextureSet ts;
         ts.add(img.data(), height, width, 1);
         ts.layout(lay);
         if (level < 0 || level >= ts.levels(0)) throw std::invalid_argument("level: out of range");
+        const int lw = std::max(1, width >> level), lh = std::max(1, height >> level);
+        if (x < 0 || x >= lw || y < 0 || y >= lh)
+          throw std::invalid_argument("x, y: expected a texel of the " + std::to_string(lw) + " x " + std::to_string(lh) +
+                                      " level, got (" + std::to_string(x) + ", " + std::to_string(y) + ")");
         return ts.address(0, level, x, y);
       },
       py::arg("height"), py::arg("width"), py::arg("layout"), py::arg("level"), py::arg("x"), py::arg("y"),
