@@ -148,6 +148,19 @@ def _texture_ids(value: Any, n: int, n_textures: int) -> np.ndarray:
     return array
 
 
+def _alpha(value: Any, n: int) -> np.ndarray:
+    """(N,) opacity per triangle (or one number for all), finite and in [0, 1]."""
+    array = _as_numeric_array("alpha", value).astype(np.float64)
+    if array.ndim == 0:
+        array = np.full(n, float(array))
+    _check_shape("alpha", array, (n,), f"({n},)")
+    bad = ~np.isfinite(array) | (array < 0.0) | (array > 1.0)
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise SceneError(f"alpha: triangle {i} has opacity {float(array[i])!r}, expected a number in [0, 1]")
+    return np.array(array, dtype=np.float32)
+
+
 def _camera_hint(value: Any) -> dict:
     if value is None:
         return {}
@@ -211,6 +224,7 @@ class Scene:
     texture_ids: np.ndarray  # (N,) int32 index into textures, -1 = untextured
     name: str = "scene"
     camera_hint: dict = field(default_factory=dict)  # keys a subset of CAMERA_HINT_KEYS
+    alpha: np.ndarray | None = None  # (N,) float32 opacity in [0, 1] (stochastic transparency), or None
 
     def __post_init__(self) -> None:
         positions = _as_numeric_array("positions", self.positions)
@@ -242,6 +256,8 @@ class Scene:
         if not isinstance(self.name, str):
             raise SceneError(f"name: expected a string, got {self.name!r}")
         self.camera_hint = _camera_hint(self.camera_hint)
+        if self.alpha is not None:
+            self.alpha = _alpha(self.alpha, n)
 
     # ----------------------------------------------------------------------------------------------
     @staticmethod
@@ -322,6 +338,7 @@ class Scene:
             texture_ids=self.texture_ids.copy(),
             name=self.name,
             camera_hint=dict(self.camera_hint),
+            alpha=None if self.alpha is None else self.alpha.copy(),
         )
         fields.update(changes)
         return Scene(**fields)
@@ -354,6 +371,11 @@ class Scene:
         """A copy whose camera_hint has these keys set (the other keys are kept)."""
         return self._replace(camera_hint={**self.camera_hint, **keys})
 
+    def with_alpha(self, alpha: Any) -> "Scene":
+        """Same geometry with opacity alpha per triangle ((N,) or one number; None: opaque): a render
+        then keeps each covered sample with probability alpha (stochastic transparency, 003)."""
+        return self._replace(alpha=None if alpha is None else _alpha(alpha, self.n_triangles))
+
     def with_color(self, color: Any) -> "Scene":
         """Same geometry with every vertex colour set to color (r, g, b), linear."""
         return self._replace(colors=_colors(color, self.n_triangles))
@@ -381,6 +403,10 @@ class Scene:
                 [s.uvs if s.uvs is not None else np.zeros((s.n_triangles, 3, 2), np.float32) for s in scenes]
             )
         hint = next((dict(s.camera_hint) for s in scenes if s.camera_hint), {})
+        alpha = None
+        if any(s.alpha is not None for s in scenes):  # opaque where a scene has no alpha
+            alpha = np.concatenate([s.alpha if s.alpha is not None else np.ones(s.n_triangles, np.float32)
+                                    for s in scenes])
         return Scene(
             positions=np.concatenate([s.positions for s in scenes]),
             positions_t1=np.concatenate([s.positions_t1 for s in scenes]),
@@ -390,6 +416,7 @@ class Scene:
             texture_ids=np.concatenate(ids).astype(np.int32),
             name=name or "+".join(s.name for s in scenes),
             camera_hint=hint,
+            alpha=alpha,
         )
 
     def __repr__(self) -> str:

@@ -22,6 +22,7 @@ from .sample_table import SampleTable
 from .intervals import ConservativeResult, OcclusionResult, conservative_raster, occlusion_query
 from .stats import counter_docs
 from . import energy, timing
+from . import uses
 
 __all__ = [
     "Camera",
@@ -50,5 +51,6 @@ __all__ = [
     "texture_filters",
     "texture_layouts",
     "timing",
+    "uses",
     "write_png",
 ]

@@ -53,6 +53,8 @@ class RenderParams:
     texture_count: int  # Textures read per shader lane, 0..4 (0: untextured, the vertex colour) [textures]; default 0
     texture_filter: str  # 'bilinear' (nearest mip level) or 'trilinear'; level of detail from analytic per-triangle derivatives (texture_filters: bilinear, trilinear); default 'trilinear'
     texture_layout: str  # Texel layout in memory: 'linear' (row-major), 'blocked' (4x4 texel blocks) or 'morton' (4x4 blocks in Morton order) (texture_layouts: linear, blocked, morton); default 'blocked'
+    alpha_seed: int  # Seed of the per-sample random alpha masks (scenes with alpha: a covered sample of a triangle survives with probability alpha); default 0
+    alpha_stratified: bool  # Alpha masks stratified over a pixel's samples (one random offset per pixel and triangle: floor or ceil of alpha x spp samples kept) instead of independent per sample; default False
     motion_test: str  # tile, moving triangles: 'intervals' (t̂ and lens sets per time sub-interval, samples indexed by time stratum) or 'bounds' (h_i lines over the shutter ends, no t̂) (motion_tests: intervals, bounds); default 'intervals'
     time_splits: int  # Time sub-intervals S per shutter (1, 2, 4, 8, 16): tile computes t̂ (and 5D lens sets) per sub-interval; default 1
     time_strata: int  # Time strata per lens cell in the sample-table index (1..64, a multiple of time_splits): tile walks only the strata that overlap t̂; default 8
@@ -106,6 +108,7 @@ def render(
     uvs: npt.NDArray[np.float32] | None = None,  # (N, 3, 2) texture coordinates
     tex_slots: npt.NDArray[np.int32] | None = None,  # (N, 4) texture index per slot, -1 unused
     textures: list[npt.NDArray[np.float32]] = ...,  # (H, W, 1..4) linear images
+    alpha: npt.NDArray[np.float32] | None = None,  # (N,) opacity: per-sample alpha coverage (backend/alpha.h)
 ) -> dict[str, Any]:
     """Returns {'image': (H, W, 3) float32, 'counters': {name: int}}, with params.record_timing
     'timing_records' (timing_record_dtype(), culled triangles then bins in raster order) and, with export_samples,

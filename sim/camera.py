@@ -13,6 +13,9 @@ Conventions (ARCHITECTURE.md §Geometric conventions; docs/conventions.md):
   with ``k_x = R s_x / F`` (``R`` the aperture radius in world units).
 * The user-facing blur is ``coc_px``: the CoC radius at infinity in pixels, ``K = k_x W / 2``
   (= ``k_y H / 2``): a point at depth ``w`` is blurred over a disc of radius ``K |1 - F / w|`` px.
+* ``shift`` (default (0, 0)) moves the principal point by (shift_x, shift_y) in normalised device
+  coordinates: ``x_c = s_x x_v + shift_x w`` (an off-centre viewport, e.g. a reflection map that
+  tightly encloses a glossy surface, 002 §6). The lens shear is unchanged (it is linear in w - F).
 * Time: vertices move linearly in world space from ``t = 0`` to ``t = 1``. The shutter interval
   ``[open, close]`` is applied by moving the scene's endpoints to ``open`` and ``close`` before
   projection, so the sample table's ``t`` in ``[0, 1)`` spans the open shutter.
@@ -61,6 +64,7 @@ class Camera:
         up=None,
         near: float = 0.05,
         shutter=(0.0, 1.0),
+        shift=(0.0, 0.0),
     ):
         self.width = check_int(_OWNER, "width", width, 1, 16384)
         self.height = check_int(_OWNER, "height", height, 1, 16384)
@@ -89,6 +93,11 @@ class Camera:
         if s_close < s_open:
             raise ConfigError(f"{_OWNER}.shutter: expected open <= close, got {shutter!r}")
         self.shutter = (s_open, s_close)
+        try:
+            sh_x, sh_y = shift
+        except (TypeError, ValueError):
+            raise ConfigError(f"{_OWNER}.shift: expected (x, y), got {shift!r}") from None
+        self.shift = (check_float(_OWNER, "shift", sh_x, lo=-1e6, hi=1e6), check_float(_OWNER, "shift", sh_y, lo=-1e6, hi=1e6))
         self._pose_given = eye is not None or target is not None or up is not None
         self.eye = np.zeros(3) if eye is None else _vec3("eye", eye)
         self.target = np.array([0.0, 0.0, -1.0]) + self.eye if target is None else _vec3("target", target)
@@ -148,7 +157,10 @@ class Camera:
         m = self.view_matrix()
         v = p @ m[:3, :3].T + m[:3, 3]
         w = -v[..., 2]
-        return np.stack([self._s_x * v[..., 0], self._s_y * v[..., 1], w - self.near, w], axis=-1)
+        x, y = self._s_x * v[..., 0], self._s_y * v[..., 1]
+        if self.shift != (0.0, 0.0):  # off-centre viewport: the principal point moves by shift (NDC)
+            x, y = x + self.shift[0] * w, y + self.shift[1] * w
+        return np.stack([x, y, w - self.near, w], axis=-1)
 
     def clip_to_engine(self, clip: np.ndarray) -> np.ndarray:
         """(..., 4) clip -> (..., 3) pixel-homogeneous (X_h, Y_h, W) in float64."""
@@ -189,6 +201,7 @@ class Camera:
             "lens": self.lens,
             "near": self.near,
             "shutter": list(self.shutter),
+            "shift": list(self.shift),
             "eye": self.eye.tolist(),
             "target": self.target.tolist(),
             "up": self.up.tolist(),

@@ -93,6 +93,27 @@ def _scene_arrays(scene) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return p0, p1, col
 
 
+def _scene_alpha(scene, n: int) -> np.ndarray | None:
+    """The scene's per-triangle opacity (optional attribute ``alpha``, (N,) in [0, 1]) as float32, or
+    None when absent or all 1 (opaque: the engine then skips the alpha masks)."""
+    alpha = getattr(scene, "alpha", None)
+    if alpha is None:
+        return None
+    try:
+        a = np.asarray(alpha, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise SceneInputError(f"scene.alpha: not a numeric array ({type(alpha).__name__})") from None
+    if a.shape != (n,):
+        raise SceneInputError(f"scene.alpha: expected shape ({n},), got {a.shape}")
+    bad = ~np.isfinite(a) | (a < 0) | (a > 1)
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise SceneInputError(f"scene.alpha: triangle {i} has opacity {float(a[i])!r}, expected [0, 1]")
+    if np.all(a >= 1.0):
+        return None
+    return np.ascontiguousarray(a, dtype=np.float32)
+
+
 def memory_parts(camera: Camera, spp: int, n_triangles: int, config: PipelineConfig, threads: int,
                  export_samples: bool = False, timing: bool = True, period: int = 0,
                  timing_per_visit: bool = False) -> dict[str, int]:
@@ -239,10 +260,11 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     uvs, slots, textures, sample_dist, col = texture_inputs(scene, p0, col, config, samples)
     params.texture_sample_distribution_index = sample_dist
     col32 = col.astype(np.float32)
+    alpha = _scene_alpha(scene, p0.shape[0])
     t0 = time.perf_counter()
     try:
         out = _core.render(params, v0, v1, col32, samples, lens_index, lens_uv, export_samples,
-                           uvs=uvs, tex_slots=slots, textures=textures)
+                           uvs=uvs, tex_slots=slots, textures=textures, alpha=alpha)
     except ValueError as e:  # invalid_argument from the engine: name it as a config error
         msg = str(e)
         raise ConfigError(f"PipelineConfig.{msg}" if msg.startswith("sample_fraction:") else msg) from None

@@ -82,6 +82,9 @@ def counter_docs() -> dict[str, tuple[str, str]]:
     docs.update(timing_docs())  # the timing model's figures (docs/timing.md)
     docs.update(sampling_docs())  # sampled simulation (sim/sampling.py)
     docs.update(energy_docs())  # the energy estimate (sim.energy, docs/energy.md)
+    from .uses.common import figure_docs
+
+    docs.update(figure_docs())  # the figures of the rasterizer's uses (sim/uses/)
     return docs
 
 

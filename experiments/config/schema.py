@@ -279,8 +279,10 @@ class PointSpec(_Strict):
     1 x 1 tiles, per-pixel t-z boxes); `retime` re-times the stored work records of the render on the
     hardware `hardware` (sim.timing.estimate, no re-render when the records are in the result store)."""
 
-    kind: Literal["render", "occlusion_query", "conservative", "retime"] = Field(
-        "render", description="render | occlusion_query | conservative | retime")
+    kind: Literal["render", "occlusion_query", "conservative", "retime", "transparency", "sampler", "soft_shadows",
+                  "caustics", "glossy"] = Field(
+        "render", description=("render | occlusion_query | conservative | retime | a use of the rasterizer "
+                               "(sim.uses.USES): transparency | sampler | soft_shadows | caustics | glossy"))
     query: Optional[SceneSpec] = Field(None, description="occlusion_query: the query scene (the config's scene "
                                                          "is the occluders)")
     mode: QueryModeName = Field("samples", description=(
@@ -288,6 +290,9 @@ class PointSpec(_Strict):
     hardware: dict[str, Any] = Field(default_factory=dict, description=(
         "retime: hardware keys deep-merged over the config's hardware section for the timing estimate "
         "(the render itself uses the config's hardware)"))
+    options: dict[str, Any] = Field(default_factory=dict, description=(
+        "A use kind's options (keyword arguments of its sim.uses function, e.g. reference_spp); unknown "
+        "keys are errors"))
 
     @model_validator(mode="after")
     def _check(self):
@@ -295,6 +300,16 @@ class PointSpec(_Strict):
             raise ValueError("point.query: needed by kind 'occlusion_query' and only by it")
         if self.hardware and self.kind != "retime":
             raise ValueError("point.hardware: only for kind 'retime'")
+        from sim import uses
+
+        if self.options and self.kind not in uses.USES:
+            raise ValueError(f"point.options: only for the use kinds ({', '.join(uses.USES)})")
+        if self.kind in uses.USES:
+            known = uses.use_options(self.kind)
+            unknown = sorted(set(self.options) - set(known))
+            if unknown:
+                raise ValueError(f"point.options: unknown option {unknown[0]!r} for kind {self.kind!r} "
+                                 f"(known: {', '.join(sorted(known))})")
         return self
 
 

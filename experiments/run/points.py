@@ -7,6 +7,9 @@ and the row it leaves in the result store.
   `query.samples_passed`.
 - conservative: sim.conservative_raster of the scene (1 x 1 tiles, per-pixel t-z boxes); its
   counters and `conservative.pixels_covered`.
+- transparency, sampler, soft_shadows, caustics, glossy: the uses of the rasterizer (sim.uses, run by
+  experiments/run/uses.py with `point.options`): the image and counters of the use's main pass and its
+  figures (sim.uses.FIGURES).
 - retime: sim.timing.estimate on the stored work records of the point's render (store.records_path;
   rendered once on first use) with `point.hardware` merged over the hardware section; the render's
   counters and the re-timed `timing.*` figures.
@@ -21,6 +24,7 @@ from pathlib import Path
 from ..config import RESULT_EXCLUDE, RenderConfig, build, build_scene, config_hash, flatten, point_columns
 from ..config.inputs import input_digests, tracking_reads
 from .store import cached_records, engine_id, git_rev, store_records
+from .uses import USE_KINDS
 
 
 def config_columns(config: RenderConfig) -> dict:
@@ -148,14 +152,15 @@ def _retime(config, row, image_path, threads):
 
 POINT_KINDS = {"render": _render, "occlusion_query": _occlusion_query, "conservative": _conservative,
                "retime": _retime}
+POINT_KINDS.update(USE_KINDS)  # the uses of the rasterizer (experiments/run/uses.py)
 
 
 def render_point(config: RenderConfig, image_path: str | Path | None = None, threads: int | None = None
                  ) -> tuple[dict, object]:
     """Compute one (non-swept) point: (row, the sim result of its kind)."""
     kind = config.point.kind
-    if image_path is not None and kind != "render":
-        raise ValueError(f"outputs.images: only render points have images, got point kind {kind!r}")
+    if image_path is not None and kind not in ("render", *USE_KINDS):
+        raise ValueError(f"outputs.images: only render and use points have images, got point kind {kind!r}")
     row = config_columns(config)
     result = POINT_KINDS[kind](config, row, image_path, threads)
     row.update(status="ok", error="", **{"engine.version": engine_id(), "engine.git_rev": git_rev()})

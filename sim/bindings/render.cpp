@@ -20,7 +20,8 @@ void register_render(py::module_& m) {
       "render",
       [](const RenderParams& p, const FArr& v0, const FArr& v1, const FArr& colors, const FArr& samples,
          const IArr& lens_index, const FArr& lens_uv, bool export_samples, std::optional<FArr> uvs,
-         std::optional<IArr> tex_slots, std::vector<FArr> textures, std::optional<IArr> bins) {
+         std::optional<IArr> tex_slots, std::vector<FArr> textures, std::optional<IArr> bins,
+         std::optional<FArr> alpha) {
         require_shape(v0, {-1, 3, 3}, "v0");
         const py::ssize_t n = v0.shape(0);
         require_shape(v1, {n, 3, 3}, "v1");
@@ -36,6 +37,11 @@ void register_render(py::module_& m) {
           require_shape(*tex_slots, {n, kMaxTexSlots}, "tex_slots");
           require_finite(*uvs, "uvs");
           scene.uvs = uvs->data(), scene.tex_slots = tex_slots->data();
+        }
+        if (alpha) {  // per-triangle opacity (stochastic transparency)
+          require_shape(*alpha, {n}, "alpha");
+          require_finite(*alpha, "alpha");
+          scene.alpha = alpha->data();
         }
         for (std::size_t i = 0; i < textures.size(); ++i) {
           const FArr& t = textures[i];
@@ -106,6 +112,7 @@ void register_render(py::module_& m) {
       py::arg("params"), py::arg("v0"), py::arg("v1"), py::arg("colors"), py::arg("samples"),
       py::arg("lens_index"), py::arg("lens_uv"), py::arg("export_samples") = false, py::arg("uvs") = py::none(),
       py::arg("tex_slots") = py::none(), py::arg("textures") = std::vector<FArr>(), py::arg("bins") = py::none(),
+      py::arg("alpha") = py::none(),
       "Render pixel-homogeneous triangles; returns {'image', 'counters'[, 'timing_records'][, "
       "'sample_depth', 'sample_triangle'][, 'bin_counters', 'bins', 'bin_stratum', 'strata_sizes', "
       "'bin_work']}. bins (or params.sample_fraction < 1: a stratified draw): render only these screen bins "

@@ -536,7 +536,21 @@ def core_texel_level(d):
     _sim()._core.texel_address(4, 4, "linear", 9, 0, 0)
 
 
+@case("Python API", "a scene opacity (alpha) of 1.5 for stochastic transparency", "SceneInputError",
+      r"scene\.alpha: triangle 1 has opacity 1\.5, expected \[0, 1\]", "the triangle and its opacity")
+def alpha_out_of_range(d):
+    scene = _Arrays(_tri(2))
+    scene.alpha = np.array([0.5, 1.5])
+    _render(scene)
+
+
 # ---- YAML configs ------------------------------------------------------------------------------------
+
+@case("YAML config", "an option a use kind does not have (point.options.spp for kind glossy)", "ConfigError",
+      r"point\.options: unknown option 'spp' for kind 'glossy'", "the option, the kind and the known options")
+def yaml_use_unknown_option(d):
+    _config(d, "scene: {name: glossy_floor}\npoint: {kind: glossy, options: {spp: 4}}\n")
+
 
 @case("YAML config", "an unknown key (camera.heigth)", "ConfigError", r"c\.yaml:4: unknown key 'camera\.heigth'",
       "the file, the line and the key")

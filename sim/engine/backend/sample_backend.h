@@ -1,9 +1,10 @@
 // The per-sample backend of the sample pipeline (traversal/sample_pipeline.h): a covered sample
-// is rejected by the user clip box (intervals/clip.h), gets its depth (near plane), runs the depth
+// is rejected by the user clip box (intervals/clip.h), gets its depth (near plane), survives the
+// alpha mask of a transparent triangle (backend/alpha.h), runs the depth
 // test against the bin's depth buffer (backend/bin_buffers.h), and on a pass writes depth, colour
 // and triangle index, textures the colour (backend/texture.h) and joins the open shading visit
 // (backend/shading.h). Counters: depth.*, raster.samples_covered / _hit / _near_rejected,
-// interval.samples_clipped, occlusion.samples_passed, ops.interp.
+// alpha.*, interval.samples_clipped, occlusion.samples_passed, ops.interp.
 //
 // Contract: the image depends only on the triangle and the sample (never on the algorithm, the
 // shading mode or the arithmetic path); depth-read skipping (zmin-culling) changes counters only.
@@ -12,6 +13,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "backend/alpha.h"
 #include "backend/bin_buffers.h"
 #include "backend/shading.h"
 #include "core/arith.h"
@@ -54,6 +56,13 @@ class SampleBackend {
       return;
     }
     ++c_[Counter::raster_samples_hit];
+    if (tri.alpha < 1.0f) {  // stochastic transparency: the sample survives with probability alpha
+      ++c_[Counter::alpha_samples_tested];
+      if (!alpha_keeps(tri.alpha, px, py, s, f_.table.spp(), f_.p.alpha_stratified, tri.index, alpha_seed_)) {
+        ++c_[Counter::alpha_samples_discarded];
+        return;
+      }
+    }
     ++c_[Counter::depth_tests];
     if (skip_depth_reads_) ++c_[Counter::depth_reads_skipped];
     else c_[Counter::depth_bytes_read] += 4;
@@ -122,6 +131,7 @@ class SampleBackend {
   ShadeState& sh_;
   const iv::ClipBox clip_ = iv::clip_box(f_.p);
   const bool clip_active_ = clip_.active();
+  const std::uint32_t alpha_seed_ = static_cast<std::uint32_t>(f_.p.alpha_seed);
   bool skip_depth_reads_ = false, query_ = false;
 };
 

@@ -48,6 +48,7 @@ struct TriSetup {
   float dX[3], dY[3], dW[3];
   float cx[3], cy[3];
   float color[3][3];
+  float alpha = 1.0f;  // opacity (scene alpha; < 1: per-sample alpha coverage, backend/alpha.h)
   // Conservative pixel bounds, clipped to the image: [bx0, bx1) x [by0, by1), and the unrounded
   // bounds they came from (before widening and clipping).
   int bx0 = 0, by0 = 0, bx1 = 0, by1 = 0;

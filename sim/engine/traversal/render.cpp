@@ -149,6 +149,7 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
         alive[i] = p.op_count == OpCount::kExact
                        ? setup_triangle<ExactArith>(v0, v1, col, i, p, fc, setups[i], setup_counters[t])
                        : setup_triangle<FastArith>(v0, v1, col, i, p, fc, setups[i], setup_counters[t]);
+        if (scene.alpha) setups[i].alpha = scene.alpha[i];
       }
     };
     std::vector<std::thread> pool;
