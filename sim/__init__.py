@@ -16,11 +16,11 @@ from .pipeline import (PipelineConfig, algorithm_docs, algorithm_names, interlea
 from .png import linear_to_srgb8, write_png
 
 from .camera import Camera
-from .render import Result, memory_estimate, render
+from .render import Result, memory_estimate, render, trace_pixel
 from .sample_table import SampleTable
 from .intervals import ConservativeResult, OcclusionResult, conservative_raster, occlusion_query
 from .stats import counter_docs
-from . import timing
+from . import pixel_stats, timing
 
 __all__ = [
     "Camera",
@@ -42,10 +42,12 @@ __all__ = [
     "interleaved_algorithms",
     "linear_to_srgb8",
     "memory_estimate",
+    "pixel_stats",
     "render",
     "shading_modes",
     "texture_filters",
     "texture_layouts",
     "timing",
+    "trace_pixel",
     "write_png",
 ]

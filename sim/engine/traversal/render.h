@@ -11,6 +11,7 @@
 
 #include "core/counters.h"
 #include "core/params.h"
+#include "core/pixel_stats.h"
 #include "core/sample_table.h"
 #include "timing/timing.h"
 
@@ -43,13 +44,25 @@ struct RenderResult {
   // then per screen bin in raster order one record per (triangle, bin) visit in submission order.
   // Independent of the thread count.
   std::vector<TileWork> timing_records;
+  // Pixel trace (PixelStats::tracing()): the events and samples of the traced pixel, in order.
+  std::vector<TraceEvent> trace_events;
+  std::vector<TraceSample> trace_samples;
+};
+
+// Optional observers of one render. pixel_stats: per-pixel counter maps (core/pixel_stats.h),
+// filled in place; in trace mode only the traced pixel's bin is rasterized. progress(done, total)
+// is called from the calling thread with the screen bins finished so far, every few milliseconds.
+struct RenderObservers {
+  PixelStats* pixel_stats = nullptr;
+  std::function<void(int, int)> progress;
 };
 
 // Throws std::invalid_argument for bad parameters. `interrupted` is polled from the calling
 // thread every few milliseconds while workers run; when it returns true the render stops and
 // RenderResult::interrupted is set.
 RenderResult render(const RenderParams& p, const SceneArrays& scene, const SampleTable& table,
-                    const std::function<bool()>& interrupted, bool export_samples = false);
+                    const std::function<bool()>& interrupted, bool export_samples = false,
+                    const RenderObservers& observers = {});
 
 void validate_params(const RenderParams& p, const SampleTable& table);
 // The checks that need no sample table (image size, tile and bin sizes, intervals, shading...).
