@@ -124,3 +124,95 @@ def write_heatmaps(result, out_dir, tile: int = 1, names=None) -> list[Path]:
         plt.close(fig)
         files.append(path)
     return files
+
+
+# ---- plot kinds `image` and `heatmap` with `map:` (report pages) -----------------------------------
+
+MAX_PANELS = 6
+
+
+def point_pictures(spec, config, d, out_base: Path | None) -> dict:
+    """`kind: image` (the rendered image) or `kind: heatmap` with `map:` (a Result.pixel_stats map,
+    or 'tile.cull_reason') of the sweep points left by `where:`, one panel per `facet` value (one
+    panel without facet). The points are re-rendered when the page is drawn (maps are not stored)."""
+    import matplotlib
+
+    from ..config import config_hash, expand_sweep
+    from ..run import render_point
+    from .figures import STYLE, _plt, _save, facet_title, grid_shape, value_label
+    from .frames import PlotError, label, same, unique
+
+    what = f"plot {spec.title or spec.kind!r}"
+    if "config_hash" not in d.columns:
+        raise PlotError(f"{what}: needs the points' config_hash column")
+    facets = unique(d[spec.facet]) if spec.facet else [None]
+    if len(facets) > MAX_PANELS:
+        raise PlotError(f"{what}: {len(facets)} panels (at most {MAX_PANELS}); narrow it with where:")
+    by_hash = {config_hash(pc): pc for _, pc in expand_sweep(config)}
+    picks = []
+    for f in facets:
+        sub = d if f is None else d[[same(v, f) for v in d[spec.facet]]]
+        hashes = unique(sub["config_hash"])
+        if len(hashes) != 1:
+            raise PlotError(f"{what}: where: leaves {len(hashes)} points" + (f" for {spec.facet} = {label(f)}" if f is not None else "")
+                            + "; pick one with where:")
+        if hashes[0] not in by_hash:
+            raise PlotError(f"{what}: point {hashes[0]} is not in the config's sweep")
+        picks.append((f, by_hash[hashes[0]], sub.iloc[0]))
+    plt = _plt()
+    rows_md = []
+    name = spec.map or "image"
+    with matplotlib.rc_context(STYLE):
+        nr, nc = grid_shape(len(picks))
+        fig, axes = plt.subplots(nr, nc, figsize=(3.0 * nc + (1.6 if name == "tile.cull_reason" else 0.6), 2.8 * nr),
+                                 squeeze=False)
+        flat = [a for r in axes for a in r]
+        for ax, (f, pc, row) in zip(flat, picks):
+            options = {"pixel_stats": True} if spec.kind == "heatmap" else None
+            _, res = render_point(pc, options=options)
+            title = facet_title(spec.facet, f) if f is not None else None
+            tile = int(pc.pipeline.tile_size)
+            if spec.kind == "image":
+                from sim.png import linear_to_srgb8
+
+                ax.imshow(linear_to_srgb8(res.image), interpolation="nearest")
+                ax.set_xticks([])
+                ax.set_yticks([])
+                ax.grid(False)
+                if title:
+                    ax.set_title(title)
+                rows_md.append(([label(f)] if f is not None else []) + [f"{res.image.shape[1]}x{res.image.shape[0]}"])
+            elif name == "tile.cull_reason":
+                draw_reason(ax, res.pixel_stats, tile, title=title)
+                ax.grid(False)
+                import sim
+
+                reason, names = sim.pixel_stats.cull_reason(res.pixel_stats, tile)
+                counts = [int((reason == i).sum()) for i in range(len(names))]
+                rows_md.append(([label(f)] if f is not None else [])
+                               + [", ".join(f"{REASON_LABELS.get(n, n)} {c}" for n, c in zip(names, counts) if c)])
+            else:
+                if name not in res.pixel_stats:
+                    raise PlotError(f"{what}: map {name!r} is not a per-pixel map; known: "
+                                    f"{', '.join(sorted(res.pixel_stats))}, tile.cull_reason")
+                values, per_tile = map_values(res.pixel_stats, name, tile)
+                draw_map(ax, values, map_label(name, per_tile), fig, title=title)
+                ax.grid(False)
+                rows_md.append(([label(f)] if f is not None else [])
+                               + [f"{int(res.pixel_stats[name].sum()):,}", f"{float(values.max()):,.0f}"])
+        for a in flat[len(picks):]:
+            a.set_visible(False)
+        if spec.title:
+            fig.suptitle(spec.title, fontsize=9)
+        files = _save(fig, out_base, dpi=150)
+        plt.close(fig)
+    from .tables import md_table
+
+    head = [value_label(spec.facet)] if spec.facet else []
+    if spec.kind == "image":
+        head += ["image size"]
+    elif name == "tile.cull_reason":
+        head += ["tiles by most frequent verdict"]
+    else:
+        head += [f"{name} frame total", "largest " + ("per tile" if name.startswith(TILE_LEVEL) else "per pixel")]
+    return {"files": files, "markdown": md_table(head, rows_md), "fits": []}

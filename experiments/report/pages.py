@@ -60,10 +60,18 @@ def section_markdown(config: RenderConfig, config_path: Path, df, out_dir: Path,
         return lines + [f"**Error:** {e}", ""]
     if o.images and "config_hash" in dfd.columns:  # the points' images, for image_grid plots
         dfd = dfd.assign(**{"image.path": [str(images_dir(config.name) / f"{h}.png") for h in dfd["config_hash"]]})
+    shown: list = []  # data tables already on the page, by figure
     for i, spec in enumerate(o.plots):
         base = out_dir / f"{config.name}_{i + 1}" if len(o.plots) > 1 else out_dir / config.name
         try:
-            res = render_plot(spec, dfd, base)
+            if spec.kind == "image" or spec.map is not None:  # pictures of single points
+                from .heatmaps import point_pictures
+                from .frames import apply_where
+
+                dd = dfd[dfd["status"] == "ok"] if "status" in dfd.columns else dfd
+                res = point_pictures(spec, config, apply_where(dd, spec.where), base)
+            else:
+                res = render_plot(spec, dfd, base)
         except PlotError as e:
             lines += [f"**Plot error:** {e}", ""]
             continue
@@ -77,7 +85,11 @@ def section_markdown(config: RenderConfig, config_path: Path, df, out_dir: Path,
             png = res["files"][0]
             lines += [f"![{spec.title or config.name}]({png.name})", "",
                       f"[PDF]({png.with_suffix('.pdf').name})", ""]
-            lines += ["<details><summary>data</summary>", ""] + res["markdown"] + ["", "</details>", ""]
+            if res["markdown"] in shown:  # one data table per figure: the same table is not repeated
+                lines += [f"Data: the table under figure {shown.index(res['markdown']) + 1} of this section.", ""]
+            else:
+                lines += ["<details><summary>data</summary>", ""] + res["markdown"] + ["", "</details>", ""]
+            shown.append(res["markdown"])
         else:
             lines += res["markdown"] + [""]
     ok = df[df["status"] == "ok"] if "status" in df.columns else df
