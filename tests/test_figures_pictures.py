@@ -90,3 +90,20 @@ def test_point_pictures_of_a_config(tmp_path):
 
     with pytest.raises(PlotError, match="leaves 2 points"):
         heatmaps.point_pictures(xc.PlotSpec(kind="image"), cfg, rows, None)
+
+
+def test_scatters_of_the_same_rows_share_one_data_table(tmp_path):
+    from pathlib import Path
+
+    from experiments.report import pages
+
+    df = _frame().assign(**{"raster.samples_tested": lambda d: d["ops.total"] * 3, "time.wall_s": 1.0})
+    plots = [{"kind": "scatter", "x": x, "y": "camera.coc_px", "hue": "pipeline.algorithm"}
+             for x in ("ops.total", "raster.samples_tested")]
+    cfg = xc.validate({"name": "s", "scene": {"name": "spot_wall"},
+                       "outputs": {"page": "s", "plots": plots}}, "s")
+    text = "\n".join(pages.section_markdown(cfg, Path("nowhere.yaml"), df, tmp_path, "cmd"))
+    assert text.count("<summary>data</summary>") == 1
+    assert "Data: the table under figure 1 of this section (column `raster.samples_tested`)" in text
+    head = next(line for line in text.splitlines() if line.startswith("| pipeline.algorithm"))
+    assert "ops.total" in head and "raster.samples_tested" in head

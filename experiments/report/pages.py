@@ -9,6 +9,8 @@ Configs whose file name starts with `_` are bases for `extends:` and are not run
 """
 from __future__ import annotations
 
+import json
+
 import os
 import shlex
 import sys
@@ -61,7 +63,25 @@ def section_markdown(config: RenderConfig, config_path: Path, df, out_dir: Path,
     if o.images and "config_hash" in dfd.columns:  # the points' images, for image_grid plots
         dfd = dfd.assign(**{"image.path": [str(images_dir(config.name) / f"{h}.png") for h in dfd["config_hash"]]})
     shown: list = []  # data tables already on the page, by figure
+    # Scatter plots of the same rows that differ only in x share one data table (under the first,
+    # with every x as a column): one data table per figure, never the same rows twice.
+    first_of: dict[int, int] = {}
+    extra_cols: dict[int, list] = {}
+    groups: dict[tuple, int] = {}
     for i, spec in enumerate(o.plots):
+        if spec.kind != "scatter":
+            continue
+        key = (spec.facet, str(spec.hue), spec.style, tuple(spec.columns), tuple(spec.ys),
+               json.dumps(spec.where, sort_keys=True, default=str))
+        if key in groups and spec.x in dfd.columns:
+            first_of[i] = groups[key]
+            extra_cols.setdefault(groups[key], []).append(spec.x)
+        else:
+            groups.setdefault(key, i)
+    figure_no: dict[int, int] = {}
+    for i, spec in enumerate(o.plots):
+        if i in extra_cols:
+            spec = spec.model_copy(update={"columns": [*spec.columns, *[c for c in extra_cols[i] if c != spec.x]]})
         base = out_dir / f"{config.name}_{i + 1}" if len(o.plots) > 1 else out_dir / config.name
         try:
             if spec.kind == "image" or spec.map is not None:  # pictures of single points
@@ -85,7 +105,11 @@ def section_markdown(config: RenderConfig, config_path: Path, df, out_dir: Path,
             png = res["files"][0]
             lines += [f"![{spec.title or config.name}]({png.name})", "",
                       f"[PDF]({png.with_suffix('.pdf').name})", ""]
-            if res["markdown"] in shown:  # one data table per figure: the same table is not repeated
+            figure_no[i] = len(shown) + 1
+            if i in first_of and first_of[i] in figure_no:
+                lines += [f"Data: the table under figure {figure_no[first_of[i]]} of this section "
+                          f"(column `{spec.x}`).", ""]
+            elif res["markdown"] in shown:  # the same table is not repeated
                 lines += [f"Data: the table under figure {shown.index(res['markdown']) + 1} of this section.", ""]
             else:
                 lines += ["<details><summary>data</summary>", ""] + res["markdown"] + ["", "</details>", ""]
