@@ -76,7 +76,7 @@ def test_image_and_map_specs_validate():
 
 
 def test_point_pictures_of_a_config(tmp_path):
-    cfg = xc.validate({"name": "pics", "scene": {"name": "spot_wall", "params": {"width": 48, "height": 40}},
+    cfg = xc.validate({"name": "pics", "scene": {"name": "motion_field", "params": {"motion_px": 4}},
                        "camera": {"width": 48, "height": 40, "coc_px": 4}, "samples": {"kind": "stratified", "spp": 4},
                        "pipeline": {"algorithm": "tile"}, "sweep": {"camera.coc_px": [0, 8]}}, "pics")
     rows = pd.DataFrame([{"camera.coc_px": c, "config_hash": xc.config_hash(pc), "status": "ok"}

@@ -44,23 +44,35 @@ def map_values(stats: dict, name: str, tile: int) -> tuple[np.ndarray, bool]:
     return a.astype(float), False
 
 
-def draw_map(ax, values: np.ndarray, label: str, fig, title: str | None = None):
-    """One map with a colour bar; a log colour scale when the non-zero values span two decades."""
-    from matplotlib.colors import LogNorm
+def map_norm(values_list):
+    """One colour scale for maps drawn side by side: log when the non-zero values span two decades."""
+    from matplotlib.colors import LogNorm, Normalize
 
-    nz = values[values > 0]
-    log = nz.size > 0 and nz.max() / nz.min() >= 100
+    nz = np.concatenate([v[v > 0].ravel() for v in values_list]) if values_list else np.zeros(0)
+    if nz.size and nz.max() / nz.min() >= 100:
+        return LogNorm(vmin=nz.min(), vmax=nz.max()), True
+    hi = max((float(v.max()) for v in values_list), default=1.0)
+    return Normalize(vmin=0.0, vmax=hi if hi > 0 else 1.0), False
+
+
+def draw_map(ax, values: np.ndarray, label: str, fig, title: str | None = None, norm=None, colorbar=True):
+    """One map (with a colour bar unless colorbar=False); a log colour scale when the non-zero values
+    span two decades (norm: a shared scale from map_norm)."""
+    if norm is None:
+        norm, log = map_norm([values])
+    else:
+        log = norm.__class__.__name__ == "LogNorm"
     data = np.ma.masked_where(values <= 0, values) if log else values
-    im = ax.imshow(data, cmap="magma", interpolation="nearest",
-                   norm=LogNorm(vmin=nz.min(), vmax=nz.max()) if log else None)
+    im = ax.imshow(data, cmap="magma", interpolation="nearest", norm=norm)
     ax.set_facecolor("black")
     ax.set_xticks([])
     ax.set_yticks([])
     if title:
         ax.set_title(title, fontsize=9)
-    cb = fig.colorbar(im, ax=ax, fraction=0.046, pad=0.04)
-    cb.set_label(label + (" (log scale; black = 0)" if log else ""), fontsize=8)
-    cb.ax.tick_params(labelsize=7)
+    if colorbar:
+        cb = fig.colorbar(im, ax=ax, fraction=0.046, pad=0.04)
+        cb.set_label(label + (" (log scale; black = 0)" if log else ""), fontsize=8)
+        cb.ax.tick_params(labelsize=7)
     return im
 
 
@@ -167,9 +179,17 @@ def point_pictures(spec, config, d, out_base: Path | None) -> dict:
         fig, axes = plt.subplots(nr, nc, figsize=(3.0 * nc + (1.6 if name == "tile.cull_reason" else 0.6), 2.8 * nr),
                                  squeeze=False)
         flat = [a for r in axes for a in r]
-        for ax, (f, pc, row) in zip(flat, picks):
-            options = {"pixel_stats": True} if spec.kind == "heatmap" else None
-            _, res = render_point(pc, options=options)
+        options = {"pixel_stats": True} if spec.kind == "heatmap" else None
+        results = [render_point(pc, options=options)[1] for _, pc, _ in picks]
+        norm = last = None
+        if spec.kind == "heatmap" and name != "tile.cull_reason":
+            for res in results:
+                if name not in res.pixel_stats:
+                    raise PlotError(f"{what}: map {name!r} is not a per-pixel map; known: "
+                                    f"{', '.join(sorted(res.pixel_stats))}, tile.cull_reason")
+            norm, log = map_norm([map_values(r.pixel_stats, name, int(pc.pipeline.tile_size))[0]
+                                  for r, (_, pc, _) in zip(results, picks)])
+        for ax, (f, pc, row), res in zip(flat, picks, results):
             title = facet_title(spec.facet, f) if f is not None else None
             tile = int(pc.pipeline.tile_size)
             if spec.kind == "image":
@@ -192,16 +212,18 @@ def point_pictures(spec, config, d, out_base: Path | None) -> dict:
                 rows_md.append(([label(f)] if f is not None else [])
                                + [", ".join(f"{REASON_LABELS.get(n, n)} {c}" for n, c in zip(names, counts) if c)])
             else:
-                if name not in res.pixel_stats:
-                    raise PlotError(f"{what}: map {name!r} is not a per-pixel map; known: "
-                                    f"{', '.join(sorted(res.pixel_stats))}, tile.cull_reason")
                 values, per_tile = map_values(res.pixel_stats, name, tile)
-                draw_map(ax, values, map_label(name, per_tile), fig, title=title)
+                last = draw_map(ax, values, map_label(name, per_tile), fig, title=title, norm=norm, colorbar=False)
                 ax.grid(False)
                 rows_md.append(([label(f)] if f is not None else [])
                                + [f"{int(res.pixel_stats[name].sum()):,}", f"{float(values.max()):,.0f}"])
         for a in flat[len(picks):]:
             a.set_visible(False)
+        if last is not None:  # one colour bar, one scale for every panel
+            cb = fig.colorbar(last, ax=flat[:len(picks)], fraction=0.046 / max(1, nc) * 2, pad=0.02)
+            cb.set_label(map_label(name, name.startswith(TILE_LEVEL)) + (" (log scale; black = 0)" if log else ""),
+                         fontsize=8)
+            cb.ax.tick_params(labelsize=7)
         if spec.title:
             fig.suptitle(spec.title, fontsize=9)
         files = _save(fig, out_base, dpi=150)
