@@ -86,9 +86,12 @@ def section_markdown(config: RenderConfig, config_path: Path, df, out_dir: Path,
         try:
             if spec.kind == "image" or spec.map is not None:  # pictures of single points
                 from .heatmaps import point_pictures
-                from .frames import apply_where
+                from .frames import apply_where, same
 
                 dd = dfd[dfd["status"] == "ok"] if "status" in dfd.columns else dfd
+                for col, names in spec.labels.items():  # display names first, as in render_plot
+                    if col in dd.columns:
+                        dd = dd.assign(**{col: [next((n for k, n in names.items() if same(v, k)), v) for v in dd[col]]})
                 res = point_pictures(spec, config, apply_where(dd, spec.where), base)
             else:
                 res = render_plot(spec, dfd, base)
