@@ -107,3 +107,9 @@ def test_scatters_of_the_same_rows_share_one_data_table(tmp_path):
     assert "Data: the table under figure 1 of this section (column `raster.samples_tested`)" in text
     head = next(line for line in text.splitlines() if line.startswith("| pipeline.algorithm"))
     assert "ops.total" in head and "raster.samples_tested" in head
+
+
+def test_derived_and_combined_columns_are_labelled():
+    assert figures.value_label("quad_ratio", {"quad_ratio": "shade.quad_requests / depth.passes"}) == \
+        "quad_ratio = shade.quad_requests / depth.passes"
+    assert figures.value_label("samples.kind / samples.n_lens") == "sample table / lens positions"

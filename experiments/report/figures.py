@@ -37,14 +37,23 @@ CONFIG_LABELS = {
     "camera.width": ("image width", "px"), "camera.height": ("image height", "px"), "samples.kind": ("sample table", ""),
     "pipeline.shading": ("shading", ""), "pipeline.bin_size": ("bin size", "px"), "time.wall_s": ("wall time", "s"),
     "scene.triangles": ("triangles", ""), "camera.u_scale": ("lens u scale", ""), "pipeline.time_splits": ("time splits", ""),
+    "scene.params.motion_px": ("motion", "px"), "scene.params.layers": ("occluder layers", ""),
+    "samples.views": ("views", ""), "pipeline.texture_layout": ("texture layout", ""),
+    "hardware.tex_cache.ways": ("texture cache ways", ""), "samples.n_lens": ("lens positions", ""),
+    "pipeline.motion_test": ("motion test", ""), "pipeline.time_strata": ("time strata", ""),
 }
 
 
-def value_label(col: str | None) -> str:
+def value_label(col: str | None, derived: dict | None = None) -> str:
     """An axis or legend label for a column: '<what> [<unit>]' from CONFIG_LABELS or sim.counter_docs()
-    (the description up to its first ':' when short), else the column name."""
+    (the description up to its first ':' when short), a derived column as 'name = expression', else
+    the column name. Combined hue columns ('a / b') are labelled part by part."""
     if not col:
         return ""
+    if " / " in col and col not in (derived or {}):
+        return " / ".join(value_label(c, derived) for c in col.split(" / "))
+    if derived and col in derived:
+        return f"{col} = {derived[col]}"
     if col in CONFIG_LABELS:
         what, unit = CONFIG_LABELS[col]
         return f"{what} [{unit}]" if unit else what
@@ -228,7 +237,7 @@ def _draw_scatter(ax, spec, d, hues, styles=None):
                 sub = sub[[same(v, s) for v in sub[spec.style]]]
             if not len(sub):
                 continue
-            ax.scatter(sub[spec.x].astype(float), sub[y].astype(float), s=14, color=COLORS[i % len(COLORS)],
+            ax.scatter(sub[spec.x].astype(float), sub[y].astype(float), s=14, color=color_for(h, i),
                        marker=MARKERS[j % len(MARKERS)], alpha=0.8, linewidths=0)
     if spec.pareto:
         ok = d[[spec.x, y]].astype(float).dropna()
@@ -242,9 +251,14 @@ def _scatter_legend(spec, hues, styles):
     from matplotlib.lines import Line2D
 
     handles = []
+    head = lambda t: Line2D([], [], linestyle="none", marker="none", label=t)  # noqa: E731
+    if any(h is not None for h in hues):  # one headed section per encoding: colour, then marker
+        handles.append(head(f"{value_label(spec.hue)} (colour):"))
     for i, h in enumerate(hues):
         if h is not None:
-            handles.append(Line2D([], [], linestyle="", marker="o", color=COLORS[i % len(COLORS)], label=label(h)))
+            handles.append(Line2D([], [], linestyle="", marker="o", color=color_for(h, i), label=label(h)))
+    if any(s is not None for s in styles):
+        handles.append(head(f"{value_label(spec.style)} (marker):"))
     for j, s in enumerate(styles):
         if s is not None:
             handles.append(Line2D([], [], linestyle="", marker=MARKERS[j % len(MARKERS)], color="0.4",
@@ -289,7 +303,7 @@ def _draw_heatmap(ax, fig, spec, d):
     xs, rs = sorted_x(d[spec.x]), sorted_x(d[spec.row])
     grid = np.array([[cell(d, {spec.row: r, spec.x: x}, spec.ys[0])[0] for x in xs] for r in rs], dtype=float)
     im = ax.imshow(grid, cmap="viridis", aspect="auto", origin="lower")
-    fig.colorbar(im, ax=ax, label=spec.ylabel or spec.ys[0])
+    fig.colorbar(im, ax=ax, label=spec.ylabel or value_label(spec.ys[0]))
     lo, hi = np.nanmin(grid), np.nanmax(grid)
     for i in range(len(rs)):
         for j in range(len(xs)):
@@ -335,9 +349,10 @@ def image_grid(spec, d, out_base: Path | None) -> dict:
 
 # ---- entry point ---------------------------------------------------------------------------------
 
-def render_plot(spec, df, out_base: Path | None) -> dict:
+def render_plot(spec, df, out_base: Path | None, derived: dict | None = None) -> dict:
     """Draw one plot spec. Returns {"files": [png, pdf], "markdown": [table lines], "fits": [...]}.
-    ``df`` already carries the derived columns; failed rows (status != ok) are left out."""
+    ``df`` already carries the derived columns (``derived``: their expressions, for axis labels);
+    failed rows (status != ok) are left out."""
     if "status" in df.columns:
         df = df[df["status"] == "ok"]
     for col, names in spec.labels.items():  # display names replace the values (before where: and paper:)
@@ -389,11 +404,11 @@ def render_plot(spec, df, out_base: Path | None) -> dict:
             if spec.logy:
                 ax.set_yscale("log")
                 ax.yaxis.set_minor_formatter(NullFormatter())
-            ax.set_xlabel(spec.xlabel or value_label(spec.x))
+            ax.set_xlabel(spec.xlabel or value_label(spec.x, derived))
             if spec.kind == "heatmap":
-                ax.set_ylabel(value_label(spec.row))
+                ax.set_ylabel(value_label(spec.row, derived))
             else:
-                ax.set_ylabel(spec.ylabel or (value_label(spec.ys[0]) if len(spec.ys) == 1 else "value"))
+                ax.set_ylabel(spec.ylabel or (value_label(spec.ys[0], derived) if len(spec.ys) == 1 else "value"))
             if f is not None:
                 ax.set_title(facet_title(spec.facet, f))
         # One legend for the figure (every panel uses the same colours), outside the panels when long.
@@ -409,7 +424,7 @@ def render_plot(spec, df, out_base: Path | None) -> dict:
                 hnd.set_label(lab)
         if len(handles) > 1 or (handles and spec.hue):
             handles = _sectioned(handles)
-            title = value_label(spec.hue) if spec.hue and spec.kind != "scatter" else None
+            title = value_label(spec.hue, derived) if spec.hue and spec.kind != "scatter" else None
             if len(axes) == 1 and len(handles) <= 6:
                 axes[0].legend(handles=handles, title=title)
             else:

@@ -94,7 +94,7 @@ def section_markdown(config: RenderConfig, config_path: Path, df, out_dir: Path,
                         dd = dd.assign(**{col: [next((n for k, n in names.items() if same(v, k)), v) for v in dd[col]]})
                 res = point_pictures(spec, config, apply_where(dd, spec.where), base)
             else:
-                res = render_plot(spec, dfd, base)
+                res = render_plot(spec, dfd, base, derived=o.derived)
         except PlotError as e:
             lines += [f"**Plot error:** {e}", ""]
             continue
