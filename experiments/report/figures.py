@@ -177,7 +177,7 @@ def _sectioned(handles):
     """Legend handles in two headed sections when there are paper series: 'measured' and 'paper'."""
     from matplotlib.lines import Line2D
 
-    ours = [h for h in handles if not str(h.get_label()).endswith("(paper)") and h.get_label() != "paper"]
+    ours = [h for h in handles if not str(h.get_label()).endswith("(paper)") and h.get_label() != "published value"]
     paper = [h for h in handles if h not in ours]
     if not paper:
         return handles
@@ -220,7 +220,7 @@ def _draw_bar(ax, spec, d, hues):
         pts = [(o, v) for o, v in pts if v is not None]
         if pts:
             ax.scatter([o for o, _ in pts], [v for _, v in pts], marker="_", s=120, color="black", zorder=3,
-                       label="paper" if i == 0 else None)
+                       label="published value" if i == 0 else None)
     ax.set_xticks(range(len(xs)), [label(x) for x in xs])
 
 
