@@ -4,21 +4,24 @@ PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMPS := .make-stamps
-SOURCES := $(shell find sim/engine sim/bindings -type f 2>/dev/null) CMakeLists.txt pyproject.toml
+CONSTRAINTS := constraints.txt
+SOURCES := $(shell find sim/engine sim/bindings -type f 2>/dev/null) CMakeLists.txt pyproject.toml $(CONSTRAINTS)
+# Pythons that `make test-install` builds a wheel for and installs it into (pyenv or pythonX.Y on PATH)
+INSTALL_PYTHONS ?= 3.12 3.13
 export CMAKE_BUILD_PARALLEL_LEVEL ?= $(shell nproc 2>/dev/null || echo 2)
 
-.PHONY: install run test test-all bench golden report report-quick clean
+.PHONY: install run test test-all test-install bench golden report report-quick clean sanitize
 
 install: $(STAMPS)/install
 
 $(STAMPS)/venv:
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade "pip>=23.2"
-	$(PY) -m pip install --quiet "scikit-build-core==1.1.2" "pybind11==3.1.0"
+	$(PY) -m pip install --quiet -c $(CONSTRAINTS) scikit-build-core pybind11
 	@mkdir -p $(STAMPS) && touch $@
 
 $(STAMPS)/install: $(STAMPS)/venv $(SOURCES)
-	$(PY) -m pip install --quiet --no-build-isolation -e ".[test]"
+	$(PY) -m pip install --quiet --no-build-isolation -c $(CONSTRAINTS) -e ".[test]"
 	@mkdir -p $(STAMPS) && touch $@
 
 run: install
@@ -27,8 +30,43 @@ run: install
 test: install
 	$(PY) -m pytest -q
 
+# The engine with AddressSanitizer + UndefinedBehaviorSanitizer (build/sanitize), loaded in place of the
+# installed module (tests/sanitize/sitecustomize.py) into every Python process of the fast test tier.
+# SANITIZE_TESTS narrows the run (default: the whole fast tier).
+SAN_BUILD := build/sanitize
+SANITIZE_TESTS ?=
+SAN_ENV = PYTHONPATH=$(CURDIR)/tests/sanitize RAST5D_CORE_SO=$$(ls $(CURDIR)/$(SAN_BUILD)/_core*.so) \
+	LD_PRELOAD=$$(gcc -print-file-name=libasan.so) \
+	ASAN_OPTIONS=detect_leaks=0:abort_on_error=1:halt_on_error=1 \
+	UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 RAST5D_SANITIZED=1
+sanitize: install
+	cmake -S . -B $(SAN_BUILD) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRAST5D_SANITIZE=ON \
+		-DRAST5D_NATIVE=OFF -DPython_EXECUTABLE=$(CURDIR)/$(PY) \
+		-Dpybind11_DIR=$$($(PY) -c "import pybind11; print(pybind11.get_cmake_dir())") > /dev/null
+	cmake --build $(SAN_BUILD) --target _core
+	$(SAN_ENV) $(PY) -c "import sim; assert '$(SAN_BUILD)' in sim._core.__file__, sim._core.__file__"
+	$(SAN_ENV) $(PY) -m pytest -q -p no:cacheprovider $(SANITIZE_TESTS)
+
 test-all: install
 	$(PY) -m pytest -q -m "not bench"
+
+# Build a wheel with each of INSTALL_PYTHONS, install it into a fresh venv with the pinned
+# dependencies (constraints.txt) and run tests/install_smoke.py there, outside the checkout.
+test-install:
+	@set -e; for v in $(INSTALL_PYTHONS); do \
+	  py=$$(ls -d $$(pyenv root 2>/dev/null)/versions/$$v.*/bin/python3 2>/dev/null | sort -V | tail -1); \
+	  if [ -z "$$py" ]; then py=$$(command -v python$$v || true); fi; \
+	  if [ -z "$$py" ]; then echo "test-install: no Python $$v (pyenv or python$$v on PATH)"; exit 1; fi; \
+	  dir=build/test-install/$$v; rm -rf $$dir; mkdir -p $$dir; start=$$(date +%s); \
+	  echo "test-install: Python $$v ($$py)"; \
+	  $$py -m venv $$dir/build-env; \
+	  $$dir/build-env/bin/python -m pip install --quiet -c $(CONSTRAINTS) scikit-build-core pybind11; \
+	  $$dir/build-env/bin/python -m pip wheel --quiet --no-deps --no-build-isolation -w $$dir/dist .; \
+	  $$py -m venv $$dir/env; \
+	  $$dir/env/bin/python -m pip install --quiet -c $(CONSTRAINTS) $$dir/dist/rast5d-*.whl; \
+	  (cd $$dir && env/bin/python $(CURDIR)/tests/install_smoke.py); \
+	  echo "test-install: Python $$v passed in $$(( $$(date +%s) - start )) s"; \
+	done
 
 bench: install
 	$(PY) -m pytest -q -s -m bench

@@ -8,6 +8,9 @@ import sys
 from pathlib import Path
 
 
+LIST_KINDS = ("algorithms", "scenes", "counters", "configs")
+
+
 def _summary(row: dict) -> str:
     return (f"{row['scene.name'] or row['scene.path']}: {row['pipeline.algorithm']}, CoC {row['camera.coc_px']:g} px, "
             f"{row['samples.spp']} spp ({row['samples.kind']}), {row['camera.width']}x{row['camera.height']} -> "
@@ -90,22 +93,68 @@ def cmd_run(args) -> int:
     data, lines = load_dict(args.config, args.set or [])
     config = validate(data, str(args.config), lines)
     df = run_sweep(config, source=str(args.config), workers=args.workers, scheduler=args.scheduler,
-                   force=args.force, lines=lines)
+                   force=args.force, lines=lines, retry_failed=args.retry_failed)
     if config.outputs.plots and not args.no_report:
         page = write_config_page(config, args.config, df, overrides=args.set or [])
         print(f"report -> {page}")
     return 0 if len(df) and (df["status"] == "ok").all() else 1
 
 
+def list_items(what: str) -> list[tuple[str, str]]:
+    """(name, description) rows of `rast5d list WHAT`: the registries the engine and models read."""
+    import sim
+
+    if what == "algorithms":
+        inter = set(sim.interleaved_algorithms())
+        return [(n, d + (" (needs an interleaved sample table)" if n in inter else ""))
+                for n, d in sim.algorithm_docs().items()]
+    if what == "scenes":
+        from models.registry import scene_description, scene_names, scene_parameters
+
+        return [(n, scene_description(n) + " [" + ", ".join(f"{k}={v!r}" for k, v in scene_parameters(n).items())
+                 + "]") for n in scene_names()]
+    if what == "counters":
+        return [(n, f"[{u}] {d}") for n, (u, d) in sim.counter_docs().items()]
+    if what == "configs":
+        from .config import REPO, load_dict, sweep_points
+
+        rows = []
+        root = next((r for r in (Path.cwd(), REPO) if (r / "configs").is_dir()), REPO)
+        for path in sorted((root / "configs").rglob("*.yaml")):
+            if "scenes" in path.relative_to(root / "configs").parts:
+                continue
+            data, _ = load_dict(path)
+            about = (data.get("outputs") or {}).get("title") or data.get("description") or ""
+            points = len(sweep_points(data["sweep"])) if isinstance(data.get("sweep"), dict) else 1
+            rows.append((str(path.relative_to(root)), f"{' '.join(str(about).split())} ({points} points)".strip()))
+        return rows
+    raise ValueError(f"list: unknown kind {what!r}")
+
+
+def cmd_list(args) -> int:
+    rows = list_items(args.what)
+    if not rows:
+        print(f"no {args.what} found (configs: a configs/ folder in the working directory or the checkout)")
+        return 0
+    width = max(len(n) for n, _ in rows)
+    for name, description in rows:
+        print(f"{name:<{width}}  {description}")
+    return 0
+
+
 def cmd_report(args) -> int:
     from .report.pages import main as report_main
 
     return report_main(only=args.only, workers=args.workers, scheduler=args.scheduler, force=args.force,
-                       quick=args.quick)
+                       quick=args.quick, retry_failed=args.retry_failed)
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="rast5d", description=__doc__)
+    from . import __version__
+
+    parser.add_argument("--version", action="version",
+                        version=f"rast5d {__version__} (Python {sys.version.split()[0]})")
     sub = parser.add_subparsers(dest="command", required=True)
 
     p = sub.add_parser("render", help="render one configuration to an image and statistics")
@@ -131,6 +180,8 @@ def main(argv: list[str] | None = None) -> int:
                    help="local worker processes (default: executor.workers or the core count; 0 = in-process)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="run on a Dask distributed scheduler, e.g. tcp://host:8786")
     p.add_argument("--force", action="store_true", help="re-render points found in the result store")
+    p.add_argument("--retry-failed", action="store_true",
+                   help="re-render stored failed points (otherwise served from the store with their error)")
     p.add_argument("--no-report", action="store_true", help="do not write the config's report page")
     p.set_defaults(func=cmd_run)
 
@@ -141,9 +192,20 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--workers", type=int, default=None)
     p.add_argument("--scheduler", metavar="ADDRESS")
     p.add_argument("--force", action="store_true")
+    p.add_argument("--retry-failed", action="store_true", help="re-render stored failed points")
     p.set_defaults(func=cmd_report)
 
+    p = sub.add_parser("list", help="list the algorithms, named scenes, counters or configs")
+    p.add_argument("what", choices=LIST_KINDS)
+    p.set_defaults(func=cmd_list)
+
     args = parser.parse_args(argv)
+    import warnings
+
+    def show_warning(message, category, filename, lineno, file=None, line=None):
+        print(f"warning: {message}", file=sys.stderr)  # a user's warning, not a source location
+
+    warnings.showwarning = show_warning
     from .config import ConfigError
     import sim
 

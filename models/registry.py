@@ -68,7 +68,11 @@ def scene_description(name: str) -> str:
 def _builder(name: str) -> SceneBuilder:
     _ensure_loaded()
     if not isinstance(name, str) or name not in _REGISTRY:
-        raise SceneError(f"scene: unknown scene {name!r}; known scenes: {', '.join(sorted(_REGISTRY))}")
+        import difflib
+
+        close = difflib.get_close_matches(str(name), list(_REGISTRY), n=2, cutoff=0.6)
+        hint = f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
+        raise SceneError(f"scene: unknown scene {name!r}{hint}; known scenes: {', '.join(sorted(_REGISTRY))}")
     return _REGISTRY[name]
 
 

@@ -9,7 +9,7 @@ Public contract (ARCHITECTURE.md §Public contract)::
 """
 from . import _core
 
-from .errors import ConfigError, SceneInputError
+from .errors import ConfigError, EmptyFrameWarning, SceneInputError
 from .hardware import HardwareConfig, TextureCacheConfig, UnitConfig
 from .pipeline import (PipelineConfig, algorithm_docs, algorithm_names, interleaved_algorithms, shading_modes,
                        texture_filters, texture_layouts)
@@ -29,6 +29,7 @@ __all__ = [
     "conservative_raster",
     "occlusion_query",
     "ConfigError",
+    "EmptyFrameWarning",
     "HardwareConfig",
     "PipelineConfig",
     "Result",

@@ -9,6 +9,11 @@ class SceneInputError(ValueError):
     """Scene arrays handed to sim.render are malformed (shape, dtype, non-finite values)."""
 
 
+class EmptyFrameWarning(UserWarning):
+    """A render tested no sample at all; the message gives the setup cull counts (near plane, off
+    screen, degenerate, back-facing), usually a camera inside or facing away from the scene."""
+
+
 def check_int(owner: str, field: str, value, lo: int, hi: int) -> int:
     """Return value as int if it is an integer in [lo, hi], else raise ConfigError."""
     import numbers
@@ -53,5 +58,8 @@ def field_docs(cls) -> dict[str, dict]:
         if dataclasses.is_dataclass(default):
             entry["fields"] = field_docs(type(default))
             entry["default"] = dataclasses.asdict(default)
+            for name, sub in entry["fields"].items():  # this field's defaults, not the section class's
+                if "fields" not in sub:
+                    sub["default"] = entry["default"][name]
         out[f.name] = entry
     return out

@@ -9,7 +9,7 @@ import numpy as np
 
 from . import _core
 from .camera import Camera
-from .errors import ConfigError, SceneInputError
+from .errors import ConfigError, EmptyFrameWarning, SceneInputError
 from .hardware import HardwareConfig
 from . import params as _params
 from . import pixel_stats as _pixel_stats
@@ -90,26 +90,55 @@ def _scene_arrays(scene) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return p0, p1, col
 
 
+def memory_parts(camera: Camera, spp: int, n_triangles: int, config: PipelineConfig, threads: int,
+                 export_samples: bool = False, timing: bool = True, period: int = 0,
+                 pixel_maps: int = 0) -> dict[str, int]:
+    """Bytes the engine will allocate, by part: {part: bytes}; ``memory_estimate`` is their sum.
+    Each part's name says what it grows with (docs/errors.md, tests/test_memory.py)."""
+    b = config.bin_size
+    bins_x = -(-camera.width // b)
+    bins_y = -(-camera.height // b)
+    grid = config.resolved_lens_grid(spp)
+    return {
+        "image (width x height)": camera.width * camera.height * 3 * 4 * 2,  # engine buffer + numpy copy
+        "bin buffers (threads x bin_size^2 x spp)": threads * b * b * spp * (4 + 12 + 4),
+        "triangle setup (triangles)": n_triangles * (224 + 1 + 4),
+        "bin lists (triangles, bins)": n_triangles * 4 * 4 + bins_x * bins_y * 32,
+        "sample export (width x height x spp)": camera.width * camera.height * spp * 8 * 2 if export_samples else 0,
+        # One 64-byte record per (triangle, bin) visit (about 4 bins per triangle, as for the bin
+        # lists), held per bin, concatenated and copied to numpy: three copies.
+        "timing records (triangles)": n_triangles * 4 * 64 * 3 if timing else 0,
+        "sample index (period^2 x lens cells x time strata)":
+            period * period * (grid * grid * config.time_strata + 1 + spp) * 4,
+        "per-pixel statistics (width x height x maps)": camera.width * camera.height * pixel_maps * 8 * 2,
+    }
+
+
 def memory_estimate(camera: Camera, spp: int, n_triangles: int, config: PipelineConfig, threads: int,
                     export_samples: bool = False, timing: bool = True, period: int = 0,
                     pixel_maps: int = 0) -> int:
     """Bytes the engine will allocate (image, per-thread bin buffers, setup, bin lists, exports,
     timing records, and with the table's period the (lens cell, time stratum) sample index)."""
-    b = config.bin_size
-    image = camera.width * camera.height * 3 * 4 * 2  # engine buffer + the numpy copy
-    bins = threads * b * b * spp * (4 + 12 + 4)
-    setup = n_triangles * (224 + 1 + 4)
-    bins_x = -(-camera.width // b)
-    bins_y = -(-camera.height // b)
-    bin_lists = n_triangles * 4 * 4 + bins_x * bins_y * 32
-    export = camera.width * camera.height * spp * 8 * 2 if export_samples else 0
-    # One 64-byte record per (triangle, bin) visit (about 4 bins per triangle, as for the bin
-    # lists), held per bin, concatenated and copied to numpy: three copies.
-    timing_records = n_triangles * 4 * 64 * 3 if timing else 0
-    grid = config.resolved_lens_grid(spp)
-    sample_index = period * period * (grid * grid * config.time_strata + 1 + spp) * 4
-    pixel_stats = camera.width * camera.height * pixel_maps * 8 * 2  # engine maps + numpy copy
-    return int(image + bins + setup + bin_lists + export + timing_records + sample_index + pixel_stats)
+    return int(sum(memory_parts(camera, spp, n_triangles, config, threads, export_samples, timing,
+                                period, pixel_maps).values()))
+
+
+def _memory_message(need: int, parts: dict, camera: Camera, spp: int, n: int, config: PipelineConfig,
+                    threads: int) -> str:
+    """The memory limit's error: the estimate, the limit, the largest parts and what to change."""
+    gib = 2**30
+    top = sorted(parts.items(), key=lambda kv: -kv[1])[:2]
+    largest = ", ".join(f"{name} {size / gib:.2f} GiB" for name, size in top)
+    return (f"memory: estimated {need / gib:.2f} GiB exceeds PipelineConfig.memory_limit_bytes="
+            f"{config.memory_limit_bytes / gib:.2f} GiB (width={camera.width}, height={camera.height}, "
+            f"spp={spp}, triangles={n}, threads={threads}); largest: {largest}. Lower what the largest "
+            f"parts grow with (spp, the frame size, pipeline.bin_size or pipeline.threads; export_samples "
+            f"and timing=False where they apply), or raise the limit if the machine has the memory: "
+            f"PipelineConfig(memory_limit_bytes={_round_up_gib(need)}) or pipeline.memory_limit_bytes in a config")
+
+
+def _round_up_gib(need: int) -> int:
+    return -(-need // 2**30) * 2**30
 
 
 def _camera_params(camera: Camera):
@@ -161,15 +190,13 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     spp = int(samples.shape[2])
     grid = config.resolved_lens_grid(spp)
     threads = config.threads or (os.cpu_count() or 1)
-    need = memory_estimate(camera, spp, p0.shape[0], config, threads, export_samples, timing,
-                           period=samples.shape[0], pixel_maps=len(map_names) + len(derived_maps))
+    parts = memory_parts(camera, spp, p0.shape[0], config, threads, export_samples, timing,
+                         period=samples.shape[0], pixel_maps=len(map_names) + len(derived_maps))
+    need = int(sum(parts.values()))
     if need > config.memory_limit_bytes:
-        raise ConfigError(
-            f"memory: estimated {need / 2**30:.2f} GiB exceeds PipelineConfig.memory_limit_bytes="
-            f"{config.memory_limit_bytes / 2**30:.2f} GiB (width={camera.width}, height={camera.height}, "
-            f"spp={spp}, triangles={p0.shape[0]}, threads={threads})"
-        )
-    v0, v1 = camera.engine_vertices(p0, p1)
+        raise ConfigError(_memory_message(need, parts, camera, spp, p0.shape[0], config, threads))
+    with np.errstate(over="ignore", invalid="ignore"):  # overflow is reported just below, by triangle
+        v0, v1 = camera.engine_vertices(p0, p1)
     if not (np.all(np.isfinite(v0)) and np.all(np.isfinite(v1))):
         t = int(np.argwhere(~np.isfinite(v0) | ~np.isfinite(v1))[0][0])
         raise SceneInputError(f"scene.positions: triangle {t} overflows float32 after projection: {p0[t].tolist()}")
@@ -211,6 +238,8 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     desc = {"camera": camera.describe(), "pipeline": config.describe(),
             "table": table.describe() if hasattr(table, "describe") else {}, "lens_grid": grid,
             "hardware": hardware_desc}
+    if query is None and _trace is None and not flat.get("raster.samples_tested"):
+        _warn_empty_frame(flat, camera)
     maps = None
     if "pixel_stats" in out and (map_names or derived_maps):
         maps = _pixel_stats.assemble(map_names, derived_maps, out["pixel_stats"])
@@ -238,3 +267,21 @@ def trace_pixel(scene, camera: Camera, table, x: int, y: int, config: PipelineCo
     return _pixel_stats.PixelTrace(x=int(x), y=int(y), spp=spp, algorithm=config.algorithm,
                                    events=[(int(t), int(k), tuple(r), dict(d)) for t, k, r, d in events],
                                    samples=[(int(t), int(s), bool(c), bool(h)) for t, s, c, h in samples])
+
+
+def _warn_empty_frame(flat: dict, camera: Camera) -> None:
+    """EmptyFrameWarning with the setup cull causes when a frame tested no sample."""
+    import warnings
+
+    n = int(flat.get("setup.triangles", 0))
+    causes = {"behind the near plane": "setup.culled_near", "off screen": "setup.culled_offscreen",
+              "degenerate": "setup.culled_degenerate", "back-facing": "setup.culled_backface"}
+    counts = {what: int(flat.get(key, 0)) for what, key in causes.items()}
+    rest = n - sum(counts.values())
+    text = ", ".join(f"{c} {what}" for what, c in counts.items() if c)
+    if rest:
+        text += (", " if text else "") + f"{rest} covering no sample position"
+    d = camera.describe()
+    warnings.warn(f"sim.render: the frame tested no samples: of {n} triangles {text or 'none'} "
+                  f"(camera eye {d.get('eye')}, target {d.get('target')}, near {d.get('near')}); frame the "
+                  "scene (models.frame_hint) or move the camera", EmptyFrameWarning, stacklevel=3)

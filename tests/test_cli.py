@@ -51,8 +51,8 @@ def test_render_errors_exit_cleanly(tmp_path, override, message):
 
 def test_run_sweep_keeps_finished_points(tmp_path):
     cfg = tmp_path / "sweep.yaml"
-    # spp 5000 is out of range: those points fail when built, the others are kept.
-    cfg.write_text(CONFIG + "sweep:\n  samples.spp: [4, 5000]\n  camera.coc_px: [0, 4]\n")
+    # quad size -1 is rejected when the scene is built: those points fail, the others are kept.
+    cfg.write_text(CONFIG + "sweep:\n  scene.params.size: [1.0, -1.0]\n  camera.coc_px: [0, 4]\n")
     env = {**os.environ, "RAST5D_RESULTS": str(tmp_path / "res")}
     r = subprocess.run([sys.executable, "-m", "experiments.cli", "run", str(cfg), "--workers", "2"],
                        capture_output=True, text=True, env=env)
@@ -60,7 +60,27 @@ def test_run_sweep_keeps_finished_points(tmp_path):
     df = pd.read_parquet(tmp_path / "res" / "tiny.parquet")
     assert len(df) == 4
     assert (df["status"] == "ok").sum() == 2 and (df["status"] == "error").sum() == 2
-    assert df[df["status"] == "error"]["error"].str.contains("spp").all()
-    assert sorted(df[df["status"] == "error"]["samples.spp"]) == [5000, 5000]
-    assert len(list((tmp_path / "res" / "points").glob("*.parquet"))) == 2  # only finished points are cached
+    assert df[df["status"] == "error"]["error"].str.contains("size").all()
+    assert sorted(df[df["status"] == "error"]["scene.params.size"]) == [-1.0, -1.0]
+    assert len(list((tmp_path / "res" / "points").glob("*.parquet"))) == 4  # failed points are stored too
     assert "2 failed" in r.stdout
+
+
+@pytest.mark.parametrize("sweep,message", [
+    ("samples.spp: [4, -1]", "sweep point {'samples.spp': -1}"),
+    ("pipeline.algorithm: [tile, tilez]", "did you mean 'tile'"),
+    ("camera.coc_px: [0, -3]", "coc_px"),
+    ("scene: [{name: quad}, {name: bunyn}]", "did you mean 'bunny'"),
+    ("pipeline.tile_sise: [2]", "unknown key 'pipeline.tile_sise'; did you mean 'tile_size'"),
+])
+def test_run_validates_every_point_before_the_first_render(tmp_path, sweep, message, capsys, monkeypatch):
+    from experiments.cli import main
+
+    cfg = tmp_path / "sweep.yaml"
+    cfg.write_text(CONFIG + "sweep:\n  " + sweep + "\n")
+    monkeypatch.setenv("RAST5D_RESULTS", str(tmp_path / "res"))
+    assert main(["run", str(cfg), "--workers", "0"]) == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err, err
+    assert f"{cfg}:" in err or "sweep point" in err  # names the file or the point
+    assert not list((tmp_path / "res").glob("**/*.parquet"))  # nothing rendered

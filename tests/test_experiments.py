@@ -178,13 +178,15 @@ def test_second_run_computes_zero_points_and_force_recomputes(tmp_path, store):
 
 
 def test_a_failing_point_is_recorded_and_the_others_finish(tmp_path, store):
-    c = xc.load_config(write(tmp_path, "f.yaml", BASE + "sweep:\n  samples.spp: [4, 9999, 8]\n"))
+    # a scene parameter's value is checked only when the scene is built, i.e. at the point's render
+    c = xc.load_config(write(tmp_path, "f.yaml", BASE + "sweep:\n  scene.params.size: [1.0, -1.0, 2.0]\n"))
     df = runner.run_sweep(c, workers=2, progress=False)
     assert df["status"].tolist() == ["ok", "error", "ok"]
-    assert "spp" in df["error"].iloc[1] and df["samples.spp"].tolist() == [4, 9999, 8]
+    assert "size" in df["error"].iloc[1] and df["scene.params.size"].tolist() == [1.0, -1.0, 2.0]
     assert df.attrs["summary"]["failed"] == 1
-    # Failed points are not cached: a rerun retries only them.
-    assert runner.run_sweep(c, workers=0, progress=False).attrs["summary"]["rendered"] == 1
+    # Failed points are stored with their error: a rerun serves them, --retry-failed retries only them.
+    assert runner.run_sweep(c, workers=0, progress=False).attrs["summary"]["rendered"] == 0
+    assert runner.run_sweep(c, workers=0, progress=False, retry_failed=True).attrs["summary"]["rendered"] == 1
 
 
 @pytest.mark.filterwarnings("ignore::DeprecationWarning", "ignore::ResourceWarning",

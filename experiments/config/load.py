@@ -93,7 +93,8 @@ def parse_override(text: str) -> tuple[str, Any]:
 
 
 def load_dict(path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> tuple[dict, dict]:
-    """(merged data, {key path: 'file:line'}) after extends and --set overrides, not validated."""
+    """(merged data, {key path: 'file:line'}) after extends and --set overrides, not validated.
+    Relative scene paths are resolved (resolve_scene_paths)."""
     path = Path(path)
     data, lines = _load_with_extends(path)
     data.setdefault("name", path.stem)
@@ -101,7 +102,66 @@ def load_dict(path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> 
         key, value = parse_override(text)
         set_dotted(data, key, value, f"{path} --set")
         lines[tuple(key.split("."))] = f"--set {text}"
+    resolve_scene_paths(data, lines, path)
     return data, lines
+
+
+def _defining_file(lines: dict, key: tuple, default: Path) -> Path | None:
+    """The config file whose line set key (extends: a base file), None for a --set override."""
+    where = lines.get(key)
+    if where is None:
+        return default
+    if where.startswith("--set"):
+        return None
+    return Path(where.rsplit(":", 1)[0])
+
+
+def _resolve_one(text, where: str, config_file: Path | None):
+    """A scene file path relative to the config file that names it, then the working directory (then
+    the repository root, where the bundled scenes live), as a path relative to the working directory
+    when it is under it (so results keep the same key from any checkout) or absolute."""
+    from models.loader import candidate_paths
+
+    if not isinstance(text, str) or not text:
+        return text
+    bases = (config_file.parent,) if config_file is not None else ()
+    tried = candidate_paths(text, *bases)
+    for option in tried:
+        if option.exists():
+            resolved = option.resolve()
+            try:
+                return str(resolved.relative_to(Path.cwd().resolve()))
+            except ValueError:
+                return str(resolved)
+    raise ConfigError(f"{where}: scene file not found: {text} (tried {', '.join(map(str, tried))})")
+
+
+def resolve_scene_paths(data: dict, lines: dict, path: Path) -> None:
+    """Rewrite every relative scene path (scene.path, point.query.path and their sweep values) to the
+    file it names, looked for against the config file that sets it, then the working directory; a
+    ConfigError names every place tried."""
+    path = path.resolve()
+    for section in (("scene",), ("point", "query")):
+        node = data
+        for part in section:
+            node = node.get(part) if isinstance(node, dict) else None
+        if isinstance(node, dict) and "path" in node and node.get("name") is None:  # both: the schema says so
+            key = section + ("path",)
+            node["path"] = _resolve_one(node["path"], lines.get(key, str(path)), _defining_file(lines, key, path))
+    sweep = data.get("sweep")
+    if not isinstance(sweep, dict):
+        return
+    for swept, values in sweep.items():
+        if not isinstance(values, list):
+            continue
+        where = lines.get(("sweep", swept), str(path))
+        config_file = _defining_file(lines, ("sweep", swept), path)
+        if swept in ("scene.path", "point.query.path"):
+            sweep[swept] = [_resolve_one(v, where, config_file) for v in values]
+        elif swept in ("scene", "point.query"):
+            for v in values:
+                if isinstance(v, dict) and "path" in v:
+                    v["path"] = _resolve_one(v["path"], where, config_file)
 
 
 def load_config(path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> RenderConfig:

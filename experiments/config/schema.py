@@ -8,6 +8,8 @@ that name the key, the file and the line (STYLE.md §Configuration).
 from __future__ import annotations
 
 import copy
+import difflib
+import re
 import typing
 from pathlib import Path
 from typing import Any, Literal, Optional, Union
@@ -40,7 +42,9 @@ class SceneSpec(_Strict):
     name: Optional[str] = Field(None, description=(
         "A named scene (models.scene_names()), e.g. 'spot_wall', "
         "'bunny'"))
-    path: Optional[str] = Field(None, description="A scene YAML file or a mesh (OBJ/PLY), relative to the repository")
+    path: Optional[str] = Field(None, description=(
+        "A scene file: YAML scene, Mitsuba XML, glTF/GLB or a mesh (OBJ/PLY/...); relative to the config file "
+        "that names it, else the working directory (docs/scenes.md)"))
     params: dict[str, Any] = Field(default_factory=dict, description="Keyword parameters of the named scene")
 
     @model_validator(mode="after")
@@ -384,11 +388,38 @@ def _format_validation(err: ValidationError, source: str, lines: dict | None = N
                 where = lines[loc[:n]]
                 break
         if e["type"] == "extra_forbidden":
-            out.append(f"{where}: unknown key {dotted!r}")
+            out.append(f"{where}: unknown key {dotted!r}{_did_you_mean(str(loc[-1]), _known_keys(loc[:-1]))}")
         else:
             msg = e["msg"].removeprefix("Value error, ")
-            out.append(f"{where}: {dotted}: {msg} (got {e.get('input')!r})")
+            hint = ""
+            if e["type"] == "literal_error" and isinstance(e.get("input"), str):
+                hint = _did_you_mean(e["input"], re.findall(r"'([^']*)'", e.get("ctx", {}).get("expected", "")))
+            out.append(f"{where}: {dotted}: {msg} (got {e.get('input')!r}){hint}")
     return "\n".join(dict.fromkeys(out))
+
+
+def _known_keys(loc: tuple) -> list[str]:
+    """The keys the schema accepts at a location (a path of keys and list indices), or []."""
+    model: Any = RenderConfig
+    for part in loc:
+        if isinstance(part, int):
+            continue
+        fields = getattr(model, "model_fields", None)
+        if not fields or part not in fields:
+            return []
+        ann = fields[part].annotation
+        candidates = [ann, *typing.get_args(ann)]
+        candidates += [a for c in candidates for a in typing.get_args(c)]  # list[PlotSpec], Optional[...]
+        model = next((c for c in candidates if isinstance(c, type) and issubclass(c, BaseModel)), None)
+        if model is None:
+            return []
+    return list(getattr(model, "model_fields", {}))
+
+
+def _did_you_mean(word: str, known: list[str]) -> str:
+    """'; did you mean 'x'?' for the closest known word (difflib), or ''."""
+    close = difflib.get_close_matches(word, known, n=2, cutoff=0.6)
+    return f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
 
 
 def validate(data: dict, source: str = "config", lines: dict | None = None) -> RenderConfig:

@@ -7,6 +7,7 @@ import hashlib
 import itertools
 import json
 
+from .inputs import config_inputs
 from .schema import ConfigError, RenderConfig, validate
 
 
@@ -52,7 +53,10 @@ def expand_sweep(config: RenderConfig, source: str = "config", lines: dict | Non
                  ) -> list[tuple[dict, RenderConfig]]:
     """[(point, config)] for every point of config.sweep (one point without a sweep). Each point is
     validated on its own; ConfigError names the point."""
+    from .build import check
+
     if not config.sweep:
+        _check_point(check, config, source)
         return [({}, config)]
     base = config.model_dump(exclude={"sweep"})
     points = []
@@ -60,8 +64,33 @@ def expand_sweep(config: RenderConfig, source: str = "config", lines: dict | Non
         d = copy.deepcopy(base)
         for k, v in point.items():
             set_dotted(d, k, v, f"{source} sweep")
-        points.append((point, validate(d, f"{source} (sweep point {point})")))
+        where = f"{source} (sweep point {point})"
+        point_config = validate(d, where, _point_lines(lines, point))
+        _check_point(check, point_config, where)
+        points.append((point, point_config))
     return points
+
+
+def _point_lines(lines: dict | None, point: dict) -> dict | None:
+    """The file:line of each key of a sweep point: its sweep entry (for the errors of validate)."""
+    if not lines:
+        return None
+    out = {}
+    for k in point:
+        where = lines.get(("sweep", k))
+        if where:
+            out[tuple(k.split("."))] = f"{where} (sweep point {point})"
+    return out or None
+
+
+def _check_point(check, config: RenderConfig, where: str) -> None:
+    """ConfigError naming the point when build() would reject it (every point before the first render)."""
+    try:
+        check(config)
+    except ConfigError as e:
+        raise ConfigError(f"{where}: {e}") from None
+    except ValueError as e:  # sim.ConfigError, models.SceneError and the sample tables' ValueErrors
+        raise ConfigError(f"{where}: {e}") from None
 
 
 RESULT_EXCLUDE = {"name", "description", "extends", "sweep", "outputs", "executor", "point"}
@@ -80,12 +109,14 @@ def point_columns(config: RenderConfig) -> dict:
 
 def config_hash(config: RenderConfig) -> str:
     """Stable hash of everything that determines a point's result row: scene, camera, samples,
-    pipeline (not the thread count: results are identical for any), hardware, and the metrics spec."""
+    pipeline (not the thread count: results are identical for any), hardware, the metrics spec, and
+    the contents of every file its scenes read (inputs.py)."""
     d = config.model_dump(exclude=RESULT_EXCLUDE)
     d["pipeline"].pop("threads", None)
     d["metrics"] = config.outputs.metrics.model_dump() if config.outputs.metrics else None
     if config.point.kind != "render":
         d["point"] = config.point.model_dump()
+    d["inputs"] = config_inputs(config)  # the contents of every file the point's scenes read
     blob = json.dumps(d, sort_keys=True, default=str).encode()
     return hashlib.sha256(blob).hexdigest()[:16]
 

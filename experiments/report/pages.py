@@ -45,8 +45,9 @@ def _command(name: str, quick: bool) -> str:
 
 
 def section_markdown(config: RenderConfig, config_path: Path, df, out_dir: Path, command: str,
-                     overrides: list[str] = (), elapsed: float | None = None) -> list[str]:
-    """The Markdown of one config's section: title, text, figures, tables, provenance."""
+                     overrides: list[str] = (), elapsed: float | None = None, volatile: bool = True) -> list[str]:
+    """The Markdown of one config's section: title, text, figures, tables, provenance (with the run's
+    times, engine and revision only when volatile)."""
     o = config.outputs
     lines = [f"## {o.title or config.name}", ""]
     if o.text:
@@ -131,11 +132,19 @@ def section_markdown(config: RenderConfig, config_path: Path, df, out_dir: Path,
     rel = config_path.resolve().relative_to(REPO) if config_path.resolve().is_relative_to(REPO) else config_path
     engine = ok["engine.version"].iloc[0] if "engine.version" in ok.columns and len(ok) else "n/a"
     rev = ok["engine.git_rev"].iloc[0] if "engine.git_rev" in ok.columns and len(ok) else "n/a"
+    # Times, engine and revision change on every run: a committed page (volatile=False) keeps them out,
+    # so regenerating it leaves git clean; they are printed and kept in results/provenance/ instead.
+    run_facts = (f"{wall:.0f} s of render time" + (f", {elapsed:.0f} s this run" if elapsed is not None else "")
+                 + f"; engine {engine}, revision {rev}")
     lines += [f"Made by `{command}` from [`{rel}`]({os.path.relpath(REPO / rel, out_dir) if not Path(rel).is_absolute() else rel})"
               + (f" with `{' '.join('--set ' + shlex.quote(s) for s in overrides)}`" if overrides else "")
-              + f": {len(df)} points ({len(bad)} failed), {wall:.0f} s of render time"
-              + (f", {elapsed:.0f} s this run" if elapsed is not None else "")
-              + f"; engine {engine}, revision {rev}. Results: `experiments.load({config.name!r})`.", ""]
+              + f": {len(df)} points ({len(bad)} failed)" + (f", {run_facts}" if volatile else "")
+              + f". Results: `experiments.load({config.name!r})`.", ""]
+    if not volatile:
+        print(f"{config.name}: {len(df)} points ({len(bad)} failed), {run_facts}")
+        record = results_dir() / "provenance" / f"{config.name}.txt"
+        record.parent.mkdir(parents=True, exist_ok=True)
+        record.write_text(f"{command}: {len(df)} points ({len(bad)} failed), {run_facts}\n")
     try:
         lines += ["<details><summary>config</summary>", "", "```yaml", config_path.read_text().rstrip(), "```", "",
                   "</details>", ""]
@@ -169,7 +178,7 @@ def report_configs(configs_dir: Path | None = None) -> list[Path]:
 
 
 def main(only=None, workers=None, scheduler=None, force=False, quick=False, configs_dir: Path | None = None,
-         reports_dir: Path | None = None) -> int:
+         reports_dir: Path | None = None, retry_failed: bool = False) -> int:
     out_root = (reports_dir or REPORTS) / ("quick" if quick else "")
     if quick:
         os.environ["RAST5D_RESULTS"] = str(results_dir() / "quick")
@@ -202,7 +211,8 @@ def main(only=None, workers=None, scheduler=None, force=False, quick=False, conf
     for p, config, overrides, lines in loaded:
         t0 = time.perf_counter()
         df = run_sweep(config, source=str(p.relative_to(REPO) if p.is_relative_to(REPO) else p), workers=workers,
-                       scheduler=scheduler, force=force and config.name in chosen, lines=lines)
+                       scheduler=scheduler, force=force and config.name in chosen, lines=lines,
+                       retry_failed=retry_failed)
         failures += int((df["status"] != "ok").sum()) if "status" in df.columns else 0
         for k in counts:
             counts[k] += df.attrs.get("summary", {}).get(k, 0)
@@ -210,7 +220,7 @@ def main(only=None, workers=None, scheduler=None, force=False, quick=False, conf
         page_dir = out_root / config.outputs.folder
         page_dir.mkdir(parents=True, exist_ok=True)
         md = section_markdown(config, p, df, page_dir, _command(config.name, quick), overrides,
-                              time.perf_counter() - t0)
+                              time.perf_counter() - t0, volatile=False)
         sections[config.outputs.folder, page].append((config.outputs.order, config.name, md, config))
     for (folder, page), parts in sections.items():
         page_dir = out_root / folder
@@ -243,8 +253,7 @@ def write_index(out_root: Path, page_dir: Path, quick: bool, elapsed: float, cou
              "(`configs/paper/` and `configs/quickstart.yaml`; results cached in `results/`, or `results/quick/` for "
              "--quick; `--force` re-renders). Each page shows our numbers beside the paper's published numbers where "
              "they exist, and the command and config that made it.", ""]
-    lines += [f"Last run: {elapsed:.0f} s on this machine ({counts['rendered']} points rendered, "
-              f"{counts['cached']} from the result store).", ""]
+    print(f"report: {elapsed:.0f} s ({counts['rendered']} points rendered, {counts['cached']} from the result store)")
     lines += md_table(["page", "sections"], rows) + [""]
     other = [p for p in (REPORTS / "quickstart" / "quickstart.md", REPORTS / "bench" / "bench_core.md",
                          REPORTS / "ccd" / "README.md") if p.exists()]

@@ -77,7 +77,7 @@ def dask(todo, address, finished):
                 try:
                     row = fut.result()
                 except Exception as e:  # noqa: BLE001 - lost worker, serialisation, ...
-                    row = error_row(args[0], f"dask: {type(e).__name__}: {e}")
+                    row = error_row(args[0], f"dask: {type(e).__name__}: {e}", transient=True)
                 finished(key, row)
         except KeyboardInterrupt:
             client.cancel(list(futures))

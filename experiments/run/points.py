@@ -19,6 +19,7 @@ import traceback
 from pathlib import Path
 
 from ..config import RESULT_EXCLUDE, RenderConfig, build, build_scene, config_hash, flatten, point_columns
+from ..config.inputs import input_digests, tracking_reads
 from .store import cached_records, engine_id, git_rev, store_records
 
 
@@ -115,7 +116,9 @@ def stored_render(config: RenderConfig, threads: int | None = None):
     if cached is not None:
         return cached
     stats: dict = {}
-    result = _rendered(base, stats, threads)
+    with tracking_reads() as reads:
+        result = _rendered(base, stats, threads)
+    stats["inputs.files"] = json.dumps(input_digests(reads))
     store_records(h, result.timing_records, stats)
     return result.timing_records, stats
 
@@ -152,21 +155,29 @@ def render_point(config: RenderConfig, image_path: str | Path | None = None, thr
 
 
 def run_point(config_json: str, image_path: str | None = None, threads: int | None = None) -> dict:
-    """One point, isolated: any exception becomes a row with status 'error' (never raised)."""
+    """One point, isolated: any exception becomes a row with status 'error', its message and its
+    traceback (never raised). ``inputs.files`` lists the files read meanwhile ({path: sha256}, JSON):
+    the store serves the row only while they are unchanged."""
     config = RenderConfig.model_validate_json(config_json)
     t0 = time.perf_counter()
-    try:
-        row, _ = render_point(config, image_path, threads)
-    except Exception as e:  # noqa: BLE001 - a failing point must not stop the sweep
-        row = config_columns(config)
-        row.update(status="error", error=f"{type(e).__name__}: {e}", traceback=traceback.format_exc(limit=4),
-                   **{"engine.version": engine_id(), "engine.git_rev": git_rev(),
-                      "time.wall_s": time.perf_counter() - t0})
+    with tracking_reads() as reads:
+        try:
+            row, _ = render_point(config, image_path, threads)
+        except Exception as e:  # noqa: BLE001 - a failing point must not stop the sweep
+            row = config_columns(config)
+            row.update(status="error", error=f"{type(e).__name__}: {e}", traceback=traceback.format_exc(),
+                       **{"engine.version": engine_id(), "engine.git_rev": git_rev(),
+                          "time.wall_s": time.perf_counter() - t0})
+    row["inputs.files"] = json.dumps(input_digests(reads))
     return row
 
 
-def error_row(config_json: str, message: str) -> dict:
+def error_row(config_json: str, message: str, transient: bool = False) -> dict:
+    """The row of a point that did not return one; ``transient`` (a lost cluster worker) rows are not
+    stored, so the next run computes the point again."""
     config = RenderConfig.model_validate_json(config_json)
     row = config_columns(config)
     row.update(status="error", error=message, **{"engine.version": engine_id(), "engine.git_rev": git_rev()})
+    if transient:
+        row["_transient"] = True
     return row

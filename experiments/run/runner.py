@@ -1,5 +1,7 @@
 """Run the points of a sweep on a local process pool or a Dask cluster (executors.py), through the
-result store (store.py): cached points are read, the others computed and stored as they finish."""
+result store (store.py): cached points are read, the others computed and stored as they finish.
+Each computed point is locked in the store while it runs, so two runs sharing a store never compute
+the same point twice: the second waits for the first's row."""
 from __future__ import annotations
 
 import os
@@ -9,17 +11,19 @@ from pathlib import Path
 from ..config import RenderConfig, config_hash, expand_sweep
 from .executors import dask, local
 from .points import render_config
-from .store import cached_row, images_dir as store_images_dir, store_point, table_path, to_frame, write_parquet
+from .store import (cached_row, claim, images_dir as store_images_dir, lock_is_stale, lock_path, release,
+                    store_point, table_path, to_frame, write_parquet)
 
 
 def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "config", workers: int | None = None,
               scheduler=None, force: bool = False, images_dir: str | Path | None = None, progress: bool = True,
-              lines: dict | None = None):
+              lines: dict | None = None, retry_failed: bool = False, wait_poll_s: float = 0.5):
     """Run every point of config's sweep; returns the sweep's table (pandas DataFrame, one row per point,
     in sweep order) and writes it to results/<name>.parquet. ``workers`` (default: executor.workers or the
     core count; 0 = in-process) is the local pool; ``scheduler`` (an address or a distributed.Client, or
-    executor: {kind: dask}) runs the points on Dask instead. Ctrl-C raises KeyboardInterrupt after the
-    finished points are saved."""
+    executor: {kind: dask}) runs the points on Dask instead. Stored failed points are served as failed
+    unless ``retry_failed``. Points another run is computing (locked in the store) are waited for.
+    Ctrl-C raises KeyboardInterrupt after the finished points are saved."""
     name = name or config.name or "experiment"
     ex = config.executor
     if scheduler is None and ex.kind == "dask":
@@ -30,17 +34,29 @@ def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "c
     if config.outputs.images and images_dir is None:
         images_dir = store_images_dir(name)
     rows: dict[int, dict] = {}
-    todo = []
+    hashes = [config_hash(cfg) for _, cfg in points]
+
+    def from_store(i: int) -> dict | None:
+        h = hashes[i]
+        cached = cached_row(h, retry_failed=retry_failed)
+        if cached is not None and (images_dir is None or cached.get("status") != "ok"
+                                   or (Path(images_dir) / f"{h}.png").exists()):
+            return cached
+        return None
+
+    todo, waiting = [], []
+    claimed: set[str] = set()
     for i, (point, cfg) in enumerate(points):
-        h = config_hash(cfg)
-        cached = None if force else cached_row(h)
-        if cached is not None and (images_dir is None or (Path(images_dir) / f"{h}.png").exists()):
+        h = hashes[i]
+        cached = None if force else from_store(i)
+        if cached is not None:
             rows[i] = cached
             continue
-        image = str(Path(images_dir) / f"{h}.png") if images_dir is not None else None
-        # Several processes on 2 cores: one engine thread per point (results do not depend on it).
-        threads = 1 if (scheduler is not None or workers > 1) else None
-        todo.append((i, (cfg.model_dump_json(), image, threads)))
+        if h not in claimed and not claim(h):  # another run is computing it
+            waiting.append(i)
+            continue
+        claimed.add(h)
+        todo.append(_job(i, h, cfg, images_dir, scheduler, workers))
     if config.outputs.metrics is not None and todo:
         from .references import prepare_references
 
@@ -61,10 +77,14 @@ def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "c
         bar = tqdm(total=len(todo), desc=name, unit="point", dynamic_ncols=True)
     n_failed = 0
 
+    n_done = 0
+
     def finished(i: int, row: dict):
-        nonlocal n_failed
+        nonlocal n_failed, n_done
+        n_done += 1
         rows[i] = row
         store_point(row)
+        release(hashes[i])
         if row.get("status") != "ok":
             n_failed += 1
         if bar is not None:
@@ -72,29 +92,68 @@ def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "c
             if row.get("status") != "ok":
                 bar.write(f"{name}: point {points[i][0]} failed: {row.get('error')}")
 
+    def execute(jobs):
+        if scheduler is not None:
+            dask(jobs, scheduler, finished)
+        else:
+            local(jobs, workers, finished)
+
     t0 = time.perf_counter()
     interrupted = False
+    n_waited = 0
     try:
         for phase in phases:
-            if scheduler is not None:
-                dask(phase, scheduler, finished)
-            else:
-                local(phase, workers, finished)
+            execute(phase)
+        # Points another run was computing: take its rows, or compute them if it gave up on them.
+        while waiting:
+            still = []
+            for i in waiting:
+                h = hashes[i]
+                if lock_path(h).exists() and not lock_is_stale(lock_path(h)):
+                    still.append(i)
+                    continue
+                row = from_store(i)
+                if row is not None:
+                    rows[i] = row
+                    n_waited += 1
+                elif claim(h):
+                    claimed.add(h)
+                    execute([_job(i, h, points[i][1], images_dir, scheduler, workers)])
+                else:
+                    still.append(i)
+            waiting = still
+            if waiting:
+                time.sleep(wait_poll_s)
     except KeyboardInterrupt:
         interrupted = True
     finally:
+        for h in claimed:
+            release(h)
         if bar is not None:
             bar.close()
     df = to_frame([rows[i] for i in sorted(rows)])
     if len(df):
         write_parquet(df, table_path(name))
-    n_cached = len(rows) - (len(todo) if not interrupted else sum(1 for k, _ in todo if k in rows))
-    summary = {"points": len(points), "rendered": len(rows) - n_cached, "cached": n_cached, "failed": n_failed,
-               "seconds": time.perf_counter() - t0}
+    n_rendered = n_done
+    n_cached = len(rows) - n_rendered - n_waited
+    n_failed_stored = sum(1 for r in rows.values() if r.get("status") != "ok") - n_failed
+    summary = {"points": len(points), "rendered": n_rendered, "cached": n_cached, "failed": n_failed,
+               "failed_cached": n_failed_stored, "from_other_run": n_waited, "seconds": time.perf_counter() - t0}
     df.attrs["summary"] = summary
     if progress:
-        print(f"{name}: {len(rows)}/{len(points)} points ({summary['rendered']} rendered, {n_cached} cached, "
-              f"{n_failed} failed) in {summary['seconds']:.1f} s -> {table_path(name)}")
+        extra = f", {n_waited} computed by another run" if n_waited else ""
+        stored = (f"; {n_failed_stored} failed point(s) served from the store (their error is kept: "
+                  "`rast5d run --retry-failed` re-renders them)") if n_failed_stored else ""
+        print(f"{name}: {len(rows)}/{len(points)} points ({n_rendered} rendered, {n_cached} cached{extra}, "
+              f"{n_failed} failed{stored}) in {summary['seconds']:.1f} s -> {table_path(name)}")
     if interrupted:
         raise KeyboardInterrupt
     return df
+
+
+def _job(i: int, h: str, cfg: RenderConfig, images_dir, scheduler, workers: int):
+    """(key, run_point arguments) of point i."""
+    image = str(Path(images_dir) / f"{h}.png") if images_dir is not None else None
+    # Several processes on 2 cores: one engine thread per point (results do not depend on it).
+    threads = 1 if (scheduler is not None or workers > 1) else None
+    return i, (cfg.model_dump_json(), image, threads)

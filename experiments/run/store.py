@@ -2,7 +2,20 @@
 
 - ``results/points/<config hash>-<engine version>.parquet``: one finished point (one row), written
   as soon as the point finishes (so Ctrl-C or a crash keeps every finished point). This is the
-  cache: a rerun renders only the points whose file is missing; ``force=True`` re-renders.
+  cache: a rerun renders only the points whose file is missing; ``force=True`` re-renders. The
+  config hash covers the contents of every file the point's scenes read (experiments/config/inputs.py)
+  and the engine version covers the installed package, so an edited scene, mesh, texture or module
+  gives new keys. A failed point is stored too, with its error and traceback, and is served as
+  failed until a run with ``retry_failed=True`` (``rast5d run --retry-failed``) re-renders it.
+  Each file carries a checksum of its row (Parquet metadata ``rast5d.sha256``) and Parquet page
+  checksums: a truncated or corrupted file is detected when read and recomputed with a
+  ``StoreWarning``. A row also lists the files read while it was computed (``inputs.files``); it is
+  served only while they are unchanged.
+- ``results/points/<config hash>-<engine version>.lock``: a point being computed by a running
+  ``rast5d run`` (host and pid inside). Another run sharing the store waits for that point instead of
+  computing it again; a lock whose process is gone (same host) or older than
+  ``RAST5D_LOCK_TIMEOUT`` seconds (default one day) is taken over. Every file is written to a
+  temporary name unique to its process and renamed into place, so a reader never sees half a file.
 - ``results/<name>.parquet``: the sweep's table (one row per point of the current sweep, failed
   points included with ``status = "error"`` and their message), written when the sweep ends or is
   interrupted; ``experiments.load(name)`` reads it.
@@ -33,19 +46,45 @@ def results_dir() -> Path:
     return Path(os.environ.get("RAST5D_RESULTS", RESULTS))
 
 
+class StoreWarning(UserWarning):
+    """A stored file could not be used (truncated, corrupted, unreadable) and is recomputed."""
+
+
+# Folders of the installed package whose files do not enter a result row (the report pages only read
+# rows): editing a figure does not invalidate the store.
+_NOT_IN_ROWS = ("experiments/report/",)
+
+
+def package_files() -> list[Path]:
+    """Every file of the installed package that a result row depends on: the compiled engine and the
+    files under sim/, models/ (assets included) and experiments/ (except _NOT_IN_ROWS), without
+    caches and build trees."""
+    import sim
+
+    root = Path(sim.__file__).resolve().parent.parent
+    files = {Path(sim._core.__file__).resolve()}
+    for folder in ("sim", "models", "experiments"):
+        for f in (root / folder).rglob("*"):
+            rel = f.relative_to(root).as_posix()
+            if (not f.is_file() or "__pycache__" in f.parts or f.suffix in (".pyc", ".so")
+                    or rel.startswith(_NOT_IN_ROWS)):
+                continue
+            files.add(f)
+    return sorted(files)
+
+
 def engine_id() -> str:
-    """The engine version: a fingerprint of the compiled engine and of the Python that drives it
-    (sim/, models/). Cached points are only reused by the same engine."""
+    """The engine version: a fingerprint of the whole installed package (package_files: the compiled
+    engine, every module and asset). Cached points are only reused by the same package."""
     global _ENGINE_ID
     if _ENGINE_ID is None:
         import hashlib
 
-        import sim
-
-        h = hashlib.sha256(Path(sim._core.__file__).read_bytes())
-        for folder in ("sim", "models"):
-            for f in sorted((REPO / folder).glob("*.py")):
-                h.update(f.read_bytes())
+        root = Path(__import__("sim").__file__).resolve().parent.parent
+        h = hashlib.sha256()
+        for f in package_files():
+            h.update(str(f.relative_to(root) if f.is_relative_to(root) else f.name).encode() + b"\0")
+            h.update(f.read_bytes())
         _ENGINE_ID = h.hexdigest()[:12]
     return _ENGINE_ID
 
@@ -97,21 +136,169 @@ def write_parquet(df, path: Path):
     atomic_write(path, lambda tmp: df.to_parquet(tmp, index=False, engine="pyarrow"))
 
 
+_CHECKSUM_KEY = b"rast5d.sha256"
+
+
+def _table_digest(table) -> str:
+    """sha256 of a pyarrow table's column names, types and values (not of its file bytes: the same
+    row read back gives the same digest)."""
+    import hashlib
+    import json
+
+    h = hashlib.sha256()
+    for name, col in zip(table.column_names, table.columns):
+        h.update(json.dumps([name, str(col.type), col.to_pylist()], default=repr).encode())
+    return h.hexdigest()
+
+
+def write_point_file(df, path: Path) -> None:
+    """One point's row with its checksum (Parquet metadata) and Parquet page checksums, atomically."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    table = pa.Table.from_pandas(df, preserve_index=False)
+    meta = dict(table.schema.metadata or {})
+    meta[_CHECKSUM_KEY] = _table_digest(table).encode()
+    table = table.replace_schema_metadata(meta)
+    atomic_write(path, lambda tmp: pq.write_table(table, tmp, write_page_checksum=True))
+
+
+def read_point_file(path: Path) -> dict:
+    """The row of a point file; raises ValueError if the file is truncated, corrupted or has no checksum."""
+    import pyarrow.parquet as pq
+
+    try:
+        table = pq.read_table(path, page_checksum_verification=True)
+    except Exception as e:  # noqa: BLE001 - any read failure means the file cannot be trusted
+        raise ValueError(f"unreadable ({type(e).__name__}: {e})") from None
+    stored = (table.schema.metadata or {}).get(_CHECKSUM_KEY)
+    if stored is None:
+        raise ValueError("no checksum")
+    if stored.decode() != _table_digest(table):
+        raise ValueError("checksum mismatch (the file was modified or corrupted)")
+    if table.num_rows != 1:
+        raise ValueError(f"expected one row, found {table.num_rows}")
+    return table.to_pandas().iloc[0].to_dict()
+
+
 def store_point(row: dict):
-    if row.get("status") == "ok":
-        write_parquet(to_frame([row]), point_path(row["config_hash"]))
+    """Store a finished point (failed ones too, with their error and traceback), unless the row is
+    marked transient (a lost Dask worker: nothing about the point itself)."""
+    if row.pop("_transient", False):
+        return
+    write_point_file(to_frame([row]), point_path(row["config_hash"]))
 
 
-def cached_row(h: str) -> dict | None:
-    import pandas as pd
+def cached_row(h: str, retry_failed: bool = False) -> dict | None:
+    """The stored row of point ``h``, or None when it must be computed: no file, a failed point with
+    ``retry_failed``, a file that fails its read check (a StoreWarning says so), or an input file
+    that changed since the row was computed."""
+    import json
+    import warnings
+
+    from ..config.inputs import unchanged
 
     p = point_path(h)
     if not p.exists():
         return None
     try:
-        return pd.read_parquet(p).iloc[0].to_dict()
-    except Exception:  # noqa: BLE001 - a corrupt cache file is recomputed
+        row = read_point_file(p)
+    except FileNotFoundError:
         return None
+    except ValueError as e:
+        warnings.warn(f"{p}: {e}; the point is recomputed", StoreWarning, stacklevel=2)
+        return None
+    if retry_failed and row.get("status") != "ok":
+        return None
+    files = row.get("inputs.files")
+    if isinstance(files, str) and files:
+        try:
+            if unchanged(json.loads(files)) is not None:
+                return None
+        except ValueError:
+            return None
+    return row
+
+
+# ---- locks: one run computes a point, the others wait for it -----------------------------------------
+
+def lock_path(h: str) -> Path:
+    return point_path(h).with_suffix(".lock")
+
+
+def _lock_owner(path: Path) -> tuple[str, int, float] | None:
+    try:
+        host, pid, t = path.read_text().split()
+        return host, int(pid), float(t)
+    except (OSError, ValueError):
+        return None
+
+
+def _alive(host: str, pid: int) -> bool:
+    import socket
+
+    if host != socket.gethostname():
+        return True  # cannot tell: trusted until it times out
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def lock_is_stale(path: Path) -> bool:
+    import time
+
+    owner = _lock_owner(path)
+    if owner is None:
+        try:  # being written right now, or garbage: stale only when old
+            return time.time() - path.stat().st_mtime > 60
+        except FileNotFoundError:
+            return False
+    host, pid, t = owner
+    timeout = float(os.environ.get("RAST5D_LOCK_TIMEOUT", 86400))
+    return not _alive(host, pid) or time.time() - t > timeout
+
+
+def claim(h: str) -> bool:
+    """Take the lock of point ``h`` for this process; False if another live process holds it."""
+    import socket
+    import time
+
+    path = lock_path(h)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    for _ in range(2):
+        try:
+            fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+        except FileExistsError:
+            if lock_is_stale(path):
+                # take over: rename the stale lock away first (only one taker wins the rename)
+                try:
+                    os.replace(path, path.with_name(f"{path.name}.stale{os.getpid()}"))
+                    os.unlink(path.with_name(f"{path.name}.stale{os.getpid()}"))
+                except FileNotFoundError:
+                    pass
+                continue
+            return False
+        with os.fdopen(fd, "w") as f:
+            f.write(f"{socket.gethostname()} {os.getpid()} {time.time()}")
+        return True
+    return False
+
+
+def release(h: str) -> None:
+    """Drop this process's lock of point ``h`` (if it holds it)."""
+    import socket
+
+    path = lock_path(h)
+    owner = _lock_owner(path)
+    if owner is not None and owner[:2] == (socket.gethostname(), os.getpid()):
+        try:
+            path.unlink()
+        except FileNotFoundError:
+            pass
 
 
 def images_dir(name: str) -> Path:
@@ -150,16 +337,26 @@ def store_records(h: str, records, stats: dict) -> None:
 
 
 def cached_records(h: str):
-    """(records, flat counters) of a stored render, or None."""
+    """(records, flat counters) of a stored render, or None (a corrupt file is recomputed with a
+    StoreWarning)."""
     import json
+    import warnings
 
     import numpy as np
+
+    from ..config.inputs import unchanged
 
     p = records_path(h)
     if not p.exists():
         return None
     try:
-        with np.load(p) as f:
-            return f["records"], json.loads(str(f["stats"]))
-    except Exception:  # noqa: BLE001 - a corrupt file is recomputed
+        with np.load(p) as f:  # an npz member carries a CRC-32, checked on read
+            records, stats = f["records"], json.loads(str(f["stats"]))
+    except Exception as e:  # noqa: BLE001 - a corrupt file is recomputed
+        warnings.warn(f"{p}: unreadable ({type(e).__name__}: {e}); the render is recomputed", StoreWarning,
+                      stacklevel=2)
         return None
+    files = stats.get("inputs.files")
+    if isinstance(files, str) and files and unchanged(json.loads(files)) is not None:
+        return None
+    return records, stats

@@ -18,6 +18,8 @@ void register_conservative(py::module_& m) {
         require_shape(v0, {-1, 3, 3}, "v0");
         const py::ssize_t n = v0.shape(0);
         require_shape(v1, {n, 3, 3}, "v1");
+        require_finite(v0, "v0");
+        require_finite(v1, "v1");
         std::vector<float> colors(static_cast<std::size_t>(n) * 9, 0.0f);
         SceneArrays scene{static_cast<int>(n), v0.data(), v1.data(), colors.data()};
         ConservativeResult res;

@@ -25,18 +25,25 @@ void register_render(py::module_& m) {
         const py::ssize_t n = v0.shape(0);
         require_shape(v1, {n, 3, 3}, "v1");
         require_shape(colors, {n, 3, 3}, "colors");
+        require_finite(v0, "v0");
+        require_finite(v1, "v1");
+        require_finite(colors, "colors");
         SampleTable table = make_table(samples, p.lens_grid, lens_index, lens_uv);
         table.set_time_strata(p.time_strata);  // the (lens cell, time stratum) index
         SceneArrays scene{static_cast<int>(n), v0.data(), v1.data(), colors.data()};
         if (uvs && tex_slots) {  // texturing: uvs (n, 3, 2), tex_slots (n, 4), textures (H, W, C)
           require_shape(*uvs, {n, 3, 2}, "uvs");
           require_shape(*tex_slots, {n, kMaxTexSlots}, "tex_slots");
+          require_finite(*uvs, "uvs");
           scene.uvs = uvs->data(), scene.tex_slots = tex_slots->data();
         }
-        for (const FArr& t : textures) {
-          require_shape(t, {-1, -1, -1}, "textures[i]");
+        for (std::size_t i = 0; i < textures.size(); ++i) {
+          const FArr& t = textures[i];
+          const std::string name = "textures[" + std::to_string(i) + "]";
+          require_shape(t, {-1, -1, -1}, name.c_str());
           if (t.shape(0) < 1 || t.shape(1) < 1 || t.shape(2) < 1 || t.shape(2) > 4)
-            throw std::invalid_argument("textures[i]: expected (H, W, 1..4) with H, W >= 1");
+            throw std::invalid_argument(name + ": expected (H, W, 1..4) with H, W >= 1");
+          require_finite(t, name.c_str());
           scene.textures.push_back({t.data(), static_cast<int>(t.shape(0)), static_cast<int>(t.shape(1)),
                                     static_cast<int>(t.shape(2))});
         }

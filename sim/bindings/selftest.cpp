@@ -88,7 +88,9 @@ void register_selftest(py::module_& m) {
       "simulate_cache",
       [](const py::array_t<std::uint64_t, py::array::c_style | py::array::forcecast>& lines, std::uint64_t n_lines,
          std::uint64_t ways) {
-        if (n_lines < 1) throw std::invalid_argument("n_lines: expected >= 1");
+        // One tag and one stamp per line, plus the LRU shadow: 2^26 lines is 1.5 GiB already.
+        if (n_lines < 1 || n_lines > (std::uint64_t{1} << 26))
+          throw std::invalid_argument("n_lines: expected 1..67108864, got " + std::to_string(n_lines));
         if (ways && n_lines % ways) throw std::invalid_argument("ways: expected 0 or a divisor of n_lines");
         SetAssocCache cache(n_lines, ways);
         py::array_t<bool> hit(lines.size());

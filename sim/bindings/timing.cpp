@@ -1,6 +1,8 @@
 // The timing model (docs/timing.md): the work-record dtype, the units and figures, the estimate.
 #include "bindings.h"
 
+#include <cmath>
+
 #include <pybind11/stl.h>
 
 #include <vector>
@@ -39,6 +41,8 @@ void register_timing(py::module_& m) {
         if (throughput.size() != kNumUnits || latency.size() != kNumUnits || fifo.size() != kNumUnits)
           throw std::invalid_argument("throughput, latency, fifo: expected one value per unit (" +
                                       std::to_string(kNumUnits) + ")");
+        if (!(std::isfinite(tex_hit_latency) && std::isfinite(tex_miss_latency)))
+          throw std::invalid_argument("tex_hit_latency, tex_miss_latency: expected finite numbers");
         TimingConfig cfg;
         for (int k = 0; k < kNumUnits; ++k) cfg.units[k] = {throughput[k], latency[k], fifo[k]};
         cfg.tex_hit_latency = tex_hit_latency;
