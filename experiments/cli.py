@@ -52,8 +52,24 @@ def cmd_render(args) -> int:
         return 2
     image = args.output or config.outputs.image
     stats_path = args.stats or config.outputs.stats
-    row, result = render_point(config, image)
+    if args.pixel:
+        return _trace(config, args.pixel)
+    from .run.progress import ProgressBar
+
+    bar = ProgressBar(delay=args.progress_delay)
+    options = {"progress": bar}
+    if args.heatmaps:
+        options["pixel_stats"] = True
+    try:
+        row, result = render_point(config, image, options=options)
+    finally:
+        bar.close()
     print(_summary(row))
+    if args.heatmaps:
+        from .report.heatmaps import write_heatmaps
+
+        files = write_heatmaps(result, args.heatmaps, tile=int(result.config["pipeline"]["tile_size"]))
+        print(f"heatmaps -> {args.heatmaps}/ ({', '.join(f.name for f in files)})")
     if image:
         print(f"image -> {image}")
     if stats_path:
@@ -63,6 +79,24 @@ def cmd_render(args) -> int:
                                     for k, (u, d) in __import__("sim").counter_docs().items()}}
         Path(stats_path).write_text(json.dumps(_json_safe(payload), indent=2, default=str))
         print(f"stats -> {stats_path}")
+    return 0
+
+
+def _pixel_arg(text: str) -> tuple[int, int]:
+    try:
+        x, y = (int(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected X,Y (two integers, column and row from the top), got {text!r}")
+    return x, y
+
+
+def _trace(config, pixel: tuple[int, int]) -> int:
+    import sim
+
+    from .config import build
+
+    scene, camera, table, pipeline = build(config)
+    print(sim.trace_pixel(scene, camera, table, pixel[0], pixel[1], pipeline, hardware=config.hardware_config()))
     return 0
 
 
@@ -148,6 +182,14 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--sample-fraction", type=float, metavar="F",
                    help="sampled simulation: render a stratified share F in (0, 1] of the screen bins and "
                         "estimate the frame with 95%% intervals (pipeline.sample_fraction)")
+    p.add_argument("--heatmaps", metavar="DIR",
+                   help="write the image and per-pixel maps of where the work goes (samples tested, hits, "
+                        "operations, tile cull reason) as PNGs with colour bars into DIR")
+    p.add_argument("--pixel", metavar="X,Y", type=_pixel_arg,
+                   help="trace one pixel (column X, row Y from the top): the triangles that reached it, each "
+                        "tile test's verdict, each sample tested and hit, the operations charged")
+    p.add_argument("--progress-delay", type=float, default=2.0, metavar="S",
+                   help="show a progress bar once the render has run S seconds (default 2)")
     p.set_defaults(func=cmd_render)
 
     p = sub.add_parser("run", help="run a sweep (config.sweep) into the result store (results/<name>.parquet)")

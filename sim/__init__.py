@@ -17,11 +17,11 @@ from .pipeline import line_algorithms
 from .png import linear_to_srgb8, write_png
 
 from .camera import Camera
-from .render import Result, memory_estimate, render
+from .render import Result, memory_estimate, render, trace_pixel
 from .sample_table import SampleTable
 from .intervals import ConservativeResult, OcclusionResult, conservative_raster, occlusion_query
 from .stats import counter_docs
-from . import energy, timing
+from . import energy, pixel_stats, timing
 from . import uses
 
 __all__ = [
@@ -46,11 +46,13 @@ __all__ = [
     "line_algorithms",
     "linear_to_srgb8",
     "memory_estimate",
+    "pixel_stats",
     "render",
     "shading_modes",
     "texture_filters",
     "texture_layouts",
     "timing",
+    "trace_pixel",
     "uses",
     "write_png",
 ]

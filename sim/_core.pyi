@@ -1,7 +1,7 @@
 """Type stub for the rast5d engine (sim/bindings/*.cpp; one section per binding file). Use the
 Python face (sim.render, sim.Camera, sim.SampleTable, sim.PipelineConfig) rather than calling these
 directly."""
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 import numpy.typing as npt
@@ -108,11 +108,15 @@ def render(
     uvs: npt.NDArray[np.float32] | None = None,  # (N, 3, 2) texture coordinates
     tex_slots: npt.NDArray[np.int32] | None = None,  # (N, 4) texture index per slot, -1 unused
     textures: list[npt.NDArray[np.float32]] = ...,  # (H, W, 1..4) linear images
-    alpha: npt.NDArray[np.float32] | None = None,  # (N,) opacity: per-sample alpha coverage (backend/alpha.h)
+    pixel_stats: list[str] = ...,  # counter names to map per pixel (sim.pixel_stats)
+    trace_pixel: tuple[int, int] | None = None,  # (x, y): trace this pixel (counting path, its bin only)
+    progress: Callable[[int, int], None] | None = None,  # (bins done, bins) every few ms
 ) -> dict[str, Any]:
     """Returns {'image': (H, W, 3) float32, 'counters': {name: int}}, with params.record_timing
     'timing_records' (timing_record_dtype(), culled triangles then bins in raster order) and, with export_samples,
-    'sample_depth' (H, W, spp) float32 and 'sample_triangle' (H, W, spp) int32. Releases the GIL;
+    'sample_depth' (H, W, spp) float32 and 'sample_triangle' (H, W, spp) int32, with pixel_stats 'pixel_stats'
+    (k, H, W) uint64, with trace_pixel 'trace_events' [(triangle, kind, (x0, y0, x1, y1), {counter: n})] and
+    'trace_samples' [(triangle, sample, covered, hit)]. Releases the GIL;
     Ctrl-C raises KeyboardInterrupt. Raises ValueError for invalid parameters."""
 
 def lens_grid_buckets(

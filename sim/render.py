@@ -12,6 +12,7 @@ from .camera import Camera
 from .errors import ConfigError, EmptyFrameWarning, SceneInputError
 from .hardware import HardwareConfig
 from . import params as _params
+from . import pixel_stats as _pixel_stats
 from .pipeline import PipelineConfig
 from .texturing import texture_inputs
 from .energy import estimate as energy_estimate
@@ -37,6 +38,9 @@ class Result:
                 half-width} of every counter and derived figure in flat_stats, which then hold
                 frame estimates; NaN for figures not estimable under sampling (sim.sampling).
                 None for a whole-frame render (exact figures)
+    pixel_stats counter name -> (H, W) uint64 map of where that work was done, only with
+                render(..., pixel_stats=True or [names]); each map sums exactly to its frame
+                counter (sim.pixel_stats)
     """
 
     image: np.ndarray
@@ -46,6 +50,7 @@ class Result:
     sample_triangle: np.ndarray | None = None
     timing_records: np.ndarray | None = None
     ci95: dict | None = None
+    pixel_stats: dict | None = None
 
     @property
     def stats(self) -> dict:
@@ -116,7 +121,7 @@ def _scene_alpha(scene, n: int) -> np.ndarray | None:
 
 def memory_parts(camera: Camera, spp: int, n_triangles: int, config: PipelineConfig, threads: int,
                  export_samples: bool = False, timing: bool = True, period: int = 0,
-                 timing_per_visit: bool = False) -> dict[str, int]:
+                 timing_per_visit: bool = False, pixel_maps: int = 0) -> dict[str, int]:
     """Bytes the engine will allocate, by part: {part: bytes}; ``memory_estimate`` is their sum.
     Each part's name says what it grows with (docs/errors.md, tests/test_memory.py)."""
     b = config.bin_size
@@ -137,16 +142,17 @@ def memory_parts(camera: Camera, spp: int, n_triangles: int, config: PipelineCon
             camera.width * camera.height // config.tile_size ** 2 * 4 * 96 * 3 if timing and timing_per_visit else 0,
         "sample index (period^2 x lens cells x time strata)":
             period * period * (grid * grid * config.time_strata + 1 + spp) * 4,
+        "per-pixel statistics (width x height x maps)": camera.width * camera.height * pixel_maps * 8 * 2,
     }
 
 
 def memory_estimate(camera: Camera, spp: int, n_triangles: int, config: PipelineConfig, threads: int,
                     export_samples: bool = False, timing: bool = True, period: int = 0,
-                    timing_per_visit: bool = False) -> int:
+                    timing_per_visit: bool = False, pixel_maps: int = 0) -> int:
     """Bytes the engine will allocate (image, per-thread bin buffers, setup, bin lists, exports,
     timing records, and with the table's period the (lens cell, time stratum) sample index)."""
     return int(sum(memory_parts(camera, spp, n_triangles, config, threads, export_samples, timing,
-                                period, timing_per_visit).values()))
+                                period, timing_per_visit, pixel_maps).values()))
 
 
 def _memory_message(need: int, parts: dict, camera: Camera, spp: int, n: int, config: PipelineConfig,
@@ -186,11 +192,14 @@ def _interval_params(params, config: PipelineConfig) -> None:
 
 def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *,
            export_samples: bool = False, hardware: HardwareConfig | None = None, timing: bool = True,
-           query: tuple[int, str] | None = None) -> Result:
+           query: tuple[int, str] | None = None, pixel_stats=False, progress=None,
+           _trace: tuple[int, int] | None = None) -> Result:
     """Render ``scene`` through ``camera`` with sample ``table``. Raises ConfigError/SceneInputError
     (ValueErrors naming the field and value) for bad input; KeyboardInterrupt on Ctrl-C.
     ``hardware`` (default HardwareConfig()) supplies the texture-cache geometry and feeds the timing
-    model (docs/timing.md), whose figures are in ``stats["timing"]``; ``timing=False`` skips it."""
+    model (docs/timing.md), whose figures are in ``stats["timing"]``; ``timing=False`` skips it.
+    ``pixel_stats=True`` (or a list of counter names) fills ``Result.pixel_stats`` (sim.pixel_stats).
+    ``progress(done_bins, total_bins)`` is called every few milliseconds while the engine runs."""
     if config is None:
         config = PipelineConfig()
     if hardware is None:
@@ -201,6 +210,13 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
         raise ConfigError(f"camera: expected sim.Camera, got {type(camera).__name__}")
     if not isinstance(config, PipelineConfig):
         raise ConfigError(f"config: expected sim.PipelineConfig, got {type(config).__name__}")
+    if pixel_stats is False or pixel_stats is None:
+        map_names, derived_maps = [], []
+    else:
+        try:
+            map_names, derived_maps = _pixel_stats.channels(pixel_stats)
+        except ValueError as e:
+            raise ConfigError(str(e)) from None
     p0, p1, col = _scene_arrays(scene)
     is_lines = getattr(table, "kind", "points") == "lines"
     if is_lines != (config.algorithm == "lines"):
@@ -221,7 +237,8 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     grid = config.resolved_lens_grid(spp)
     threads = config.threads or (os.cpu_count() or 1)
     parts = memory_parts(camera, spp, p0.shape[0], config, threads, export_samples, timing,
-                         period=samples.shape[0], timing_per_visit=hardware.timing.granularity == "visit")
+                         period=samples.shape[0], timing_per_visit=hardware.timing.granularity == "visit",
+                         pixel_maps=len(map_names) + len(derived_maps))
     need = int(sum(parts.values()))
     if need > config.memory_limit_bytes:
         raise ConfigError(_memory_message(need, parts, camera, spp, p0.shape[0], config, threads))
@@ -233,6 +250,8 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     params = _camera_params(camera)
     _params.set_layer(params, "pipeline", config)  # lens_grid 'auto' keeps the engine default:
     params.lens_grid = grid                          # resolved here
+    if _trace is not None:  # sim.trace_pixel: the counting path records each sample
+        params.op_count = "exact"
     if query is not None:  # (first query triangle, mode name): set by sim.occlusion_query only
         params.query_first, params.query_mode = int(query[0]), query[1]
     # The engine skips a dimension only where skipping is exact: every sample has u = v = 0 (no
@@ -264,7 +283,8 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     t0 = time.perf_counter()
     try:
         out = _core.render(params, v0, v1, col32, samples, lens_index, lens_uv, export_samples,
-                           uvs=uvs, tex_slots=slots, textures=textures, alpha=alpha)
+                           uvs=uvs, tex_slots=slots, textures=textures, alpha=alpha, pixel_stats=map_names,
+                           trace_pixel=_trace, progress=progress)
     except ValueError as e:  # invalid_argument from the engine: name it as a config error
         msg = str(e)
         raise ConfigError(f"PipelineConfig.{msg}" if msg.startswith("sample_fraction:") else msg) from None
@@ -292,11 +312,35 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
             "hardware": hardware_desc}
     if lod_report is not None:
         desc["lod"] = lod_report.objects
-    if query is None and not flat.get("raster.samples_tested") and not flat.get("lines.tests"):
+    if query is None and _trace is None and not flat.get("raster.samples_tested") and not flat.get("lines.tests"):
         _warn_empty_frame(flat, camera)
-    return Result(image=out["image"], flat_stats=flat, config=desc,
-                  sample_depth=out.get("sample_depth"), sample_triangle=out.get("sample_triangle"),
-                  timing_records=records, ci95=ci95)
+    maps = None
+    if "pixel_stats" in out and (map_names or derived_maps):
+        maps = _pixel_stats.assemble(map_names, derived_maps, out["pixel_stats"])
+    result = Result(image=out["image"], flat_stats=flat, config=desc,
+                    sample_depth=out.get("sample_depth"), sample_triangle=out.get("sample_triangle"),
+                    timing_records=records, ci95=ci95, pixel_stats=maps)
+    if _trace is not None:
+        result.config["trace"] = (out["trace_events"], out["trace_samples"])
+    return result
+
+
+def trace_pixel(scene, camera: Camera, table, x: int, y: int, config: PipelineConfig | None = None, *,
+                hardware: HardwareConfig | None = None) -> "_pixel_stats.PixelTrace":
+    """Trace pixel (x, y) (column, row from the top): render its screen bin on the counting path and
+    return a sim.pixel_stats.PixelTrace (the triangles that reached it, each tile test's verdict, each
+    sample tested and hit, the operations charged); print it for a readable account."""
+    if config is None:
+        config = PipelineConfig()
+    for name, v in (("x", x), ("y", y)):
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
+            raise ConfigError(f"pixel.{name}: expected an integer, got {v!r}")
+    res = render(scene, camera, table, config, hardware=hardware, timing=False, _trace=(int(x), int(y)))
+    events, samples = res.config.pop("trace")
+    spp = int(table.samples(camera.lens).shape[2])
+    return _pixel_stats.PixelTrace(x=int(x), y=int(y), spp=spp, algorithm=config.algorithm,
+                                   events=[(int(t), int(k), tuple(r), dict(d)) for t, k, r, d in events],
+                                   samples=[(int(t), int(s), bool(c), bool(h)) for t, s, c, h in samples])
 
 
 def _warn_empty_frame(flat: dict, camera: Camera) -> None:

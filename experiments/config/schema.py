@@ -161,12 +161,16 @@ HardwareSpec.__doc__ = ("The modelled hardware (sim.HardwareConfig: timing units
 class PlotSpec(_Strict):
     """One figure or table of a report page (docs/reports.md)."""
 
-    kind: Literal["line", "bar", "table", "scatter", "heatmap", "image_grid"] = Field(
-        "line", description="line | bar | table | scatter | heatmap | image_grid")
+    kind: Literal["line", "bar", "table", "scatter", "heatmap", "image_grid", "image"] = Field(
+        "line", description="line | bar | table | scatter | heatmap | image_grid | image")
+    map: Optional[str] = Field(None, description=(
+        "heatmap only: a per-pixel map (sim.pixel_stats: raster.samples_tested, ops.total, tile.culled_H, ...) "
+        "or 'tile.cull_reason' of the one point left by where: (one panel per facet value), re-rendered "
+        "when the page is drawn; then x, row and y are not needed"))
     x: Optional[str] = Field(None, description=(
         "Column on the x axis (table: the row key; heatmap and image_grid: the column whose values make the "
         "columns)"))
-    y: Union[str, list[str]] = Field(..., description=(
+    y: Union[str, list[str]] = Field("", description=(
         "Column(s) on the y axis (table: the value columns; heatmap: the cell value; image_grid: the value "
         "written under each image)"))
     row: Optional[str] = Field(None, description=(
@@ -207,8 +211,12 @@ class PlotSpec(_Strict):
     def _check(self):
         if self.kind in ("line", "bar", "scatter") and self.x is None:
             raise ValueError(f"a {self.kind} plot needs x")
-        if self.kind in ("heatmap", "image_grid") and (self.x is None or self.row is None):
+        if self.map is not None and self.kind != "heatmap":
+            raise ValueError("map: only for heatmap plots")
+        if self.kind in ("heatmap", "image_grid") and self.map is None and (self.x is None or self.row is None):
             raise ValueError(f"a {self.kind} plot needs x and row")
+        if self.kind not in ("image",) and self.map is None and not self.y:
+            raise ValueError(f"a {self.kind} plot needs y")
         if self.row is not None and self.kind not in ("heatmap", "image_grid"):
             raise ValueError("row: only for heatmap and image_grid plots")
         if self.echo and self.kind != "table":

@@ -26,6 +26,70 @@ STYLE = {
     "figure.constrained_layout.use": True,
 }
 PANEL_INCHES = (3.3, 2.5)
+# One colour per algorithm on every page (the others take COLORS in order).
+ALGORITHM_COLORS = {"bruteforce": "#000000", "interval": "#0072B2", "tile": "#D55E00", "tile_interleaved": "#E69F00",
+                    "interleave": "#009E73", "hinterleave": "#56B4E9", "laine": "#CC79A7"}
+# Axis labels of config columns (counters and derived figures take theirs from sim.counter_docs()).
+CONFIG_LABELS = {
+    "camera.coc_px": ("CoC radius", "px"), "samples.spp": ("samples per pixel", ""),
+    "pipeline.algorithm": ("algorithm", ""), "scene.name": ("scene", ""), "pipeline.tile_size": ("tile size", "px"),
+    "pipeline.lens_grid": ("lens grid", "cells per axis"), "hardware.tex_cache.size_bytes": ("texture cache size", "bytes"),
+    "camera.width": ("image width", "px"), "camera.height": ("image height", "px"), "samples.kind": ("sample table", ""),
+    "pipeline.shading": ("shading", ""), "pipeline.bin_size": ("bin size", "px"), "time.wall_s": ("wall time", "s"),
+    "scene.triangles": ("triangles", ""), "camera.u_scale": ("lens u scale", ""), "pipeline.time_splits": ("time splits", ""),
+    "scene.params.motion_px": ("motion", "px"), "scene.params.layers": ("occluder layers", ""),
+    "samples.views": ("views", ""), "pipeline.texture_layout": ("texture layout", ""),
+    "hardware.tex_cache.ways": ("texture cache ways", ""), "samples.n_lens": ("lens positions", ""),
+    "pipeline.motion_test": ("motion test", ""), "pipeline.time_strata": ("time strata", ""),
+}
+
+
+def value_label(col: str | None, derived: dict | None = None) -> str:
+    """An axis or legend label for a column: '<what> [<unit>]' from CONFIG_LABELS or sim.counter_docs()
+    (the description up to its first ':' when short), a derived column as 'name = expression', else
+    the column name. Combined hue columns ('a / b') are labelled part by part."""
+    if not col:
+        return ""
+    if " / " in col and col not in (derived or {}):
+        return " / ".join(value_label(c, derived) for c in col.split(" / "))
+    if derived and col in derived:
+        return f"{col} = {derived[col]}"
+    if col in CONFIG_LABELS:
+        what, unit = CONFIG_LABELS[col]
+        return f"{what} [{unit}]" if unit else what
+    import sim
+
+    doc = sim.counter_docs().get(col)
+    if doc is None:
+        return col
+    unit, desc = doc
+    what = desc.split(":")[0].split(" (")[0].strip()
+    if len(what) > 48 or not what:
+        what = col
+    return f"{what} [{unit}]" if unit and unit not in ("ratio",) else (f"{what} (ratio)" if unit == "ratio" else what)
+
+
+def facet_title(col: str, v) -> str:
+    """'CoC radius 10 px' rather than 'coc_px = 10'."""
+    if col in CONFIG_LABELS:
+        what, unit = CONFIG_LABELS[col]
+        return f"{what} {label(v)}" + (f" {unit}" if unit else "")
+    return f"{_short(col)} {label(v)}"
+
+
+def color_for(h, i: int) -> str:
+    return ALGORITHM_COLORS.get(label(h), COLORS[i % len(COLORS)]) if h is not None else COLORS[i % len(COLORS)]
+
+
+def grid_shape(n: int) -> tuple[int, int]:
+    """(rows, columns) for n panels without empty cells where a shape of at most 4 columns allows it."""
+    if n <= 3:
+        return 1, max(n, 1)
+    for cols in (3, 4, 2):
+        if n % cols == 0:
+            return n // cols, cols
+    cols = min((3, 4, 2), key=lambda c: (-(-n // c) * c - n, c != 3))
+    return -(-n // cols), cols
 
 
 def _plt():
@@ -38,8 +102,7 @@ def _plt():
 
 
 def _panels(plt, n: int):
-    cols = min(n, 3)
-    rows = math.ceil(n / cols)
+    rows, cols = grid_shape(n)
     fig, axes = plt.subplots(rows, cols, figsize=(PANEL_INCHES[0] * cols, PANEL_INCHES[1] * rows), squeeze=False)
     flat = [a for row in axes for a in row]
     for a in flat[n:]:
@@ -70,17 +133,56 @@ def _draw_line(ax, spec, d, hues):
         xs = sorted_x(sub[spec.x])
         ys = [cell(sub, {spec.x: x}, y)[0] for x in xs]
         px = [float(x) for x in xs] if numeric else [xs_all.index(x) for x in xs]
-        ax.plot(px, ys, marker=MARKERS[i % len(MARKERS)], color=COLORS[i % len(COLORS)], label=name)
+        ax.plot(px, ys, marker=MARKERS[i % len(MARKERS)], color=color_for(h, i), label=name)
         group = h if h is not None else y
         paper = [(x, paper_number(paper_value(spec, group, x))) for x in (paper_x(spec, group) or [])]
         paper = [(x, v) for x, v in paper if v is not None]
         if paper:
-            ppx = [float(x) if numeric else (xs_all.index(x) if x in xs_all else None) for x, _ in paper]
+            ppx = [(paper_number(x) if numeric else (xs_all.index(x) if x in xs_all else None)) for x, _ in paper]
             keep = [(a, v) for a, (_, v) in zip(ppx, paper) if a is not None]
-            ax.plot([a for a, _ in keep], [v for _, v in keep], linestyle="--", marker="x", color=COLORS[i % len(COLORS)],
+            ax.plot([a for a, _ in keep], [v for _, v in keep], linestyle="--", marker="x", color=color_for(h, i),
                     alpha=0.8, label=f"{label(group)} (paper)")
+    # Paper curves whose name matches no series (the paper's own scenes): grey, drawn all the same.
+    groups = [h if h is not None else y for h, y, _ in series]
+    for k, (g, by_x) in enumerate((g, v) for g, v in spec.paper.items() if not any(same(g, x) for x in groups)):
+        pts = sorted((float(x), paper_number(v)) for x, v in by_x.items()
+                     if paper_number(v) is not None and paper_number(x) is not None)
+        if numeric and pts:
+            ax.plot([a for a, _ in pts], [v for _, v in pts], linestyle="--", marker=MARKERS[(k + 3) % len(MARKERS)],
+                    color=["#555555", "#999999", "#333333", "#BBBBBB"][k % 4], alpha=0.9, label=f"{label(g)} (paper)")
     if not numeric:
         ax.set_xticks(list(pos), [label(x) for x in pos.values()])
+
+
+def unmatched_paper(spec, d, hues) -> list[str]:
+    """Paper values a figure cannot draw: a name matching no series (bar plots) or an x that is not a
+    number on a numeric axis, or not one of the x values of a category axis."""
+    out = []
+    groups = [h if h is not None else y for h in hues for y in spec.ys]
+    xs = sorted_x(d[spec.x]) if spec.x and spec.x in d.columns else []
+    numeric = all(paper_number(x) is not None for x in xs)
+    for g, by_x in spec.paper.items():
+        if spec.kind == "bar" and not any(same(g, x) for x in groups):
+            out.append(f"{label(g)} (no such {spec.hue or 'column'})")
+            continue
+        for x, v in by_x.items():
+            if paper_number(v) is None:
+                continue  # text: tables only
+            if (numeric and paper_number(x) is None) or (not numeric and not any(same(x, a) for a in xs)):
+                out.append(f"{label(g)} at {spec.x} = {label(x)}")
+    return out
+
+
+def _sectioned(handles):
+    """Legend handles in two headed sections when there are paper series: 'measured' and 'paper'."""
+    from matplotlib.lines import Line2D
+
+    ours = [h for h in handles if not str(h.get_label()).endswith("(paper)") and h.get_label() != "published value"]
+    paper = [h for h in handles if h not in ours]
+    if not paper:
+        return handles
+    head = lambda t: Line2D([], [], linestyle="none", marker="none", label=t)  # noqa: E731
+    return [head("measured:")] + ours + [head("paper:")] + paper
 
 
 def paper_x(spec, group) -> list | None:
@@ -112,13 +214,13 @@ def _draw_bar(ax, spec, d, hues):
         sub = d if h is None else d[[same(v, h) for v in d[spec.hue]]]
         vals = [cell(sub, {spec.x: x}, y)[0] for x in xs]
         offs = [k - 0.4 + width * (i + 0.5) for k in range(len(xs))]
-        ax.bar(offs, vals, width=width * 0.95, color=COLORS[i % len(COLORS)], label=name)
+        ax.bar(offs, vals, width=width * 0.95, color=color_for(h, i), label=name)
         group = h if h is not None else y
         pts = [(o, paper_number(paper_value(spec, group, x))) for o, x in zip(offs, xs)]
         pts = [(o, v) for o, v in pts if v is not None]
         if pts:
             ax.scatter([o for o, _ in pts], [v for _, v in pts], marker="_", s=120, color="black", zorder=3,
-                       label="paper" if i == 0 else None)
+                       label="published value" if i == 0 else None)
     ax.set_xticks(range(len(xs)), [label(x) for x in xs])
 
 
@@ -135,7 +237,7 @@ def _draw_scatter(ax, spec, d, hues, styles=None):
                 sub = sub[[same(v, s) for v in sub[spec.style]]]
             if not len(sub):
                 continue
-            ax.scatter(sub[spec.x].astype(float), sub[y].astype(float), s=14, color=COLORS[i % len(COLORS)],
+            ax.scatter(sub[spec.x].astype(float), sub[y].astype(float), s=14, color=color_for(h, i),
                        marker=MARKERS[j % len(MARKERS)], alpha=0.8, linewidths=0)
     if spec.pareto:
         ok = d[[spec.x, y]].astype(float).dropna()
@@ -149,9 +251,14 @@ def _scatter_legend(spec, hues, styles):
     from matplotlib.lines import Line2D
 
     handles = []
+    head = lambda t: Line2D([], [], linestyle="none", marker="none", label=t)  # noqa: E731
+    if any(h is not None for h in hues):  # one headed section per encoding: colour, then marker
+        handles.append(head(f"{value_label(spec.hue)} (colour):"))
     for i, h in enumerate(hues):
         if h is not None:
-            handles.append(Line2D([], [], linestyle="", marker="o", color=COLORS[i % len(COLORS)], label=label(h)))
+            handles.append(Line2D([], [], linestyle="", marker="o", color=color_for(h, i), label=label(h)))
+    if any(s is not None for s in styles):
+        handles.append(head(f"{value_label(spec.style)} (marker):"))
     for j, s in enumerate(styles):
         if s is not None:
             handles.append(Line2D([], [], linestyle="", marker=MARKERS[j % len(MARKERS)], color="0.4",
@@ -196,7 +303,7 @@ def _draw_heatmap(ax, fig, spec, d):
     xs, rs = sorted_x(d[spec.x]), sorted_x(d[spec.row])
     grid = np.array([[cell(d, {spec.row: r, spec.x: x}, spec.ys[0])[0] for x in xs] for r in rs], dtype=float)
     im = ax.imshow(grid, cmap="viridis", aspect="auto", origin="lower")
-    fig.colorbar(im, ax=ax, label=spec.ylabel or spec.ys[0])
+    fig.colorbar(im, ax=ax, label=spec.ylabel or value_label(spec.ys[0]))
     lo, hi = np.nanmin(grid), np.nanmax(grid)
     for i in range(len(rs)):
         for j in range(len(xs)):
@@ -242,9 +349,10 @@ def image_grid(spec, d, out_base: Path | None) -> dict:
 
 # ---- entry point ---------------------------------------------------------------------------------
 
-def render_plot(spec, df, out_base: Path | None) -> dict:
+def render_plot(spec, df, out_base: Path | None, derived: dict | None = None) -> dict:
     """Draw one plot spec. Returns {"files": [png, pdf], "markdown": [table lines], "fits": [...]}.
-    ``df`` already carries the derived columns; failed rows (status != ok) are left out."""
+    ``df`` already carries the derived columns (``derived``: their expressions, for axis labels);
+    failed rows (status != ok) are left out."""
     if "status" in df.columns:
         df = df[df["status"] == "ok"]
     for col, names in spec.labels.items():  # display names replace the values (before where: and paper:)
@@ -296,13 +404,13 @@ def render_plot(spec, df, out_base: Path | None) -> dict:
             if spec.logy:
                 ax.set_yscale("log")
                 ax.yaxis.set_minor_formatter(NullFormatter())
-            ax.set_xlabel(spec.xlabel or spec.x)
+            ax.set_xlabel(spec.xlabel or value_label(spec.x, derived))
             if spec.kind == "heatmap":
-                ax.set_ylabel(spec.row)
+                ax.set_ylabel(value_label(spec.row, derived))
             else:
-                ax.set_ylabel(spec.ylabel or (spec.ys[0] if len(spec.ys) == 1 else "value"))
+                ax.set_ylabel(spec.ylabel or (value_label(spec.ys[0], derived) if len(spec.ys) == 1 else "value"))
             if f is not None:
-                ax.set_title(f"{_short(spec.facet)} = {label(f)}")
+                ax.set_title(facet_title(spec.facet, f))
         # One legend for the figure (every panel uses the same colours), outside the panels when long.
         if spec.kind == "scatter":
             handles = _scatter_legend(spec, hues, styles)
@@ -315,10 +423,17 @@ def render_plot(spec, df, out_base: Path | None) -> dict:
             for hnd, lab in zip(handles, seen):
                 hnd.set_label(lab)
         if len(handles) > 1 or (handles and spec.hue):
+            handles = _sectioned(handles)
+            title = value_label(spec.hue, derived) if spec.hue and spec.kind != "scatter" else None
             if len(axes) == 1 and len(handles) <= 6:
-                axes[0].legend(handles=handles)
+                axes[0].legend(handles=handles, title=title)
             else:
-                fig.legend(handles=handles, loc="outside right upper")
+                fig.legend(handles=handles, loc="outside right center", title=title)
+        lost = unmatched_paper(spec, d, hues) if spec.paper and spec.kind in ("line", "bar") else []
+        if lost:
+            import warnings
+
+            warnings.warn(f"plot {spec.title or spec.kind!r}: paper values not drawn: {'; '.join(lost)}", stacklevel=2)
         if spec.title:
             fig.suptitle(spec.title, fontsize=9)
         files = _save(fig, out_base)

@@ -78,10 +78,39 @@ def section_markdown(config: RenderConfig, config_path: Path, df, out_dir: Path,
         return lines + [f"**Error:** {e}", ""]
     if o.images and "config_hash" in dfd.columns:  # the points' images, for image_grid plots
         dfd = dfd.assign(**{"image.path": [str(images_dir(config.name) / f"{h}.png") for h in dfd["config_hash"]]})
+    shown: list = []  # data tables already on the page, by figure
+    # Scatter plots of the same rows that differ only in x share one data table (under the first,
+    # with every x as a column): one data table per figure, never the same rows twice.
+    first_of: dict[int, int] = {}
+    extra_cols: dict[int, list] = {}
+    groups: dict[tuple, int] = {}
     for i, spec in enumerate(o.plots):
+        if spec.kind != "scatter":
+            continue
+        key = (spec.facet, str(spec.hue), spec.style, tuple(spec.columns), tuple(spec.ys),
+               json.dumps(spec.where, sort_keys=True, default=str))
+        if key in groups and spec.x in dfd.columns:
+            first_of[i] = groups[key]
+            extra_cols.setdefault(groups[key], []).append(spec.x)
+        else:
+            groups.setdefault(key, i)
+    figure_no: dict[int, int] = {}
+    for i, spec in enumerate(o.plots):
+        if i in extra_cols:
+            spec = spec.model_copy(update={"columns": [*spec.columns, *[c for c in extra_cols[i] if c != spec.x]]})
         base = out_dir / f"{config.name}_{i + 1}" if len(o.plots) > 1 else out_dir / config.name
         try:
-            res = render_plot(spec, dfd, base)
+            if spec.kind == "image" or spec.map is not None:  # pictures of single points
+                from .heatmaps import point_pictures
+                from .frames import apply_where, same
+
+                dd = dfd[dfd["status"] == "ok"] if "status" in dfd.columns else dfd
+                for col, names in spec.labels.items():  # display names first, as in render_plot
+                    if col in dd.columns:
+                        dd = dd.assign(**{col: [next((n for k, n in names.items() if same(v, k)), v) for v in dd[col]]})
+                res = point_pictures(spec, config, apply_where(dd, spec.where), base)
+            else:
+                res = render_plot(spec, dfd, base, derived=o.derived)
         except PlotError as e:
             lines += [f"**Plot error:** {e}", ""]
             continue
@@ -95,7 +124,15 @@ def section_markdown(config: RenderConfig, config_path: Path, df, out_dir: Path,
             png = res["files"][0]
             lines += [f"![{spec.title or config.name}]({png.name})", "",
                       f"[PDF]({png.with_suffix('.pdf').name})", ""]
-            lines += ["<details><summary>data</summary>", ""] + res["markdown"] + ["", "</details>", ""]
+            figure_no[i] = len(shown) + 1
+            if i in first_of and first_of[i] in figure_no:
+                lines += [f"Data: the table under figure {figure_no[first_of[i]]} of this section "
+                          f"(column `{spec.x}`).", ""]
+            elif res["markdown"] in shown:  # the same table is not repeated
+                lines += [f"Data: the table under figure {shown.index(res['markdown']) + 1} of this section.", ""]
+            else:
+                lines += ["<details><summary>data</summary>", ""] + res["markdown"] + ["", "</details>", ""]
+            shown.append(res["markdown"])
         else:
             lines += res["markdown"] + [""]
     ok = df[df["status"] == "ok"] if "status" in df.columns else df

@@ -59,12 +59,13 @@ def _build(config: RenderConfig, row: dict, threads: int | None):
     return scene, camera, table, pipeline
 
 
-def _rendered(config, row: dict, threads):
-    """sim.render of a point; adds its resolved lens grid and every counter and figure to row."""
+def _rendered(config, row: dict, threads, options: dict | None = None):
+    """sim.render of a point; adds its resolved lens grid and every counter and figure to row.
+    options: extra sim.render keywords that observe the render (pixel_stats, progress)."""
     import sim
 
     scene, camera, table, pipeline = _build(config, row, threads)
-    result = sim.render(scene, camera, table, pipeline, hardware=config.hardware_config())
+    result = sim.render(scene, camera, table, pipeline, hardware=config.hardware_config(), **(options or {}))
     row["resolved.lens_grid"] = result.config.get("lens_grid")
     row.update(result.flat_stats)
     if result.ci95 is not None:  # sampled simulation: 95% half-widths beside the estimates
@@ -72,8 +73,8 @@ def _rendered(config, row: dict, threads):
     return result
 
 
-def _render(config, row, image_path, threads):
-    result = _rendered(config, row, threads)
+def _render(config, row, image_path, threads, options=None):
+    result = _rendered(config, row, threads, options)
     if config.outputs.metrics is not None and result.ci95 is not None:
         raise ValueError(f"outputs.metrics: image metrics need the whole frame; pipeline.sample_fraction="
                          f"{config.pipeline.sample_fraction!r} renders only sampled bins (not estimable)")
@@ -155,14 +156,17 @@ POINT_KINDS = {"render": _render, "occlusion_query": _occlusion_query, "conserva
 POINT_KINDS.update(USE_KINDS)  # the uses of the rasterizer (experiments/run/uses.py)
 
 
-def render_point(config: RenderConfig, image_path: str | Path | None = None, threads: int | None = None
-                 ) -> tuple[dict, object]:
-    """Compute one (non-swept) point: (row, the sim result of its kind)."""
+def render_point(config: RenderConfig, image_path: str | Path | None = None, threads: int | None = None,
+                 options: dict | None = None) -> tuple[dict, object]:
+    """Compute one (non-swept) point: (row, the sim result of its kind). options: sim.render keywords
+    that observe a render point (pixel_stats, progress)."""
     kind = config.point.kind
     if image_path is not None and kind not in ("render", *USE_KINDS):
         raise ValueError(f"outputs.images: only render and use points have images, got point kind {kind!r}")
+    if options and kind != "render":
+        raise ValueError(f"point.kind: per-pixel statistics and progress need a render point, got {kind!r}")
     row = config_columns(config)
-    result = POINT_KINDS[kind](config, row, image_path, threads)
+    result = POINT_KINDS[kind](config, row, image_path, threads, **({"options": options} if options else {}))
     row.update(status="ok", error="", **{"engine.version": engine_id(), "engine.git_rev": git_rev()})
     return row, result
 

@@ -21,7 +21,8 @@ void register_render(py::module_& m) {
       [](const RenderParams& p, const FArr& v0, const FArr& v1, const FArr& colors, const FArr& samples,
          const IArr& lens_index, const FArr& lens_uv, bool export_samples, std::optional<FArr> uvs,
          std::optional<IArr> tex_slots, std::vector<FArr> textures, std::optional<IArr> bins,
-         std::optional<FArr> alpha) {
+         std::optional<FArr> alpha, std::vector<std::string> pixel_stats,
+         std::optional<std::pair<int, int>> trace_pixel, std::optional<py::function> progress) {
         require_shape(v0, {-1, 3, 3}, "v0");
         const py::ssize_t n = v0.shape(0);
         require_shape(v1, {n, 3, 3}, "v1");
@@ -58,13 +59,47 @@ void register_render(py::module_& m) {
           require_shape(*bins, {-1}, "bins");
           bin_list.emplace(bins->data(), bins->data() + bins->shape(0));
         }
+        // Per-pixel statistics: the named counters' maps (core/pixel_stats.h).
+        PixelStats pstats;
+        RenderObservers obs;
+        if (!pixel_stats.empty() || trace_pixel) {
+          std::vector<int> ids;
+          for (const auto& name : pixel_stats) {
+            int id = -1;
+            for (int i = 0; i < kNumCounters; ++i)
+              if (kCounterInfo[static_cast<std::size_t>(i)].name == name) id = i;
+            if (id < 0) throw std::invalid_argument("pixel_stats: unknown counter '" + name + "'");
+            ids.push_back(id);
+          }
+          pstats.init(p.width, p.height, ids);
+          if (trace_pixel) {
+            if (trace_pixel->first < 0 || trace_pixel->first >= p.width || trace_pixel->second < 0 ||
+                trace_pixel->second >= p.height)
+              throw std::invalid_argument("pixel: (" + std::to_string(trace_pixel->first) + ", " +
+                                          std::to_string(trace_pixel->second) + ") is outside the " +
+                                          std::to_string(p.width) + "x" + std::to_string(p.height) + " image");
+            pstats.trace_x = trace_pixel->first, pstats.trace_y = trace_pixel->second;
+          }
+          obs.pixel_stats = &pstats;
+        }
         std::optional<py::error_already_set> pending;
+        if (progress)
+          obs.progress = [&progress, &pending](int done, int total) {
+            if (pending) return;
+            py::gil_scoped_acquire acquire;
+            try {
+              (*progress)(done, total);
+            } catch (py::error_already_set& e) {
+              pending.emplace(std::move(e));
+            }
+          };
         RenderResult res;
         {
           py::gil_scoped_release release;
           res = render(
               p, scene, table,
               [&pending]() {
+                if (pending) return true;  // progress() raised
                 py::gil_scoped_acquire acquire;
                 if (PyErr_CheckSignals() != 0) {
                   pending.emplace();
@@ -72,7 +107,7 @@ void register_render(py::module_& m) {
                 }
                 return false;
               },
-              export_samples, bin_list ? &*bin_list : nullptr);
+              export_samples, bin_list ? &*bin_list : nullptr, obs);
         }
         if (pending) throw *pending;
         py::array_t<float> image({p.height, p.width, 3});
@@ -107,17 +142,36 @@ void register_render(py::module_& m) {
           out["sample_depth"] = depth;
           out["sample_triangle"] = tri;
         }
+        if (obs.pixel_stats) {
+          const py::ssize_t k = static_cast<py::ssize_t>(pstats.channels.size());
+          py::array_t<std::uint64_t> maps({k, static_cast<py::ssize_t>(p.height), static_cast<py::ssize_t>(p.width)});
+          std::copy(pstats.maps.begin(), pstats.maps.end(), maps.mutable_data());
+          out["pixel_stats"] = maps;
+        }
+        if (trace_pixel) {
+          py::list events, samples;
+          for (const auto& ev : res.trace_events) {
+            py::dict d;
+            for (const auto& [id, v] : ev.deltas) d[py::str(std::string(kCounterInfo[static_cast<std::size_t>(id)].name))] = v;
+            events.append(py::make_tuple(ev.triangle, ev.kind, py::make_tuple(ev.x0, ev.y0, ev.x1, ev.y1), d));
+          }
+          for (const auto& sm : res.trace_samples) samples.append(py::make_tuple(sm.triangle, sm.sample, sm.covered, sm.hit));
+          out["trace_events"] = events;
+          out["trace_samples"] = samples;
+        }
         return out;
       },
       py::arg("params"), py::arg("v0"), py::arg("v1"), py::arg("colors"), py::arg("samples"),
       py::arg("lens_index"), py::arg("lens_uv"), py::arg("export_samples") = false, py::arg("uvs") = py::none(),
       py::arg("tex_slots") = py::none(), py::arg("textures") = std::vector<FArr>(), py::arg("bins") = py::none(),
       py::arg("alpha") = py::none(),
+      py::arg("pixel_stats") = std::vector<std::string>(), py::arg("trace_pixel") = py::none(),
+      py::arg("progress") = py::none(),
       "Render pixel-homogeneous triangles; returns {'image', 'counters'[, 'timing_records'][, "
       "'sample_depth', 'sample_triangle'][, 'bin_counters', 'bins', 'bin_stratum', 'strata_sizes', "
-      "'bin_work']}. bins (or params.sample_fraction < 1: a stratified draw): render only these screen bins "
+      "'bin_work'][, 'pixel_stats' (k, H, W)][, 'trace_events', 'trace_samples']}. bins (or params.sample_fraction < 1: a stratified draw): render only these screen bins "
       "(row-major) and return their counters, one row per bin in counter_docs() order. The GIL is "
-      "released; Ctrl-C interrupts.");
+      "released; Ctrl-C interrupts; progress(done_bins, total_bins) is called while it runs.");
 
   m.def(
       "stratify_bins",

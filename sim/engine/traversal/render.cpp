@@ -120,8 +120,9 @@ static void build_shade_frame(const RenderParams& p, const SceneArrays& scene, c
 
 RenderResult render(const RenderParams& p, const SceneArrays& scene, const SampleTable& table,
                     const std::function<bool()>& interrupted, bool export_samples,
-                    const std::vector<int>* bins) {
+                    const std::vector<int>* bins, const RenderObservers& observers) {
   validate_params(p, table);
+  PixelStats* const pstats = observers.pixel_stats;
   const FrameConst fc = make_frame_const(p);
   const int n_threads = p.threads > 0
                             ? p.threads
@@ -135,6 +136,7 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
   }
 
   // ---- setup: static partition over triangles, each thread its own counters ----
+  std::vector<std::uint64_t> frame_pool;  // per-pixel statistics with no pixel bounds
   std::vector<TriSetup> setups(static_cast<std::size_t>(scene.n));
   std::vector<char> alive(static_cast<std::size_t>(scene.n), 0);
   std::vector<Counters> setup_counters(n_threads);
@@ -152,10 +154,31 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
         if (scene.alpha) setups[i].alpha = scene.alpha[i];
       }
     };
-    std::vector<std::thread> pool;
-    for (int t = 1; t < n_threads; ++t) pool.emplace_back(work, t);
-    work(0);
-    for (auto& th : pool) th.join();
+    if (pstats) {  // per-pixel statistics: one thread, each triangle's setup charged to its bounds
+      PixelCursor cur;
+      cur.attach(pstats);
+      for (int i = 0; i < scene.n; ++i) {
+        const float* v0 = scene.v0 + static_cast<std::size_t>(i) * 9;
+        const float* v1 = scene.v1 + static_cast<std::size_t>(i) * 9;
+        const float* col = scene.colors + static_cast<std::size_t>(i) * 9;
+        alive[i] = p.op_count == OpCount::kExact
+                       ? setup_triangle<ExactArith>(v0, v1, col, i, p, fc, setups[i], setup_counters[0])
+                       : setup_triangle<FastArith>(v0, v1, col, i, p, fc, setups[i], setup_counters[0]);
+        if (scene.alpha) setups[i].alpha = scene.alpha[i];
+        const TriSetup& t = setups[i];
+        cur.triangle = i;
+        cur.x0 = t.bx0, cur.y0 = t.by0, cur.x1 = t.bx1, cur.y1 = t.by1, cur.kind = 3;
+        cur.commit(setup_counters[0], true);
+        cur.commit(setup_counters[0], false);
+      }
+      frame_pool = cur.frame_pool;
+      result.trace_events = std::move(cur.events);
+    } else {
+      std::vector<std::thread> pool;
+      for (int t = 1; t < n_threads; ++t) pool.emplace_back(work, t);
+      work(0);
+      for (auto& th : pool) th.join();
+    }
   }
   std::vector<std::uint32_t> live;
   live.reserve(scene.n);
@@ -222,6 +245,14 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
   std::vector<std::vector<std::uint32_t>> bin_stream_ends(track_stream_ends ? n_bins : 0);
   std::vector<ThreadState> states(n_threads);
   for (auto& s : states) s.shade.attach(&shade_frame, &s.counters);
+  std::vector<PixelCursor> cursors(pstats ? n_threads : 0);
+  for (int t = 0; t < static_cast<int>(cursors.size()); ++t) {
+    cursors[t].attach(pstats);
+    states[t].cursor = &cursors[t];
+  }
+  const int trace_bin =
+      pstats && pstats->tracing() ? (pstats->trace_y / B) * bins_x + pstats->trace_x / B : -1;
+  std::atomic<int> bins_done{0};
   std::atomic<int> next_bin{0};
   std::atomic<bool> cancel{false};
   std::atomic<int> running{n_threads};
@@ -241,6 +272,7 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
         if (k >= n_work || cancel.load(std::memory_order_relaxed)) break;
         const int b = bins ? (*bins)[k] : k;
         const Counters at_start = bins ? ts.counters : Counters{};
+        if (trace_bin >= 0 && b != trace_bin) continue;
         const int bx = b % bins_x, by = b / bins_x;
         BinRect r{bx * B, by * B, std::min(p.width, (bx + 1) * B), std::min(p.height, (by + 1) * B)};
         ts.buffers.begin(r, table.spp());
@@ -257,7 +289,18 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
             ts.visit_stream = track_stream_ends ? &shade_frame.streams[b] : nullptr;
             ts.visit_stream_ends = track_stream_ends ? &visit_ends : nullptr;
           }
+          PixelCursor* const cur = ts.cursor;
+          const int rx0 = std::max(tri.bx0, r.x0), ry0 = std::max(tri.by0, r.y0);
+          const int rx1 = std::min(tri.bx1, r.x1), ry1 = std::min(tri.by1, r.y1);
+          if (cur) {  // the triangle's pixels in this bin until the algorithm aims finer
+            cur->target(ts.counters, rx0, ry0, rx1, ry1, 0);
+            cur->triangle = i;
+          }
           algo->rasterize(tri, r, home);
+          if (cur) {
+            cur->target(ts.counters, rx0, ry0, rx1, ry1, 0);
+            cur->commit(ts.counters, true);
+          }
           if (!p.record_timing) continue;
           if (per_visit) {
             ts.visit_records = nullptr;
@@ -288,6 +331,11 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
         }
         algo->end_bin(r);
         ts.shade.close_visit();  // algorithms end their visits; this only guards the contract
+        if (ts.cursor) {
+          ts.cursor->commit(ts.counters);
+          ts.cursor->triangle = -1;
+        }
+        bins_done.fetch_add(1, std::memory_order_relaxed);
         ts.buffers.resolve(result.image.data(), p.width);
         if (export_samples)
           ts.buffers.export_samples(result.sample_depth.data(), result.sample_triangle.data(), p.width);
@@ -316,6 +364,7 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
       if (running.load() == 0) break;
       lock.unlock();
       const bool stop = interrupted && interrupted();
+      if (observers.progress && !stop) observers.progress(bins_done.load(), n_work);
       lock.lock();
       if (stop) {
         cancel = true;
@@ -326,6 +375,15 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
   for (auto& th : pool) th.join();
   if (error) std::rethrow_exception(error);
 
+  if (pstats) {  // what had no pixel bounds, over the whole frame; the trace in bin order
+    for (const auto& cur : cursors) {
+      for (std::size_t k = 0; k < frame_pool.size(); ++k) frame_pool[k] += cur.frame_pool[k];
+      result.trace_events.insert(result.trace_events.end(), cur.events.begin(), cur.events.end());
+      result.trace_samples.insert(result.trace_samples.end(), cur.samples.begin(), cur.samples.end());
+    }
+    for (std::size_t k = 0; k < frame_pool.size(); ++k)
+      if (frame_pool[k]) pstats->spread(k, frame_pool[k], 0, 0, p.width, p.height);
+  }
   for (const auto& c : setup_counters) result.counters.merge(c);
   for (const auto& s : states) result.counters.merge(s.counters);
   result.counters[Counter::frame_pixels] = static_cast<std::uint64_t>(p.width) * p.height;

@@ -11,6 +11,7 @@
 
 #include "core/counters.h"
 #include "core/params.h"
+#include "core/pixel_stats.h"
 #include "core/sample_table.h"
 #include "timing/timing.h"
 
@@ -54,6 +55,17 @@ struct RenderResult {
   // every bin with triangles was traversed).
   std::vector<std::int64_t> bin_work;
   std::vector<int> sampled_bins, sampled_stratum, strata_sizes;
+  // Pixel trace (PixelStats::tracing()): the events and samples of the traced pixel, in order.
+  std::vector<TraceEvent> trace_events;
+  std::vector<TraceSample> trace_samples;
+};
+
+// Optional observers of one render. pixel_stats: per-pixel counter maps (core/pixel_stats.h),
+// filled in place; in trace mode only the traced pixel's bin is rasterized. progress(done, total)
+// is called from the calling thread with the screen bins finished so far, every few milliseconds.
+struct RenderObservers {
+  PixelStats* pixel_stats = nullptr;
+  std::function<void(int, int)> progress;
 };
 
 // Throws std::invalid_argument for bad parameters. `interrupted` is polled from the calling
@@ -63,7 +75,7 @@ struct RenderResult {
 // return each one's counters in RenderResult::bin_counters; the other bins stay empty.
 RenderResult render(const RenderParams& p, const SceneArrays& scene, const SampleTable& table,
                     const std::function<bool()>& interrupted, bool export_samples = false,
-                    const std::vector<int>* bins = nullptr);
+                    const std::vector<int>* bins = nullptr, const RenderObservers& observers = {});
 
 void validate_params(const RenderParams& p, const SampleTable& table);
 // The checks that need no sample table (image size, tile and bin sizes, intervals, shading...).

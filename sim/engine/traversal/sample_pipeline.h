@@ -22,6 +22,7 @@
 #include "core/costs.h"
 #include "core/counters.h"
 #include "core/params.h"
+#include "core/pixel_stats.h"
 #include "core/sample_table.h"
 #include "sampletest/hardware.h"
 #include "sampletest/inside.h"
@@ -44,6 +45,7 @@ struct ThreadState {
   const std::vector<std::uint32_t>* visit_stream = nullptr;
   std::vector<std::uint32_t>* visit_stream_ends = nullptr;
   TileWork visit_mark;
+  PixelCursor* cursor = nullptr;  // per-pixel statistics (core/pixel_stats.h), when asked for
 };
 
 // Two ways in: test() / test_sheared() for one sample, or the batch protocol
@@ -59,7 +61,8 @@ class SamplePipeline {
 
   SamplePipeline(const Frame& f, ThreadState& ts)
       : f_(f), c_(ts.counters), sh_(ts.shade), ts_(ts), backend_(f, ts.counters, ts.buffers, ts.shade), cap_(std::max(kBatch, f.table.spp())),
-        model_(f.p.cost_model) {
+        model_(f.p.cost_model),
+        cur_(ts.cursor) {
     for (auto* v : {&gx_, &gy_, &gu_, &gv_, &gt_, &bdet_}) v->resize(cap_);
     for (auto* v : {&bpx_, &bpy_, &bs_, &bl_}) v->resize(cap_);
     be_.resize(3 * static_cast<std::size_t>(cap_));
@@ -79,6 +82,15 @@ class SamplePipeline {
                            const PixelSamples& ps, int s) {
     test_sheared_values(tri, Xs, Ys, F(static_cast<float>(px) + ps.x[s]), F(static_cast<float>(py) + ps.y[s]),
                         px, py, s);
+  }
+
+  // Per-pixel statistics (core/pixel_stats.h): the work from here on is done for pixel (px, py), or
+  // for the pixels [x0, x1) x [y0, y1) (a tile). Without statistics: one pointer test.
+  inline void at_pixel(int px, int py) {
+    if (cur_) [[unlikely]] retarget(px, py, px + 1, py + 1, 2);
+  }
+  inline void at_rect(int x0, int y0, int x1, int y1) {
+    if (cur_) [[unlikely]] retarget(x0, y0, x1, y1, 1);
   }
 
   // ---- batch protocol ----
@@ -116,6 +128,7 @@ class SamplePipeline {
   }
   // Every sample of pixel (px, py).
   inline void push_pixel(int px, int py, const PixelSamples& ps) {
+    at_pixel(px, py);
     const int spp = f_.table.spp();
     if constexpr (A::counting) {
       for (int s = 0; s < spp; ++s) push(px, py, ps, s);
@@ -139,6 +152,7 @@ class SamplePipeline {
   // idx[0..n_sel) lists the selected samples.
   inline void push_pixel_masked(int px, int py, const PixelSamples& ps, const std::uint8_t* sel, const int* idx,
                                 int n_sel) {
+    at_pixel(px, py);
     if constexpr (!A::counting) {
       const int spp = f_.table.spp();
       if (spp >= 32 && 3 * n_sel >= spp) {
@@ -188,6 +202,12 @@ class SamplePipeline {
       Counter::raster_samples_tested_2d, Counter::raster_samples_tested_3d,
       Counter::raster_samples_tested_4d, Counter::raster_samples_tested_5d};
   static constexpr int kBatch = 1024;  // small enough for the batch to stay in L1/L2
+
+  void retarget(int x0, int y0, int x1, int y1, int kind) {
+    if (cur_->x0 == x0 && cur_->y0 == y0 && cur_->x1 == x1 && cur_->y1 == y1) return;
+    flush();
+    cur_->target(c_, x0, y0, x1, y1, kind);
+  }
 
   inline void test_values(const TriSetup& tri, F sx, F sy, F u, F v, F t, int px, int py, int s) {
     F X[3], Y[3], W[3], e[3], det;
@@ -378,6 +398,14 @@ class SamplePipeline {
     ++c_[Counter::raster_samples_tested];
     charge<A>(c_[Counter::ops_sample_inside], test_cost);
     if (n_ties) ++c_[Counter::raster_tie_breaks];
+    if constexpr (A::counting) {  // pixel trace (sim.trace_pixel renders on the counting path)
+      if (cur_ && cur_->stats->tracing() && cur_->traces_pixel(px, py)) [[unlikely]] {
+        const std::uint64_t hits = c_[Counter::raster_samples_hit];
+        if (covered) shade(tri, e, det, px, py, s);
+        cur_->samples.push_back({tri.index, s, covered, c_[Counter::raster_samples_hit] != hits});
+        return;
+      }
+    }
     if (covered) shade(tri, e, det, px, py, s);
   }
 
@@ -406,6 +434,7 @@ class SamplePipeline {
   std::vector<float> gx_, gy_, gu_, gv_, gt_, be_, bdet_;
   std::vector<int> bpx_, bpy_, bs_, bl_;
   std::vector<std::uint8_t> flags_;
+  PixelCursor* cur_;
 };
 
 }  // namespace rast5d

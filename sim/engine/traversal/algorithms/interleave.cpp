@@ -69,6 +69,7 @@ class Interleave final : public Traversal {
       if (kHier && !tri.moving) {
         for (int ty = (y0 / HT) * HT; ty < y1; ty += HT)
           for (int tx = (x0 / HT) * HT; tx < x1; tx += HT) {
+            pipe_.at_rect(std::max(tx, x0), std::max(ty, y0), std::min(tx + HT, x1), std::min(ty + HT, y1));
             ++c_[Counter::tile_visited];
             const bool out = tiletest::tile_outside_2d<D>(e, tiletest::expand_lo(tx), tiletest::expand_hi(tx + HT),
                                                           tiletest::expand_lo(ty), tiletest::expand_hi(ty + HT)) ||
@@ -100,6 +101,7 @@ class Interleave final : public Traversal {
     for (int py = y0; py < y1; ++py)
       for (int px = x0; px < x1; ++px) {
         const PixelSamples ps = f_.table.pixel(px, py);
+        pipe_.at_pixel(px, py);
         for (int k = ps.lens_offsets[i]; k < ps.lens_offsets[i + 1]; ++k) pipe_.push(px, py, ps, ps.lens_order[k]);
       }
   }

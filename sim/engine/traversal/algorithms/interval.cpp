@@ -47,6 +47,7 @@ class Interval final : public Traversal {
           for (int py = std::max(ty, y0); py < std::min(ty + T, y1); ++py)
             for (int px = std::max(tx, x0); px < std::min(tx + T, x1); ++px) {
               const PixelSamples ps = f_.table.pixel(px, py);
+              pipe_.at_pixel(px, py);
               for (int k = ps.cell_offsets[c]; k < ps.cell_offsets[c + 1]; ++k)
                 pipe_.push(px, py, ps, ps.cell_order[k]);
             }

@@ -115,6 +115,7 @@ class Tile final : public Traversal {
     for (int ty = (y0 / T) * T; ty < y1; ty += T)
       for (int tx = (x0 / T) * T; tx < x1; tx += T)
         if (!zcull_.query_answered()) {  // interval-based query: abort at the first visible tile
+          pipe_.at_rect(std::max(tx, x0), std::max(ty, y0), std::min(tx + T, x1), std::min(ty + T, y1));
           fn(tx, ty, std::max(tx, x0), std::max(ty, y0), std::min(tx + T, x1), std::min(ty + T, y1));
           pipe_.end_visit();  // a shading visit = one tile
         }
@@ -237,6 +238,7 @@ class Tile final : public Traversal {
       for (int py = py0; py < ty1; ++py)
         for (int px = px0; px < tx1; ++px) {
           const PixelSamples ps = f_.table.pixel(px, py);
+          pipe_.at_pixel(px, py);
           // Candidates: samples of the surviving cells whose (u, v) passes the h_i lines.
           int n = 0, checked = 0;
           for (int q = 0; q < n_cells; ++q) checked += ps.cell_offsets[cl[q] + 1] - ps.cell_offsets[cl[q]];
@@ -322,6 +324,7 @@ class Tile final : public Traversal {
       for (int py = py0; py < ty1; ++py)
         for (int px = px0; px < tx1; ++px) {
           const PixelSamples ps = f_.table.pixel(px, py);
+          pipe_.at_pixel(px, py);
           std::uint64_t region_ops = 0;
           int n = 0;
           for (int k = 0; k < S; ++k) {
