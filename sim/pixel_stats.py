@@ -22,14 +22,14 @@ import numpy as np
 # The maps of pixel_stats=True.
 DEFAULT = (
     "raster.samples_tested", "raster.samples_hit",
-    "ops.setup", "ops.tile", "ops.sample_region", "ops.sample_inside",
+    "ops.setup", "ops.tile", "ops.sample_region", "ops.sample_inside", "ops.ps_setup",
     "tile.visited", "tile.accepted", "tile.culled_2d", "tile.culled_h", "tile.culled_lens", "tile.culled_H",
     "interval.culled_t", "interval.culled_clip",
 )
 # Maps computed from the counter maps (same formulas as sim/stats.py, exact integer sums).
 DERIVED = {
     "ops.sample": ("ops.sample_region", "ops.sample_inside"),
-    "ops.total": ("ops.setup", "ops.tile", "ops.sample_region", "ops.sample_inside"),
+    "ops.total": ("ops.setup", "ops.tile", "ops.sample_region", "ops.sample_inside", "ops.ps_setup"),
     "tile.culled": ("tile.culled_2d", "tile.culled_h", "tile.culled_lens", "tile.culled_H"),
 }
 # Counted after the traversal, not per pixel.

@@ -16,7 +16,7 @@ from tests.test_op_costs import CLASSES, H, INTERLEAVED, W, F, doc, single_class
 
 pytestmark = pytest.mark.invariants
 
-PRE_SHEARED = ("interleave", "hinterleave", "tile_interleaved")
+PRE_SHEARED = ("interleave", "hinterleave", "tile_interleaved", "accumulation")  # 2D tests per lens position
 
 
 def test_hardware_2d_test_costs_at_most_six_tenths_of_4d():

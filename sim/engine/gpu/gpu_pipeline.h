@@ -89,6 +89,7 @@ class GpuBounding final : public Traversal {
     pipe_.begin(tri);
     for (int py = y0; py < y1; ++py)
       for (int px = x0; px < x1; ++px) {
+        pipe_.at_pixel(px, py);
         ++c_[Counter::gpu_raster_pixels_tested];
         if (!pixel_covered<A>(r, px, py, raster_ops)) continue;
         // A fragment: the pixel shader.

@@ -65,6 +65,7 @@ class Accumulation final : public Traversal {
       for (int py = y0; py < y1; ++py)
         for (int px = x0; px < x1; ++px) {
           const PixelSamples ps = f_.table.pixel(px, py);
+          pipe_.at_pixel(px, py);
           for (int k = ps.lens_offsets[i]; k < ps.lens_offsets[i + 1]; ++k) pipe_.push(px, py, ps, ps.lens_order[k]);
         }
       pipe_.end_visit();  // a visit = one pass

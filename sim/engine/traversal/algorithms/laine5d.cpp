@@ -51,6 +51,7 @@ class Laine5D final : public Traversal {
     const int y0 = std::max(tri.by0, bin.y0), y1 = std::min(tri.by1, bin.y1);
     for (int ty = (y0 / T) * T; ty < y1; ty += T)
       for (int tx = (x0 / T) * T; tx < x1; tx += T) {
+        pipe_.at_rect(std::max(tx, x0), std::max(ty, y0), std::min(tx + T, x1), std::min(ty + T, y1));
         ++c_[Counter::tile_visited];
         const double ex0 = tiletest::expand_lo(tx), ex1 = tiletest::expand_hi(tx + T);
         const double ey0 = tiletest::expand_lo(ty), ey1 = tiletest::expand_hi(ty + T);
@@ -71,6 +72,7 @@ class Laine5D final : public Traversal {
         for (int py = std::max(ty, y0); py < std::min(ty + T, y1); ++py)
           for (int px = std::max(tx, x0); px < std::min(tx + T, x1); ++px) {
             const PixelSamples ps = f_.table.pixel(px, py);
+            pipe_.at_pixel(px, py);
             int n = 0;
             for (int s = 0; s < spp; ++s) {
               bool pass;
