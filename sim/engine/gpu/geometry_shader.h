@@ -249,6 +249,10 @@ inline bool hull_bound(D* px, D* py, int n, double mag, Bound& b, std::uint64_t&
     const D dx = px[c] - px[a], dy = py[c] - py[a];
     const D h = madd(dy, px[a], (-dx) * py[a]);
     charge<A>(ops, cost::gpu::kHullEdge);
+    // An edge between two hull points that coincide up to rounding (a volume of zero thickness: a
+    // triangle in the focus plane) has no reliable direction; leaving its plane out only widens the
+    // bound.
+    if (std::fabs(raw(dx)) + std::fabs(raw(dy)) <= 1e-9 * mag) continue;
     add_plane(b, dy, -dx, h, m);
   }
   b.n_verts = k;
