@@ -5,6 +5,11 @@
 // vs static-triangle test on 8x8 tiles in each pass. The per-pass shear, bounds and edge setup
 // are triangle setup. Moving triangles: bounds over both shutter ends, general sample test, no
 // tile test (conservative, counted).
+// ACCUMULATION buffering (000_de06ed5e73318ec6.txt §2.2, §8; Haeberli and Akeley 1990) is the same
+// pass structure on an accumulation table (SampleTable.accumulation: every pixel uses the same N
+// positions, sample s = pass s): one full pinhole pass per lens position, the triangle re-sent and
+// set up as an ordinary pinhole triangle every pass (a static triangle's 2D edge setup charged per
+// pass). Its samples tested, images and counts equal INTERLEAVE's on the same table except that setup.
 #include <algorithm>
 
 #include "setup/footprint.h"
@@ -15,7 +20,7 @@
 namespace rast5d {
 namespace {
 
-template <class A, bool kHier>
+template <class A, bool kHier, bool kPassSetup = false>
 class Interleave final : public Traversal {
   using D = typename A::f64;
   using F = typename A::f32;
@@ -55,8 +60,9 @@ class Interleave final : public Traversal {
       }
       tiletest::Edges2D e;
       // per-pass setup, charged whether or not this bin sees the pass; the hardware cost model's
-      // affine 2D sample test uses these edges too (sampletest/hardware.h), so INTERLEAVE pays them
-      if ((kHier || f_.p.cost_model == CostModel::kHardware) && !tri.moving) {
+      // affine 2D sample test uses these edges too (sampletest/hardware.h), so INTERLEAVE pays them;
+      // accumulation sets up its pinhole triangle every pass
+      if ((kPassSetup || kHier || f_.p.cost_model == CostModel::kHardware) && !tri.moving) {
         e = tiletest::edges_2d<D>(xs, ys, W);
         charge<A>(setup_ops, cost::kEdges2DSetup);
       }
@@ -115,6 +121,8 @@ template <class A>
 using InterleaveFlat = Interleave<A, false>;
 template <class A>
 using InterleaveHier = Interleave<A, true>;
+template <class A>
+using Accumulation = Interleave<A, false, true>;
 
 }  // namespace
 
@@ -125,5 +133,9 @@ RAST5D_REGISTER_TRAVERSAL("interleave",
 RAST5D_REGISTER_TRAVERSAL("hinterleave",
                           "001 §5.3 HINTERLEAVE: INTERLEAVE plus an 8x8 tile vs static-triangle test per pass",
                           true, InterleaveHier);
+RAST5D_REGISTER_TRAVERSAL("accumulation",
+                          "000 §2.2 accumulation buffering: one pinhole pass per lens position of an "
+                          "accumulation table (triangle re-sent and set up every pass), 2D test",
+                          true, Accumulation);
 
 }  // namespace rast5d
