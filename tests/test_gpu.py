@@ -269,10 +269,8 @@ def test_table2_constants_floats(method, strip_vertices):
         got.append(s["gpu.gs_floats"])
         per_fragment = s["gpu.interp_floats"] / s["gpu.fragments"]
         assert per_fragment == (39 if constants == "none" else 4)
-        if constants == "none":
-            assert s["ops.ps_setup"] == 6 * s["gpu.fragments"]  # the 4D shear constants, per fragment
-        else:
-            assert s["ops.ps_setup"] == 0
+        # the perturbation-texture coordinate (2) and, without constants, the 4D shear constants (6)
+        assert s["ops.ps_setup"] == (8 if constants == "none" else 2) * s["gpu.fragments"]
     assert tuple(got) == want
 
 
