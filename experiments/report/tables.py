@@ -604,13 +604,14 @@ def gpu_table1(df, config) -> list[str]:
         per = lambda c: float((sub[c].astype(float) / n).mean())  # noqa: E731
         area = float((sub["gpu.bound_area"].astype(float) / 1000.0 / hit).mean())
         frag = float((sub["gpu.fragments"].astype(float) / hit).mean())
+        outside = float((sub["gpu.fragments_outside_box"].astype(float) / sub["gpu.fragments"].astype(float)).mean())
         paper = PAPER_GPU_T1.get(m, ("", "", "", ""))
         rows.append([m, f"{per('gpu.gs_vertices'):.2f}", paper[0], f"{per('gpu.gs_triangles'):.2f}", paper[1],
                      f"{per('gpu.gs_ops'):.0f}", paper[2], f"{per('gpu.gs_floats'):.0f}", f"{area:.2f}", f"{frag:.2f}",
-                     f"{float(sub['raster.ste'].mean()):.3f}", paper[3]])
+                     f"{100 * outside:.1f}%", f"{float(sub['raster.ste'].mean()):.3f}", paper[3]])
     return md_table(["method", "vertices / tri", "paper", "triangles / tri", "paper", "GS ops / tri", "paper",
-                     "floats / tri", "bound area / hit px", "fragments / hit fragment", "PS STE",
-                     "paper usability"], rows)
+                     "floats / tri", "bound area / hit px", "fragments / hit fragment", "fragments outside setup box",
+                     "PS STE", "paper usability"], rows)
 
 
 @named_table("gpu_fallbacks")
