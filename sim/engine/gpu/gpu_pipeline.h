@@ -134,8 +134,10 @@ class GpuBounding final : public Traversal {
         if (by_tile) {
           pipe_.at_rect(rx0, ry0, rx1, ry1);
           const int n = static_cast<int>(frags_.size());
+          const std::uint64_t culled0 = c_[Counter::zcull_pairs_culled];
           if (!zcull_.check(tri, rx0, ry0, rx0, rx1, ry0, ry1, lens, -1.0, 1.0, -1.0, 1.0, 0.0, 1.0, n * spp)) {
-            c_[Counter::gpu_fragments_depth_culled] += static_cast<std::uint64_t>(n);
+            // behind zmax (an interval-based occlusion query's pairs also stop here, uncounted)
+            if (c_[Counter::zcull_pairs_culled] != culled0) c_[Counter::gpu_fragments_depth_culled] += static_cast<std::uint64_t>(n);
             continue;
           }
         }
