@@ -175,7 +175,7 @@ TimingResult simulate_timing(const TileWork* records, std::size_t n, const Timin
 std::vector<TimingFigure> timing_figures() {
   std::vector<TimingFigure> out = {
       {"timing.cycles", "clocks", "Estimated clocks per frame: the last work record leaves the last unit (docs/timing.md)"},
-      {"timing.records", "records", "Work records fed to the timing model (one per triangle and screen bin visited, one per culled triangle)"},
+      {"timing.records", "records", "Work records fed to the timing model (one per triangle and screen bin visited, one per culled triangle, one per bin with end-of-bin work)"},
       {"timing.cores", "pipelines", "Parallel pipelines modelled (hardware.cores); per-unit clocks are summed over them"},
   };
   for (const auto& u : kUnitInfo)
