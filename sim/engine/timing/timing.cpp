@@ -72,7 +72,7 @@ TileWork work_from_counters(const Counters& c) {
   // point sample's depth test is.
   w.depth_tests = d(Counter::depth_tests) + d(Counter::lines_segments) + d(Counter::lines_composite_steps);
   w.quads = d(Counter::shade_quad_requests);
-  w.texel_fetches = d(Counter::tex_fetches);
+  w.texel_fetches = d(Counter::tex_fetches) + d(Counter::gpu_perturb_fetches);  // + the GPU's perturbation texture
   // Memory: per-sample depth traffic and HiZ traffic (depth.*, hiz.*). Texture-cache misses and
   // the line bytes they fetch are added per record by the cache replay after the render
   // (traversal/render.cpp), since the cache is simulated in bin order once all bins are done.
