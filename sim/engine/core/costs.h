@@ -71,6 +71,11 @@ inline constexpr std::uint64_t kH5Corner3D = 2 + 1 + 2 * 4;  // 11
 inline constexpr std::uint64_t kH5LineBox = 8;
 // Per edge: the first corner, from the signs of Q_x and Q_y at the lens centre (2 CMP).
 inline constexpr std::uint64_t kH5CornerOrder = 2;
+// Per edge: the support corner, the signs of the corner gradient (b1 v + cx, a1 u + cy) over the
+// lens rectangle and t̂_k: 5D 8 MADD, 6 MIN + 6 MAX, 2 MUL (s^2 terms), 4 CMP; 3D 2 MIN + 2 MAX,
+// 2 MUL, 4 CMP.
+inline constexpr std::uint64_t kH5Support5D = 8 + 12 + 2 + 4;  // 26
+inline constexpr std::uint64_t kH5Support3D = 4 + 2 + 4;       // 10
 
 // ---- time intervals t̂ and the clip box (intervals/time_interval.h, intervals/clip.h) ----
 inline constexpr std::uint64_t kFormCull = 7;  // SUB, RCP, MUL, 2 CMP, MAX, MIN

@@ -204,13 +204,13 @@ inline void h5_setup(const iv::MotionSetup& ms, const FrameConst& fc, const H5Or
 }
 
 // The oracle's C_tile: the expected H5 cost of one edge against one (tile, sub-interval): its
-// constants at both ends, two corners (5D: with their box pre-tests and one corner's cells at both
-// ends over the full G x G grid, as 001's C_tile counts the two tangent lines over the grid).
+// constants at both ends, the support corner, and that corner's lines (5D: with their box pre-tests
+// and the cells at both ends over the full G x G grid, as 001's C_tile counts the lines over the grid).
 inline std::uint64_t h5_edge_tile_cost(bool lens, int G) {
   const std::uint64_t g = static_cast<std::uint64_t>(G);
-  return lens ? cost::kH5EdgeEnds5D + cost::kH5CornerOrder + 2 * (cost::kH5Corner5D + 2 * cost::kH5LineBox) +
-                    2 * line_cells_cost(g, g)
-              : cost::kH5EdgeEnds3D + cost::kH5CornerOrder + 2 * cost::kH5Corner3D;
+  return lens ? cost::kH5EdgeEnds5D + cost::kH5Support5D + cost::kH5CornerOrder + cost::kH5Corner5D +
+                    2 * cost::kH5LineBox + 2 * line_cells_cost(g, g)
+              : cost::kH5EdgeEnds3D + cost::kH5Support3D + cost::kH5CornerOrder + cost::kH5Corner3D;
 }
 
 // Does the line l (culls where negative) lie entirely below / above zero over the lens box
@@ -260,13 +260,40 @@ inline CellMask h5_culled_cells(const MotionH5& h5, int k, double x0, double x1,
     CellMask edge;
     edge.set();
     bool edge_culls = true;
-    // Corners in order from the one most inside the edge at the lens centre and t̂_k's start (the
-    // largest sigma C = sigma (Q_x X + Q_y Y + Q_w)): an edge that culls nothing usually stops at
-    // the first. Cost: 2 CMP.
-    const bool qx_pos = f[0][4] >= D(0.0), qy_pos = f[0][5] >= D(0.0);
-    const int first = ((qx_pos == (sigma > 0)) ? 1 : 0) | ((qy_pos == (sigma > 0)) ? 2 : 0);
+    // The support corner. H_c is affine in the corner: H_c = H_0 + Xc (b1 v + cx) + Yc (a1 u + cy), so
+    // where sigma (b1 v + cx) and sigma (a1 u + cy) keep their signs over the lens rectangle and t̂_k,
+    // one corner has the largest sigma H_c at every (u, v, t) and the edge culls exactly where that
+    // corner is outside. Each gradient component is bounded by its values at both ends (and both
+    // rectangle edges) and its s^2 term (b1, a1 are linear in s: only cx2, cy2 enter). A component of
+    // uncertain sign keeps both corners on that axis (2 or 4 corners: their AND is exact).
+    D gx_lo, gx_hi, gy_lo, gy_hi;
+    if (h5.lens) {
+      gx_lo = gx_hi = madd(f[0][3], D(v0), f[0][4]);
+      gy_lo = gy_hi = madd(f[0][1], D(u0), f[0][5]);
+      const D gx[3] = {madd(f[0][3], D(v1), f[0][4]), madd(f[1][3], D(v0), f[1][4]), madd(f[1][3], D(v1), f[1][4])};
+      const D gy[3] = {madd(f[0][1], D(u1), f[0][5]), madd(f[1][1], D(u0), f[1][5]), madd(f[1][1], D(u1), f[1][5])};
+      for (int q = 0; q < 3; ++q) {
+        gx_lo = vmin(gx_lo, gx[q]), gx_hi = vmax(gx_hi, gx[q]);
+        gy_lo = vmin(gy_lo, gy[q]), gy_hi = vmax(gy_hi, gy[q]);
+      }
+    } else {
+      gx_lo = vmin(f[0][4], f[1][4]), gx_hi = vmax(f[0][4], f[1][4]);
+      gy_lo = vmin(f[0][5], f[1][5]), gy_hi = vmax(f[0][5], f[1][5]);
+    }
+    const D rx = vabs(D(eh.f2[4])) * rq, ry = vabs(D(eh.f2[5])) * rq;
+    const bool x_pos = gx_lo > rx, x_neg = gx_hi < -rx, y_pos = gy_lo > ry, y_neg = gy_hi < -ry;
+    charge<A>(ops, h5.lens ? cost::kH5Support5D : cost::kH5Support3D);
+    // Corner bits: bit0 = x1, bit1 = y1. First the support corner (or, on an uncertain axis, the
+    // larger one at the lens centre and t̂_k's start: 2 CMP).
+    const bool up = sigma > 0;
+    const bool gx0 = f[0][4] >= D(0.0), gy0 = f[0][5] >= D(0.0);
     charge<A>(ops, cost::kH5CornerOrder);
+    const int bx = (x_pos || x_neg) ? ((x_pos == up) ? 1 : 0) : ((gx0 == up) ? 1 : 0);
+    const int by = (y_pos || y_neg) ? ((y_pos == up) ? 1 : 0) : ((gy0 == up) ? 1 : 0);
+    const int first = bx | (by << 1);
+    const int flips = ((x_pos || x_neg) ? 0 : 1) | ((y_pos || y_neg) ? 0 : 2);  // axes with two corners
     for (int n = 0; n < 4 && edge_culls; ++n) {
+      if (n & ~flips) continue;  // a certain axis keeps one corner
       const int c = first ^ n;
       const double xc = (c & 1) ? x1 : x0, yc = (c & 2) ? y1 : y0;
       ++lines;
