@@ -22,9 +22,10 @@
 //
 // The tile is outside edge (q, r) seen from (u, v) at t iff every tile corner is on the other side
 // of the projected edge from the third vertex: sigma * H_c < 0 for all four corners, with sigma the
-// triangle's orientation seen from (u, v, t) (the sign of the sample test's determinant). The four
-// corners are used (not 001's two tangent corners: the focus-plane point v of the edge moves with
-// t, and its nine-region class may change within t̂_k). sigma must be one sign over the lens
+// triangle's orientation seen from (u, v, t) (the sign of the sample test's determinant). H_c is
+// affine in the corner, so where its corner gradient keeps its sign one support corner decides (else
+// 2 or 4 corners; 001's two tangent corners are not used: the focus-plane point v of the edge moves
+// with t, and its nine-region class may change within t̂_k). sigma must be one sign over the lens
 // square and the sub-interval: the orientation det[X', Y', W] is affine in (u, v) and cubic in s,
 // and its tensor Bernstein coefficients over the lens square's corners and [0, 1] bound it (convex
 // hull property); a sub-interval whose 16 coefficients do not share a sign (with a relative margin)
