@@ -71,6 +71,11 @@ VARIANTS = {
     "cache_tex": {"shading": "cache", "texture_count": 2, "texture_layout": "morton"},
     # the hardware operation-cost model (fixed-point affine edge functions)
     "hardware": {"cost_model": "hardware"},
+    # moving triangles: the H5 planes (with and without the selective oracle), t̂ without lens sets
+    "h5": {"halfspace": {"h": True, "H": True, "H5": True}},
+    "h5_all_edges": {"halfspace": {"h": True, "H": True, "H5": True}, "selective_H": False},
+    "h5_splits4": {"halfspace": {"h": True, "H": True, "H5": True}, "time_splits": 4},
+    "no_lens_sets": {"halfspace": {"h": False, "H": True}},
 }
 # Variants of the line-sample cases only: the tile's h_i lens region clips the lines.
 LINE_VARIANTS = {"tile_clip": {"lines": {"tile_clip": True}}}
