@@ -55,6 +55,12 @@ void validate_params(const RenderParams& p, const SampleTable& table) {
     fail("algorithm: '" + p.algorithm +
          "' needs an interleaved sample table (SampleTable.interleaved), got a table without "
          "discrete lens coordinates");
+  // Occlusion queries are answered by the depth-cull stage (backend/zcull.h) that the tile algorithms
+  // and the gpu_* pixel shader run; the others would draw the query triangles as occluders.
+  const bool has_zcull = p.algorithm.rfind("tile", 0) == 0 || p.algorithm.rfind("gpu_", 0) == 0;
+  if (p.query_first >= 0 && p.query_mode != QueryMode::kNone && !has_zcull)
+    fail("algorithm: occlusion queries are answered by 'tile', 'tile_interleaved' and the gpu_* methods; got '" +
+         p.algorithm + "'");
   const bool lines_algo = p.algorithm == "lines";
   if (lines_algo != p.table_lines)
     fail(lines_algo ? "algorithm: 'lines' needs a line-sample table (SampleTable.lines), got a point-sample table"
@@ -332,7 +338,21 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
           if (track_stream_ends)
             bin_stream_ends[b].push_back(static_cast<std::uint32_t>(shade_frame.streams[b].size()));
         }
-        algo->end_bin(r);
+        {
+          // End-of-bin work (the line-sample composite): its own record, after the bin's triangles.
+          const TileWork before = p.record_timing ? work_from_counters(ts.counters) : TileWork{};
+          algo->end_bin(r);
+          if (p.record_timing) {
+            TileWork w = work_from_counters(ts.counters).since(before);
+            w.bin = b;
+            if (w.depth_tests || w.sample_tests || w.tile_tests || w.quads || w.texel_fetches || w.memory_bytes ||
+                w.gs_ops || w.gs_floats || w.raster_pixels || w.ps_ops) {
+              bin_records[b].push_back(w);
+              if (track_stream_ends)
+                bin_stream_ends[b].push_back(static_cast<std::uint32_t>(shade_frame.streams[b].size()));
+            }
+          }
+        }
         ts.shade.close_visit();  // algorithms end their visits; this only guards the contract
         if (ts.cursor) {
           ts.cursor->commit(ts.counters);
