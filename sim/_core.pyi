@@ -36,6 +36,9 @@ class RenderParams:
     cost_model: str  # Operation cost model: 'robust' (float32 sample-relative edge functions, no FMA) or 'hardware' (fixed-point affine edge functions with FMA; 2D edges set up per triangle or lens position); the image is the same in both (cost_models: robust, hardware); default 'robust'
     count_optimal: bool  # Instrument tile.samples_optimal (exact lens region per tile; 001 Table 1); off by default: it costs more than the traversal it describes; default False
     simd: bool  # Fast path: the 4D/5D sample tests in explicit SIMD (bit-identical results and counts; false = the auto-vectorised kernels, for benchmarks); default True
+    precision_tile: str | dict  # 2D edge tile test (in-focus triangles of tile and tile_interleaved; hinterleave): float64 (the default), float32 (no extra margin: may lose samples), or fixed point on the screen-space vertices and tile corners snapped to frac_bits sub-pixel bits, exact registers, tiles widened by 2^(1 - frac_bits) px; default 'float64'
+    precision_sample: str | dict  # Sample test decision: float32 (the default), float64, or fixed point on the vertices placed at the sample's (u, v, t) and projected, snapped with the sample to frac_bits sub-pixel bits; tile tests widen by 2^(1 - frac_bits) px to stay conservative; default 'float32'
+    precision_depth: str | dict  # Stored sample depth z in [0, 1]: float32 (the default) or fixed point (z rounded to frac_bits fraction bits, frac_bits <= 24: a unorm depth buffer); float64 is refused (the buffer holds float32); default 'float32'
     hinterleave_tile: int  # HINTERLEAVE tile edge: 4, 8 or 16 [px]; default 8
     bin_size: int  # Screen bin edge for threading (multiple of 8 and of hinterleave_tile) [px]; default 64
     lines_buffer_size: int  # Segment-buffer capacity per line sample; 0 = unlimited (004 does not state its size; 8 overflows by 27% on modern_hall at CoC 40 and darkens it, 32 does not) [segments]; default 32

@@ -22,7 +22,9 @@ from . import _core
 from .errors import ConfigError, check_float, check_int
 
 _SENTINELS = {"auto": "auto", "null": None}
-PY_TYPES = {"int": int, "float": float, "bool": bool, "str": str, "range": list}
+PY_TYPES = {"int": int, "float": float, "bool": bool, "str": str, "range": list, "precision": str | dict}
+# The largest fixed-point formats (core/params.h: kFixedMaxIntBits, kFixedMaxFracBits, kFixedMaxRegisterBits).
+FIXED_MAX_INT_BITS, FIXED_MAX_FRAC_BITS, FIXED_MAX_REGISTER_BITS = 62, 24, 100
 
 
 @dataclass(frozen=True)
@@ -99,6 +101,8 @@ class ParamSpec:
             if not lo <= hi:
                 raise ConfigError(f"{owner}.{label}: expected lo <= hi, got {list(value)!r}")
             return [lo, hi]
+        if self.type == "precision":
+            return self._check_precision(owner, value, label)
         if self.registry is not None:
             if not isinstance(value, str) or value not in self.choices:
                 if self.registry == "algorithms":  # a registry of units, open to additions
@@ -123,6 +127,25 @@ class ParamSpec:
         elif self.type == "float":
             check_float(owner, label, value)
         return value
+
+    def _check_precision(self, owner, value, label):
+        """A stage's arithmetic: 'float64', 'float32' or {fixed: {int_bits, frac_bits}}, of the kinds in
+        the domain ("{float64, float32, fixed}")."""
+        kinds = [k for k in self.values if k != "fixed"]
+        shape = _alternatives([repr(k) for k in kinds] + (["{fixed: {int_bits: int, frac_bits: int}}"]
+                                                          if "fixed" in self.values else []))
+        if isinstance(value, str) and value in kinds:
+            return value
+        if isinstance(value, dict) and "fixed" in self.values and set(value) == {"fixed"}:
+            bits = value["fixed"]
+            if isinstance(bits, dict) and set(bits) == {"int_bits", "frac_bits"}:
+                ib = check_int(owner, f"{label}.fixed.int_bits", bits["int_bits"], 1, FIXED_MAX_INT_BITS)
+                fb = check_int(owner, f"{label}.fixed.frac_bits", bits["frac_bits"], 0, FIXED_MAX_FRAC_BITS)
+                if 1 + ib + 2 * fb > FIXED_MAX_REGISTER_BITS:
+                    raise ConfigError(f"{owner}.{label}.fixed: expected 1 + int_bits + 2 frac_bits <= "
+                                      f"{FIXED_MAX_REGISTER_BITS} register bits, got {1 + ib + 2 * fb} ({bits!r})")
+                return {"fixed": {"int_bits": ib, "frac_bits": fb}}
+        raise ConfigError(f"{owner}.{label}: expected {shape}, got {value!r}")
 
     def _check_group(self, owner, value, label):
         keys = [m.key for m in self.members]
@@ -171,7 +194,8 @@ def _alternatives(items: list[str]) -> str:
 
 
 def _shape(spec: ParamSpec) -> str:
-    return {"range": "[lo, hi]", "int": spec.unit or "int"}.get(spec.type, spec.type)
+    return {"range": "[lo, hi]", "int": spec.unit or "int",
+            "precision": "float64 | float32 | {fixed: {int_bits, frac_bits}}"}.get(spec.type, spec.type)
 
 
 def _number(text: str):
@@ -300,7 +324,8 @@ STUB_BEGIN = "    # ---- generated from params.def by `python -m sim.gen_stub`: 
 STUB_END = "    # ---- end of the generated fields ----"
 _LAYER_SETTERS = {"camera": "set from sim.Camera", "pipeline": "from sim.PipelineConfig",
                   "hardware": "from sim.HardwareConfig", "frame": "set by sim.render for this render"}
-_STUB_TYPES = {"int": "int", "float": "float", "bool": "bool", "str": "str", "range": "list[float]"}
+_STUB_TYPES = {"int": "int", "float": "float", "bool": "bool", "str": "str", "range": "list[float]",
+               "precision": "str | dict"}
 
 
 def stub_fields() -> str:

@@ -1,13 +1,17 @@
-"""Fixed-point precision of the 2D tile test and sample test (001 §7: "an efficient fixed-point
-implementation"). For each viewport size (512 to 8192 px) and sub-pixel precision, the fewest integer bits
-of a fixed-point datapath (core/fixed.h: vertices and samples snapped to frac_bits; registers of a sign,
-int_bits integer and 2 frac_bits fraction bits, so the 2D set-up and edge functions are exact) that keep, on the hard-case suite
-(tests/reference/hardcases.py, projected at each viewport, at the lens centre and the four lens-square
-corners, both shutter ends):
-  * every 2D tile test conservative against the float64 test of the unsnapped triangle, and
-  * every affine sample test in agreement with the float64 test except within DELTA(frac_bits) of an edge,
-with triangles clipped to the near plane and a guard band of one viewport on each side (as hardware
-rasterizers clip before snapping). Writes reports/paper/precision.md (or prints with --print).
+"""Precision of the tile test, the sample test and the depth (001 §7: "an efficient fixed-point
+implementation"; pipeline.precision, docs/precision.md). With the render's own kernels in fixed point
+(core/fixed.h: vertices and samples snapped to frac_bits; registers of a sign, int_bits integer and 2
+frac_bits fraction bits, exact on the snapped inputs) and in float32:
+  * 2D tile test and 2D sample test (sim._core.precision_probe_2d), on the hard-case suite
+    (tests/reference/hardcases.py) projected at each viewport (512 to 8192 px) at the lens centre and the four
+    lens-square corners, both shutter ends, clipped to the near plane and a guard band of one viewport on each
+    side: the fewest int_bits (largest register magnitude), tile tests conservative against float64 on the
+    unsnapped triangle, sample decisions equal to float64 except within DELTA = 2^(1 - frac_bits) px of an edge;
+  * 2D/3D/4D/5D sample tests (sim._core.precision_probe: vertices placed at each sample's (u, v, t)) on the
+    hard cases at each viewport against the float64 ray caster (tests/reference/raycaster.py);
+  * depth: a fixed-point depth buffer on close layers (closed form and renders);
+  * renders: the image error and the tile culls lost at fewer bits.
+Writes reports/paper/precision.md (or prints with --print).
 
     python -m experiments.examples.precision
 """
@@ -115,11 +119,11 @@ def queries(tri, V, frac_bits, rng):
         pts.append(a + s * (b - a) + off * n)
     pts = np.concatenate(pts)
     pts = pts[(pts >= 0).all(1) & (pts <= V).all(1)]
-    tx0, ty0 = (lo // TILE).astype(int), (hi // TILE).astype(int)
-    tiles = np.array([(x * TILE, x * TILE + TILE, y * TILE, y * TILE + TILE)
-                      for x in range(tx0[0], ty0[0] + 1) for y in range(tx0[1], ty0[1] + 1)], dtype=np.float64)
-    if len(tiles) > N_TILES:
-        tiles = tiles[rng.choice(len(tiles), N_TILES, replace=False)]
+    t0, t1 = (lo // TILE).astype(int), (hi // TILE).astype(int)
+    nx, ny = t1[0] - t0[0] + 1, t1[1] - t0[1] + 1
+    k = np.arange(nx * ny) if nx * ny <= N_TILES else rng.choice(nx * ny, N_TILES, replace=False)
+    x, y = (t0[0] + k // ny) * TILE, (t0[1] + k % ny) * TILE
+    tiles = np.stack([x, x + TILE, y, y + TILE], axis=1).astype(np.float64)
     return pts, tiles.reshape(-1, 4)
 
 
@@ -142,21 +146,22 @@ def reference(tri, pts, tiles, inset=0.0):
     return inside, dist, outside
 
 
-def evaluate(tris, V, int_bits, frac_bits, seed=1):
-    """(overflows, tile violations, tiles, sample disagreements beyond DELTA, samples, max disagreement
-    distance [px], cull rate lost) over the triangles."""
+def evaluate(tris, V, int_bits, frac_bits, seed=1, kind="fixed"):
+    """One pass of the render's 2D kernels over the triangles: overflows, tile violations (culled tiles
+    holding a point of the triangle farther than DELTA from its edges; float: any overlap), tiles, sample
+    disagreements beyond DELTA (float: beyond EDGE_TOL_PX), samples, max disagreement distance [px], cull
+    rate lost, share of samples differing, and the largest register magnitudes (set-up + tile test, sample)."""
     rng = np.random.default_rng(seed)
     ovf = viol = n_t = bad = n_s = lost = culled_ref = differ = 0
-    dmax = 0.0
+    dmax = max_t = max_s = 0.0
+    d = delta(frac_bits) if kind == "fixed" else EDGE_TOL_PX
     for _name, tri in tris:
         pts, tiles = queries(tri, V, frac_bits, rng)
-        r = _core.precision_probe_2d(tri, pts, tiles, int_bits, frac_bits)
+        r = _core.precision_probe_2d(tri, pts, tiles, int_bits, frac_bits, kind)
         inside, dist, outside = reference(tri, pts, tiles)
-        # a tile may be culled when it holds no point of the triangle farther than DELTA from its edges
-        # (the snapped triangle misses it too: the sample criterion's DELTA)
-        _, _, outside_shrunk = reference(tri, pts[:0], tiles, inset=delta(frac_bits))
-        o_s, o_t = np.asarray(r["overflow_sample"]), np.asarray(r["overflow_tile"])
-        ovf += int(o_s.sum() + o_t.sum())
+        _, _, outside_shrunk = reference(tri, pts[:0], tiles, inset=d if kind == "fixed" else 0.0)
+        ovf += int(np.asarray(r["overflow_sample"]).sum() + np.asarray(r["overflow_tile"]).sum())
+        max_t, max_s = max(max_t, r["max_abs_tile"]), max(max_s, r["max_abs_sample"])
         fo = np.asarray(r["tile_outside"])
         viol += int((fo & ~outside_shrunk).sum())
         lost += int((~fo & outside).sum())
@@ -165,104 +170,394 @@ def evaluate(tris, V, int_bits, frac_bits, seed=1):
         dis = np.asarray(r["inside"]) != inside
         if dis.any():
             dmax = max(dmax, float(dist[dis].max()))
-        bad += int((dis & (dist > delta(frac_bits))).sum())
+        bad += int((dis & (dist > d)).sum())
         differ += int(dis.sum())
         n_s += len(pts)
     return dict(overflows=ovf, tile_violations=viol, tiles=n_t, sample_bad=bad, samples=n_s, dmax=dmax,
-                cull_lost=lost / max(culled_ref, 1), differ=differ / max(n_s, 1))
+                cull_lost=lost / max(culled_ref, 1), differ=differ / max(n_s, 1), max_tile=max_t, max_sample=max_s)
 
 
-def safe(res) -> bool:
-    return res["overflows"] == 0 and res["tile_violations"] == 0 and res["sample_bad"] == 0
+EDGE_TOL_PX = 1e-3  # float32 engine against float64 (tests/test_raycaster.py)
+PROBE_BITS = 60  # int_bits of the measuring pass (wide enough for every clipped triangle)
 
 
-def fewest_int_bits(tris, V, frac_bits, lo=4, hi=None):
-    hi = 60 - 2 * frac_bits if hi is None else hi
-    while lo < hi:
-        mid = (lo + hi) // 2
-        if safe(evaluate(tris, V, mid, frac_bits)):
-            hi = mid
-        else:
-            lo = mid + 1
-    return lo
+def guard_band_int_bits(V: int) -> int:
+    """Closed-form int_bits of the 2D tile test and sample test for any triangle clipped to the guard band
+    [-V, 2V] and samples and tiles on the V x V screen: relative coordinates |x_j - s_x| <= 2V, so every
+    edge function is below 2 (2V)^2 = 8 V^2 and its partial sums (det, A x + B y + C) below 16 V^2 = 2^(4 + 2
+    log2 V): registers must reach 2^(5 + 2 ceil(log2 V))."""
+    return 5 + 2 * int(np.ceil(np.log2(V)))
 
 
-ROWS = REPO / "results" / "precision_rows.json"  # finished (viewport, frac_bits) rows: a rerun resumes
+def int_bits_for(max_abs: float) -> int:
+    """The fewest integer bits n whose registers hold max_abs: max_abs < 2^n."""
+    return max(1, int(np.floor(np.log2(max_abs))) + 1) if max_abs >= 1 else 1
+
+
+def rows_2d(V, tris):
+    """The 2D tile test and 2D sample test rows of viewport V."""
+    out = []
+    for F in FRAC_BITS:
+        wide = evaluate(tris, V, PROBE_BITS, F)
+        it, is_ = int_bits_for(wide["max_tile"]), int_bits_for(wide["max_sample"])
+        at = evaluate(tris, V, max(it, is_), F)
+        below = evaluate(tris, V, max(it, is_) - 1, F)
+        gb = guard_band_int_bits(V)
+        at_gb = evaluate(tris, V, gb, F)
+        out.append(dict(viewport=V, kind="fixed", frac_bits=F, int_bits_tile=it, int_bits_sample=is_,
+                        int_bits_bound=gb, bound_total_bits=1 + gb + 2 * F, bound_safe=at_gb["overflows"] == 0
+                        and at_gb["tile_violations"] == 0 and at_gb["sample_bad"] == 0,
+                        total_bits=1 + max(it, is_) + 2 * F, triangles=len(tris), safe=at["overflows"] == 0
+                        and at["tile_violations"] == 0 and at["sample_bad"] == 0, samples=at["samples"], tiles=at["tiles"],
+                        dmax=at["dmax"], differ=at["differ"], cull_lost=at["cull_lost"],
+                        tile_violations=at["tile_violations"], sample_bad=at["sample_bad"],
+                        below_overflows=below["overflows"]))
+        print(out[-1], flush=True)
+    f32 = evaluate(tris, V, 0, 8, kind="float32")
+    out.append(dict(viewport=V, kind="float32", triangles=len(tris), samples=f32["samples"], tiles=f32["tiles"],
+                    dmax=f32["dmax"], differ=f32["differ"], cull_lost=f32["cull_lost"],
+                    tile_violations=f32["tile_violations"], sample_bad=f32["sample_bad"]))
+    print(out[-1], flush=True)
+    return out
+
+
+def _hard_cameras(V):
+    """The hard cases at a V x V viewport, with their blur (4D, 5D) and in focus (coc 0: 2D, 3D)."""
+    sys.path.insert(0, str(REPO))
+    from tests.reference.hardcases import hard_cases
+
+    for name, (cam_kw, p0, p1, _) in sorted(hard_cases().items()):
+        scale = V / cam_kw["width"]
+        for coc in (cam_kw["coc_px"] * scale, 0.0):
+            yield name, sim.Camera(**{**cam_kw, "width": V, "height": V, "coc_px": coc}), p0, p1
+
+
+CLASSES = ("2D", "3D", "4D", "5D")
+N_PROBE = 600
+
+
+def rows_nd(V, seed=3):
+    """The render's sample test per triangle class on the hard cases at viewport V, against the float64 ray
+    caster: per (class, precision) the samples, disagreements beyond the stated distance, the largest
+    disagreement distance, and (fixed) the fewest int_bits over all samples and over the samples whose
+    placed triangle lies in front of the near plane and inside a guard band of one viewport (what a
+    clipping datapath sees)."""
+    from tests import reference as ref
+
+    rng = np.random.default_rng(seed)
+    acc = {}
+    precisions = [("float32", None), ("float64", None)] + [("fixed", F) for F in FRAC_BITS]
+    for _name, cam, p0, p1 in _hard_cameras(V):
+        for i in range(p0.shape[0]):
+            pts = ref.sample_points(rng, cam, p0[i], p1[i], N_PROBE)
+            pts64 = pts.astype(np.float64)
+            rc = ref.ray_cast(cam, p0[i], p1[i], pts64)
+            edge = ref.edge_distance_px(cam, p0[i], p1[i], pts64)
+            near = ref.near_rel_distance(cam, rc.w)
+            H, _ = ref.lens_homogeneous(cam, p0[i], p1[i], pts64)
+            W = H[..., 2]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                xy = H[..., :2] / W[..., None]
+            clipped_ok = (W >= cam.near).all(-1) & (np.abs(xy - V / 2) <= 1.5 * V).all((-1, -2))
+            v0, v1 = cam.engine_vertices(p0[i][None], p1[i][None])
+            for kind, F in precisions:
+                params = ref.engine_params(cam)
+                params.precision_sample = kind if F is None else {"fixed": {"int_bits": PROBE_BITS, "frac_bits": F}}
+                r = _core.precision_probe(params, v0[0], v1[0], pts)
+                cls = r["dim_class"]
+                if cls < 0:
+                    continue
+                tol = delta(F) if F is not None else EDGE_TOL_PX
+                mism = (np.asarray(r["covered"]) != rc.covered) & (near > 1e-3)
+                a = acc.setdefault((CLASSES[cls], kind, F), dict(samples=0, bad=0, differ=0, dmax=0.0, max_all=0.0,
+                                                                 max_clipped=0.0, clipped_share=0))
+                a["samples"] += len(pts)
+                a["differ"] += int((mism & (edge > EDGE_TOL_PX)).sum())
+                a["bad"] += int((mism & (edge > tol)).sum())
+                if mism.any():
+                    a["dmax"] = max(a["dmax"], float(edge[mism].max()))
+                m = np.asarray(r["max_abs"])
+                a["max_all"] = max(a["max_all"], float(m.max()))
+                a["clipped_share"] += int(clipped_ok.sum())
+                if clipped_ok.any():
+                    a["max_clipped"] = max(a["max_clipped"], float(m[clipped_ok].max()))
+    rows = []
+    for (cls, kind, F), a in sorted(acc.items(), key=lambda kv: (kv[0][0], kv[0][1], kv[0][2] or 0)):
+        rows.append(dict(viewport=V, cls=cls, kind=kind, frac_bits=F, samples=a["samples"], bad=a["bad"],
+                         differ=a["differ"] / max(a["samples"], 1), dmax=a["dmax"],
+                         int_bits_all=int_bits_for(a["max_all"]) if kind == "fixed" else None,
+                         int_bits_clipped=int_bits_for(a["max_clipped"]) if kind == "fixed" else None,
+                         in_band=a["clipped_share"] / max(a["samples"], 1)))
+    print(rows, flush=True)
+    return rows
+
+
+ROWS = REPO / "results" / "precision_rows.json"  # finished viewports: a rerun resumes
 
 
 def study():
     import json
 
-    rows = json.loads(ROWS.read_text()) if ROWS.exists() else []
-    done = {(r["viewport"], r["frac_bits"]) for r in rows}
+    data = json.loads(ROWS.read_text()) if ROWS.exists() else {}
     for V in VIEWPORTS:
-        if all((V, F) in done for F in FRAC_BITS):
+        if str(V) in data:
             continue
-        tris = screen_triangles(V)
-        for F in FRAC_BITS:
-            if (V, F) in done:
-                continue
-            I = fewest_int_bits(tris, V, F)
-            at = evaluate(tris, V, I, F)
-            below = evaluate(tris, V, I - 2, F)
-            rows.append(dict(viewport=V, frac_bits=F, int_bits=I, total_bits=1 + I + 2 * F, safe=safe(at), triangles=len(tris),
-                             samples=at["samples"], tiles=at["tiles"], dmax=at["dmax"], differ=at["differ"],
-                             cull_lost=at["cull_lost"],
-                             below_overflows=below["overflows"], below_tile_violations=below["tile_violations"],
-                             below_sample_bad=below["sample_bad"], below_samples=below["samples"],
-                             below_tiles=below["tiles"]))
-            print(rows[-1], flush=True)
-            ROWS.parent.mkdir(exist_ok=True)
-            ROWS.write_text(json.dumps(rows))
-    rows.sort(key=lambda r: (r["viewport"], r["frac_bits"]))
-    return rows
+        t0 = time.process_time()
+        data[str(V)] = dict(rows_2d=rows_2d(V, screen_triangles(V)), rows_nd=rows_nd(V),
+                            cpu_s=time.process_time() - t0)
+        ROWS.parent.mkdir(exist_ok=True)
+        ROWS.write_text(json.dumps(data))
+    if "renders" not in data:
+        t0 = time.process_time()
+        data["renders"] = dict(image=render_rows(), depth=depth_rows(), cpu_s=0.0)
+        data["renders"]["cpu_s"] = time.process_time() - t0
+        ROWS.write_text(json.dumps(data))
+    return data
 
 
-def markdown(rows, elapsed):
+# ----------------------------------------------------------------------------- renders
+
+def _camera(scene, **given):
+    """The scene's camera hint (its framing) with the given keys (as experiments/config/build.py does)."""
+    args = {k: v for k, v in dict(scene.camera_hint or {}).items() if k != "aperture_radius"}
+    args.update(given)
+    return sim.Camera(**args)
+
+
+def _scene(name, **params):
+    import models
+
+    return models.registry.named(name, **params)
+
+
+RENDER_SIZE = 256
+RENDER_PRECISIONS = [
+    ("default", {}),
+    ("sample float64", {"sample": "float64"}),
+    ("sample fixed 8", {"sample": {"fixed": {"int_bits": 40, "frac_bits": 8}}}),
+    ("sample fixed 4", {"sample": {"fixed": {"int_bits": 40, "frac_bits": 4}}}),
+    ("sample fixed 2", {"sample": {"fixed": {"int_bits": 40, "frac_bits": 2}}}),
+    ("tile float32", {"tile": "float32"}),
+    ("tile fixed 8", {"tile": {"fixed": {"int_bits": 40, "frac_bits": 8}}}),
+    ("tile fixed 4", {"tile": {"fixed": {"int_bits": 40, "frac_bits": 4}}}),
+    ("tile fixed 2", {"tile": {"fixed": {"int_bits": 40, "frac_bits": 2}}}),
+    ("tile + sample fixed 4, 14 int bits", {"tile": {"fixed": {"int_bits": 14, "frac_bits": 4}},
+                                            "sample": {"fixed": {"int_bits": 14, "frac_bits": 4}}}),
+]
+
+
+def render_rows():
+    """Image error and tile culls lost at fewer bits: spot (5.9k triangles, in focus so the 2D tile test
+    runs, and CoC 10) at RENDER_SIZE^2, 4 spp, tile 2x2, against the default precision's render."""
+    out = []
+    scene = _scene("spot")
+    for coc in (0.0, 10.0):
+        cam = _camera(scene, width=RENDER_SIZE, height=RENDER_SIZE, coc_px=coc)
+        table = sim.SampleTable.stratified(spp=4, seed=1)
+        base = None
+        for label, prec in RENDER_PRECISIONS:
+            r = sim.render(scene, cam, table, sim.PipelineConfig(algorithm="tile", precision=prec),
+                           export_samples=True, timing=False)
+            s = r.flat_stats
+            if base is None:
+                base = r
+            differ = int((r.sample_triangle != base.sample_triangle).sum())
+            out.append(dict(coc=coc, label=label, rmse=float(np.sqrt(np.mean((r.image - base.image) ** 2))),
+                            samples_differ=differ, samples=int(r.sample_triangle.size),
+                            culled_2d=int(s["tile.culled_2d"]), culled_2d_base=int(base.flat_stats["tile.culled_2d"]),
+                            tested=int(s["raster.samples_tested"]), tested_base=int(base.flat_stats["raster.samples_tested"]),
+                            sample_overflows=int(s["precision.sample_overflows"]),
+                            tile_overflows=int(s["precision.tile_overflows"])))
+            print(out[-1], flush=True)
+    return out
+
+
+DEPTH_BITS = (8, 12, 16, 20, 24)
+
+
+def depth_rows():
+    """A fixed-point depth buffer on depth_layers (4 screen-covering layers tilted +-5 %) at spacings 0.25 and
+    0.01 from depth 2 (near 0.01): samples whose visible layer differs from the float32 buffer's."""
+    out = []
+    table = sim.SampleTable.stratified(spp=4, seed=1)
+    for spacing in (0.25, 0.01):
+        scene = _scene("depth_layers", layers=4, spacing=spacing)
+        cam = _camera(scene, width=128, height=128, coc_px=0.0, near=0.01)
+        base = sim.render(scene, cam, table, sim.PipelineConfig(algorithm="tile"), export_samples=True, timing=False)
+        for F in DEPTH_BITS:
+            r = sim.render(scene, cam, table, sim.PipelineConfig(algorithm="tile", precision={
+                "depth": {"fixed": {"int_bits": 1, "frac_bits": F}}}), export_samples=True, timing=False)
+            out.append(dict(spacing=spacing, frac_bits=F,
+                            differ=int((r.sample_triangle != base.sample_triangle).sum()),
+                            samples=int(r.sample_triangle.size)))
+            print(out[-1], flush=True)
+    return out
+
+
+def depth_resolution(w, near, frac_bits):
+    """The smallest view-depth gap that a frac_bits unorm z = 1 - near / w resolves at depth w (closed form:
+    dz/dw = near / w^2; one step 2^-frac_bits)."""
+    return 2.0 ** -frac_bits * w * w / near
+
+
+def _pct(x):
+    return f"{100 * x:.3f} %"
+
+
+def markdown(data):
+    vs = [v for v in VIEWPORTS if str(v) in data]
+    cpu = sum(data[str(v)]["cpu_s"] for v in vs) + data.get("renders", {}).get("cpu_s", 0.0)
     out = ["# precision", "",
-           "Made by `python -m experiments.examples.precision` (" + f"{elapsed:.0f} s" + "). Fixed-point "
-           "instantiations (`core/fixed.h`) of the 2D edge set-up and 2D tile test (`tiletest/edges_2d.h`) "
-           "and the affine sample test (`sampletest/hardware.h`), through `sim._core.precision_probe_2d`.",
+           "Made by `python -m experiments.examples.precision` (" + f"{cpu / 60:.1f} CPU-minutes on a loaded "
+           "2-core machine). Every number comes from the render's own kernels in the chosen arithmetic "
+           "(`pipeline.precision`, docs/precision.md): the fixed-point scalar `core/fixed.h` (inputs snapped to "
+           "`frac_bits` sub-pixel bits; registers of a sign, `int_bits` integer and 2 `frac_bits` fraction bits, "
+           "so the edge set-up and the edge functions are exact on the snapped inputs) instantiating the 2D tile "
+           "test (`tiletest/edges_2d.h`) and the sample test (`sampletest/precision.h`). cudaraster (Laine & "
+           "Karras 2011) snaps to 4 sub-pixel bits; 8 is shown beside it. Total bits = 1 + int_bits + 2 frac_bits.",
            "",
-           "## Fewest bits of the 2D tile test and sample test per viewport",
+           "## The choice in a render",
            "",
-           "Format: vertices and samples snapped to `frac_bits` sub-pixel bits; every register a sign, `int_bits` "
-           "integer and 2 `frac_bits` fraction bits (total bits = 1 + int_bits + 2 frac_bits), so the edge "
-           "set-up's products and the affine edge functions are exact; no value may reach 2^int_bits. Workload: the hard-case suite "
-           "(`tests/reference/hardcases.py`: vertices behind the camera, at the near plane, on the lens plane, "
-           "gigantic coordinates, huge blur, degenerate and edge-on triangles) projected at each viewport, at the "
-           "lens centre and the four lens-square corners and at both shutter ends, clipped to the near plane and "
-           "to a guard band of one viewport on each side, fan-triangulated. Per triangle: 200 random samples in "
-           "its on-screen bounds and 200 within 3 DELTA of its edges; up to 150 of the 8x8 tiles over its bounds. "
-           "Safe = no overflow, every tile test conservative against float64 on the unsnapped triangle (a tile "
-           "holding no point of the triangle farther than DELTA from its edges may be culled: the snapped "
-           "triangle misses it too), every "
-           "sample decision equal to float64 except within DELTA = 2^(1 - frac_bits) px of an edge. "
-           "cudaraster (Laine & Karras 2011) snaps to 4 sub-pixel bits, the first anchor.",
+           "```yaml",
+           "pipeline:",
+           "  precision:",
+           "    tile: {fixed: {int_bits: 27, frac_bits: 4}}   # float64 (default) | float32 | fixed",
+           "    sample: {fixed: {int_bits: 27, frac_bits: 4}} # float32 (default) | float64 | fixed",
+           "    depth: {fixed: {int_bits: 1, frac_bits: 24}}  # float32 (default) | fixed (a unorm depth buffer)",
+           "```",
            "",
-           "| viewport [px] | frac_bits | fewest int_bits | total bits | triangles | samples | tiles | "
-           "samples differing from float64 | max distance of a differing sample [px] | tile culls lost | "
-           "int_bits - 2: values overflowing |",
-           "|---|---|---|---|---|---|---|---|---|---|---|"]
-    for r in rows:
-        out.append(f"| {r['viewport']} | {r['frac_bits']} | {r['int_bits']} | {r['total_bits']} | {r['triangles']} | "
-                   f"{r['samples']} | {r['tiles']} | {100 * r['differ']:.3f} % | {r['dmax']:.4g} | "
-                   f"{100 * r['cull_lost']:.3f} % | {r['below_overflows']} |")
+           "(`sim.PipelineConfig(precision={...})` in Python.) A fixed-point sample or tile test widens every tile "
+           "test's tile by 2^(1 - frac_bits) px, so tile culling stays conservative and every exact algorithm "
+           "renders the same image (tests/test_precision_render.py). One exception, by design of the pairing: a "
+           "fixed-point tile test culls a sub-pixel triangle that snapping collapses to zero area or flips, which "
+           "a float sample test would still hit (10 samples of spot at 2 fraction bits below, none at 4 or 8); "
+           "paired with a fixed-point sample test of the same snapping it is conservative. A float32 tile test "
+           "gets no extra margin and may lose samples. Values reaching 2^int_bits are counted (`precision.sample_overflows`, "
+           "`precision.tile_overflows`); the render keeps the unwrapped decision, where hardware would wrap. "
+           "Operation counts do not depend on the precision.",
+           "",
+           "## 2D tile test and 2D sample test: fewest bits per viewport",
+           "",
+           "Workload: the hard-case suite (`tests/reference/hardcases.py`: vertices behind the camera, at the "
+           "near plane, on the lens plane, gigantic coordinates, huge blur, degenerate and edge-on triangles) "
+           "projected at each viewport at the lens centre and the four lens-square corners and at both shutter "
+           "ends, clipped to the near plane and to a guard band of one viewport on each side (as a hardware "
+           "rasterizer clips before snapping), fan-triangulated. Per triangle 200 random samples in its on-screen "
+           "bounds and 200 within 3 DELTA of its edges, up to 150 of the 8x8 tiles over its bounds. Fewest int_bits "
+           "= the smallest n with every register magnitude below 2^n (one measuring pass; the row's check at that "
+           "n finds no overflow, at n - 1 the overflows listed). Safe = no overflow, no tile culled that holds a "
+           "point of the triangle farther than DELTA from its edges, no sample decision different from float64 "
+           "farther than DELTA = 2^(1 - frac_bits) px from an edge.",
+           "",
+           "| viewport [px] | arithmetic | fewest int_bits: tile test (set-up) | fewest int_bits: sample test | "
+           "total bits | safe | closed-form int_bits (total bits), safe | triangles | samples | samples differing from float64 | max distance of a "
+           "differing sample [px] | tiles | tiles culled beyond DELTA | tile culls lost | overflows at int_bits - 1 |",
+           "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for v in vs:
+        for r in data[str(v)]["rows_2d"]:
+            if r["kind"] == "fixed":
+                out.append(f"| {v} | fixed, frac_bits {r['frac_bits']} | {r['int_bits_tile']} | {r['int_bits_sample']} | "
+                           f"{r['total_bits']} | {'yes' if r['safe'] else 'NO'} | {r['int_bits_bound']} "
+                           f"({r['bound_total_bits']}), {'yes' if r['bound_safe'] else 'NO'} | {r['triangles']} | {r['samples']} | "
+                           f"{_pct(r['differ'])} | {r['dmax']:.4g} | {r['tiles']} | {r['tile_violations']} | "
+                           f"{_pct(r['cull_lost'])} | {r['below_overflows']} |")
+            else:
+                out.append(f"| {v} | float32 | - | - | 32 | {'yes' if not r['tile_violations'] and not r['sample_bad'] else 'NO'} "
+                           f"| - | {r['triangles']} | {r['samples']} | {_pct(r['differ'])} | {r['dmax']:.4g} | {r['tiles']} | "
+                           f"{r['tile_violations']} | {_pct(r['cull_lost'])} | - |")
     out += ["",
-            "The integer bits grow by two per doubling of the viewport: the edge set-up's constant C = x_j y_k - "
-            "y_j x_k is a product of two coordinates of the guard band [-V, 2V]. With fewer bits the set-up "
-            "overflows (last column: the number of values that reach 2^int_bits; the probe flags them rather than "
-            "wrapping, and a wrapped edge constant would make that triangle's tile and sample tests arbitrary). "
-            "Samples differing from float64 lie within DELTA of an edge: they are the snapping of vertices and "
-            "samples to the sub-pixel grid, do not depend on int_bits, and their distance shrinks 16x from 4 to 8 "
-            "fraction bits (the share listed is of samples drawn within 3 DELTA of an edge, so it stays near 1 %); "
-            "the image error "
-            "of a fixed-point sample test is these samples. Tile culls lost: tiles float64 culls that the snapped "
-            "triangle's test keeps (the cull rate lost to snapping).",
+            "The closed-form column holds for every triangle clipped to the guard band (relative coordinates "
+            "below 2V, edge functions below 8 V^2, their sums below 16 V^2: int_bits = 5 + 2 log2 V); the measured "
+            "columns are what the suite reaches. The tests (tests/test_precision.py) check the closed-form formats "
+            "with hypothesis on triangles up to four viewports off screen, behind the camera and at the near plane. "
+            "The integer bits grow by two per doubling of the viewport: the set-up constant C = x_j y_k - y_j x_k "
+            "is a product of two guard-band coordinates ([-V, 2V]), so a datapath for an 8192 px viewport needs "
+            "about 4 more integer bits than one for 2048 px. The sample test needs as many (its edge functions "
+            "reach the same magnitudes). Samples differing from float64 lie within DELTA of an edge (the share "
+            "listed is of samples drawn near edges, so it stays near 1 %); their distance shrinks 16x from 4 to 8 "
+            "fraction bits and does not depend on int_bits. The float32 rows: tiles culled beyond DELTA would be "
+            "a float32 tile test's misses without a margin (the render's float32 option has only the 2^-10 px one), "
+            "and sample disagreements beyond 10^-3 px are what float32 costs at large viewports.",
             "",
-            "Not measured here: the depth stage (z in fixed point), the 4D/5D sample tests (vertices placed per "
-            "sample) and the h_i / H_j tile tests, which run in float64 on widened tiles; renders do not yet take "
-            "a per-stage precision parameter.", ""]
+            "## Sample test by class: vertices placed per sample",
+            "",
+            "The render's sample test (`sim._core.precision_probe`: vertices placed at each sample's (u, v, t) in "
+            "float64, projected and snapped, then the edge functions in the format) on the hard cases at each "
+            "viewport, against the float64 thin-lens ray caster (`tests/reference/raycaster.py`); 600 samples per "
+            "triangle, half aimed at it. 'Beyond stated' counts samples differing from the ray caster farther than "
+            "the stated distance (DELTA for fixed point, 10^-3 px for floats) from an edge seen from the sample's "
+            "lens point (samples within 10^-3 relative of the near plane excluded). Fewest int_bits: over all "
+            "samples (unclipped: vertices near the lens plane project arbitrarily far, which a clipping datapath "
+            "never sees) and over the samples whose placed triangle lies in front of the near plane and inside a "
+            "guard band of one viewport (share 'in band').",
+            "",
+            "| viewport [px] | class | arithmetic | samples | beyond stated | differing beyond 10^-3 px | max distance "
+            "of a differing sample [px] | in band | fewest int_bits (in band) | fewest int_bits (all) |",
+            "|---|---|---|---|---|---|---|---|---|---|"]
+    for v in vs:
+        for r in data[str(v)]["rows_nd"]:
+            arith = r["kind"] if r["kind"] != "fixed" else f"fixed, frac_bits {r['frac_bits']}"
+            ib = r["int_bits_clipped"] if r["int_bits_clipped"] is not None else "-"
+            ia = r["int_bits_all"] if r["int_bits_all"] is not None else "-"
+            out.append(f"| {v} | {r['cls']} | {arith} | {r['samples']} | {r['bad']} | {_pct(r['differ'])} | "
+                       f"{r['dmax']:.4g} | {_pct(r['in_band'])} | {ib} | {ia} |")
+    if "renders" in data:
+        out += ["",
+                "## Image error and cull rate lost at fewer bits",
+                "",
+                f"`spot` at {RENDER_SIZE} x {RENDER_SIZE}, 4 spp, `tile` 2x2, in focus (CoC 0: the 2D tile test runs on every "
+                "triangle) and at CoC 10, each precision against the default (tile float64, sample float32, "
+                "depth float32). RMSE of the linear image; samples whose visible triangle differs; tile culls "
+                "lost = 1 - 2D tiles culled / the default's (negative: more culled); samples tested against the "
+                "default's.",
+                "",
+                "| CoC [px] | precision | image RMSE | samples differing | 2D tiles culled (default) | tile culls lost | "
+                "samples tested / default | sample overflows | tile overflows |",
+                "|---|---|---|---|---|---|---|---|---|"]
+        for r in data["renders"]["image"]:
+            lost = 1 - r["culled_2d"] / r["culled_2d_base"] if r["culled_2d_base"] else 0.0
+            out.append(f"| {r['coc']:g} | {r['label']} | {r['rmse']:.3g} | {r['samples_differ']} of {r['samples']} | "
+                       f"{r['culled_2d']} ({r['culled_2d_base']}) | {_pct(lost)} | {r['tested'] / r['tested_base']:.4f} | "
+                       f"{r['sample_overflows']} | {r['tile_overflows']} |")
+        out += ["",
+                "Every sample the fixed-point sample test changes lies within DELTA of an edge (the tables above); on "
+                "spot they are 0.02 % of the samples at 8 fraction bits, 0.4 % at 4 and 1.5 % at 2, with image RMSE "
+                "0.0009 / 0.005 / 0.010 in focus. The tile test gives up culls, never samples: the 2^(1 - frac_bits) px "
+                "widening keeps 2.4 % / 21 % / 57 % of the in-focus tiles float64 culls at 8 / 4 / 2 fraction bits, "
+                "which raises the samples tested by 0.6 % / 6 % / 16 %. The sample-relative edge functions stay "
+                "small on small triangles: with 14 integer bits spot's sample tests never overflow at 256 px, "
+                "while its 2D tile-test set-up (C = x_j y_k - y_j x_k, screen-sized) overflows 22,859 times; the "
+                "hard-case suite's large triangles need the full viewport-sized formats of the first table. float32 "
+                "and float64 sample tests change no sample here.",
+                "",
+                "## Depth",
+                "",
+                "A unorm depth buffer of frac_bits bits stores z = 1 - near / w rounded to 2^-frac_bits; the depth test "
+                "is z < z_buffer, so two surfaces whose z round together are resolved by submission order. Closed "
+                "form: at view depth w the smallest resolved gap is 2^-frac_bits w^2 / near. Renders: `depth_layers` "
+                "(4 screen-covering layers tilted +-5 %, from depth 2, near 0.01, 128 x 128, 4 spp), samples whose "
+                "visible layer differs from the float32 buffer's.",
+                "",
+                "`depth_layers` submits front to back, so layers whose z round together still resolve to the front "
+                "one (the first submitted keeps the sample): at spacing 0.25 even 8 bits (closed-form gap 1.56) "
+                "change no sample. At spacing 0.01 the oppositely tilted neighbours cross on screen; past a crossing "
+                "the later-submitted layer is in front, and where the two round together it loses: 30,616 samples at "
+                "8 bits, 32 at 20, none at 24. Back-to-front submission would expose every merged pair.",
+                "",
+                "| spacing | frac_bits | samples differing from float32 | smallest resolved gap at w = 2 (closed form) |",
+                "|---|---|---|---|"]
+        for r in data["renders"]["depth"]:
+            out.append(f"| {r['spacing']} | {r['frac_bits']} | {r['differ']} of {r['samples']} | "
+                       f"{depth_resolution(2.0, 0.01, r['frac_bits']):.3g} |")
+    out += ["",
+            "## Not measured",
+            "",
+            "The h_i / H_j tile tests (4D: 001 §4) and INTERVAL's box bounds run in float64 on widened tiles in every "
+            "render; their fixed-point form is not instantiated, so no 4D tile-test row is given. The fixed-point "
+            "sample test places the vertices at (u, v, t) in float64 before snapping; a datapath placing them in "
+            "fixed point would add that rounding. Line samples (`lines`) and the gpu_* pipeline's own tests do not "
+            "take `pipeline.precision`.",
+            ""]
     return "\n".join(out)
 
 
@@ -270,9 +565,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--print", action="store_true", help="print instead of writing reports/paper/precision.md")
     args = ap.parse_args(argv)
-    t0 = time.perf_counter()
-    rows = study()
-    md = markdown(rows, time.perf_counter() - t0)
+    md = markdown(study())
     if args.print:
         print(md)
     else:

@@ -149,15 +149,20 @@ def table2_culling(df, config) -> list[str]:
     for s in _scenes(df):
         for coc in sorted(df["camera.coc_px"].unique()):
             sub = df[(df["scene.name"] == s) & (df["camera.coc_px"] == coc)]
-            tested, gops = {}, {}
+            models = list(dict.fromkeys(sub["pipeline.cost_model"])) if "pipeline.cost_model" in sub.columns else [None]
+            tested, gops = {}, {m: {} for m in models}
             for name, algo, h, H in modes:
                 r = sub[(sub["pipeline.algorithm"] == algo) & (sub["pipeline.halfspace.h"] == h)
                         & (sub["pipeline.halfspace.H"] == H)]
                 tested[name] = float(r["raster.samples_tested"].iloc[0]) if len(r) else math.nan
-                gops[name] = float(r["ops.total"].iloc[0]) / 1e9 if len(r) else math.nan
+                for model in models:  # the samples tested do not depend on the cost model (oracle off)
+                    rm = r if model is None else r[r["pipeline.cost_model"] == model]
+                    gops[model][name] = float(rm["ops.total"].iloc[0]) / 1e9 if len(rm) else math.nan
             base = tested["none"]
             rows.append([s, f"{coc:g}", "culled"] + [f"{100 * (1 - tested[m[0]] / base):.0f}%" for m in modes])
-            rows.append([s, f"{coc:g}", "Gops"] + [f"{gops[m[0]]:.2f}" for m in modes])
+            for model in models:
+                label = "Gops" if model is None else f"Gops ({model})"
+                rows.append([s, f"{coc:g}", label] + [f"{gops[model][m[0]]:.2f}" for m in modes])
     for coc, (cull, g) in PAPER_T2.items():
         rows.append(["**paper: StoneGiant**", str(coc), "culled"] + cull)
         rows.append(["**paper: StoneGiant**", str(coc), "Gops"] + g)
@@ -169,8 +174,11 @@ def fig15_trends(df, config) -> list[str]:
     """Is tile (2x2, and 1x1) the cheapest of the arbitrary-pattern algorithms at every CoC?"""
     df = _ok(df)
     lines = ["Trend checks (001 §6.2: OUR is the cheapest at every CoC):", ""]
-    for s in _scenes(df):
+    models = list(dict.fromkeys(df["pipeline.cost_model"])) if "pipeline.cost_model" in df.columns else [None]
+    for s, model in [(s, m) for s in _scenes(df) for m in models]:
         sub = df[df["scene.name"] == s]
+        if model is not None:
+            sub = sub[sub["pipeline.cost_model"] == model]
         others = sub[sub["pipeline.algorithm"].isin(["bruteforce", "interval"])]
 
         def cheapest(tile_size):
@@ -185,7 +193,8 @@ def fig15_trends(df, config) -> list[str]:
 
         bf = sub[sub["pipeline.algorithm"] == "bruteforce"].sort_values("camera.coc_px")["ops.total"]
         growth = bf.iloc[-1] / bf.iloc[0] if len(bf) > 1 else math.nan
-        lines.append(f"- {s}: `tile` 2x2 cheaper than bruteforce and interval at every CoC: **{cheapest(2)}**; "
+        where = s if model is None else f"{s} ({model})"
+        lines.append(f"- {where}: `tile` 2x2 cheaper than bruteforce and interval at every CoC: **{cheapest(2)}**; "
                      f"`tile` 1x1: **{cheapest(1)}**; bruteforce ops grow {growth:.1f}x from the smallest to "
                      "the largest CoC.")
     lines += ["", "Where `tile` with 2x2 tiles loses to `interval` (micro-triangle workloads such as the bunny, "

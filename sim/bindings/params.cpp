@@ -7,6 +7,7 @@
 
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <array>
 #include <stdexcept>
 #include <string>
@@ -26,11 +27,48 @@ const char* param_type() {
   else if constexpr (std::is_integral_v<T>) return "int";
   else if constexpr (std::is_floating_point_v<T>) return "float";
   else if constexpr (std::is_same_v<T, CoordRange>) return "range";
+  else if constexpr (std::is_same_v<T, Precision>) return "precision";
+}
+
+// A stage's arithmetic as the user writes it: 'float64', 'float32' or {'fixed': {'int_bits', 'frac_bits'}}.
+py::object precision_value(const Precision& p) {
+  if (p.kind == PrecisionKind::kFloat64) return py::str("float64");
+  if (p.kind == PrecisionKind::kFloat32) return py::str("float32");
+  py::dict bits;
+  bits["int_bits"] = p.int_bits, bits["frac_bits"] = p.frac_bits;
+  py::dict d;
+  d["fixed"] = bits;
+  return d;
+}
+
+Precision precision_from(const py::object& v, const char* name) {
+  const std::string shape = "expected 'float64', 'float32' or {fixed: {int_bits: int, frac_bits: int}}, got ";
+  if (py::isinstance<py::str>(v)) {
+    const std::string s = v.cast<std::string>();
+    if (s == "float64") return Precision::float64();
+    if (s == "float32") return Precision::float32();
+  } else if (py::isinstance<py::dict>(v)) {
+    const py::dict d = v.cast<py::dict>();
+    if (d.size() == 1 && d.contains("fixed") && py::isinstance<py::dict>(d["fixed"])) {
+      const py::dict b = d["fixed"].cast<py::dict>();
+      if (b.size() == 2 && b.contains("int_bits") && b.contains("frac_bits") && py::isinstance<py::int_>(b["int_bits"]) &&
+          py::isinstance<py::int_>(b["frac_bits"]) && !py::isinstance<py::bool_>(b["int_bits"]) &&
+          !py::isinstance<py::bool_>(b["frac_bits"])) {
+        const long long ib = b["int_bits"].cast<long long>(), fb = b["frac_bits"].cast<long long>();
+        const Precision p = Precision::fixed(static_cast<int>(std::clamp(ib, -1LL, 1LL << 20)),
+                                             static_cast<int>(std::clamp(fb, -1LL, 1LL << 20)));
+        check_precision(name, p);
+        return p;
+      }
+    }
+  }
+  throw std::invalid_argument(std::string(name) + ": " + shape + py::repr(v).cast<std::string>());
 }
 
 template <class T>
 py::object param_value(const T& v) {
   if constexpr (IsChoice<T>::value) return py::str(std::string(choice_name(v)));
+  else if constexpr (std::is_same_v<T, Precision>) return precision_value(v);
   else return py::cast(v);
 }
 
@@ -41,6 +79,10 @@ void bind_param(py::class_<RenderParams>& c, const char* name, T RenderParams::*
         name,
         [member](const RenderParams& p) { return std::string(choice_name(p.*member)); },
         [member, name](RenderParams& p, const std::string& v) { p.*member = choice_value<T>(v, name); });
+  } else if constexpr (std::is_same_v<T, Precision>) {
+    c.def_property(
+        name, [member](const RenderParams& p) { return precision_value(p.*member); },
+        [member, name](RenderParams& p, const py::object& v) { p.*member = precision_from(v, name); });
   } else {
     c.def_readwrite(name, member);
   }

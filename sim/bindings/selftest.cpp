@@ -13,6 +13,7 @@
 #include "backend/texture.h"
 #include "core/fixed.h"
 #include "sampletest/hardware.h"
+#include "sampletest/precision.h"
 #include "tiletest/edges_2d.h"
 #include "selftest/kernel_costs.h"
 #include "selftest/probe.h"
@@ -158,49 +159,124 @@ void register_selftest(py::module_& m) {
       "Byte address of texel (x, y) of a level of a lone height x width texture; layout: a name in "
       "choices()['texture_layouts'].");
 
+  m.def(
+      "precision_probe",
+      [](const RenderParams& p, const FArr& v0, const FArr& v1, const FArr& points) {
+        require_shape(v0, {3, 3}, "v0");
+        require_shape(v1, {3, 3}, "v1");
+        require_shape(points, {-1, 5}, "points");
+        const Precision prec = p.precision_sample;
+        const int m_pts = static_cast<int>(points.shape(0));
+        const FrameConst fc = make_frame_const(p);
+        const float col[9] = {1, 1, 1, 1, 1, 1, 1, 1, 1};
+        TriSetup tri;
+        Counters c;
+        setup_triangle<FastArith>(v0.data(), v1.data(), col, 0, p, fc, tri, c);
+        py::array_t<bool> covered(m_pts), overflow(m_pts);
+        py::array_t<double> max_abs(m_pts);
+        for (int i = 0; i < m_pts; ++i) {
+          const float* q = points.data() + 5 * static_cast<std::size_t>(i);
+          bool cov, ovf = false;
+          double mag = 0.0;
+          if (prec.kind == PrecisionKind::kFloat32) {
+            float X[3], Y[3], W[3], e[3], det;
+            int n_ties;
+            cov = inside_test<float>(tri, tri.cls, fc, q[0], q[1], q[2], q[3], q[4], p.backface_cull, X, Y, W, e, det,
+                                     n_ties);
+          } else {
+            double e[3], det;
+            cov = precise_inside(tri, fc, prec, q[0], q[1], q[2], q[3], q[4], p.backface_cull, e, det, ovf);
+            if (prec.kind == PrecisionKind::kFixed) mag = std::ldexp(FixedFormat::max_abs, -2 * prec.frac_bits);
+          }
+          covered.mutable_data()[i] = cov;
+          overflow.mutable_data()[i] = ovf;
+          max_abs.mutable_data()[i] = mag;
+        }
+        py::dict out;
+        out["dim_class"] = c[Counter::setup_culled_near] ? -1 : static_cast<int>(tri.cls);
+        out["covered"] = covered;
+        out["overflow"] = overflow;
+        out["max_abs"] = max_abs;
+        return out;
+      },
+      py::arg("params"), py::arg("v0"), py::arg("v1"), py::arg("points"),
+      "The sample test of one triangle (v0, v1: pixel-homogeneous vertices at shutter open/close) at points "
+      "(M, 5) = (sx, sy, u, v, t) in params.precision_sample (sampletest/precision.h): covered (M,), and for "
+      "fixed point overflow (M,) and max_abs (M,), the largest register magnitude (the fewest int_bits n "
+      "satisfy max_abs < 2^n).");
+
   using DArr = py::array_t<double, py::array::c_style | py::array::forcecast>;
   m.def(
       "precision_probe_2d",
-      [](const DArr& tri, const DArr& points, const DArr& tiles, int int_bits, int frac_bits) {
+      [](const DArr& tri, const DArr& points, const DArr& tiles, int int_bits, int frac_bits, const std::string& kind) {
         require_shape(tri, {3, 2}, "tri");
         require_shape(points, {-1, 2}, "points");
         require_shape(tiles, {-1, 4}, "tiles");
-        if (int_bits < 1 || frac_bits < 0 || int_bits + 2 * frac_bits > 60)
-          throw std::invalid_argument("int_bits, frac_bits: need int_bits >= 1, frac_bits >= 0, int_bits + 2 frac_bits <= 60");
-        FixedFormat::set(int_bits, frac_bits);
+        Precision prec = Precision::fixed(int_bits, frac_bits);
+        if (kind == "float32") prec = Precision::float32();
+        else if (kind == "float64") prec = Precision::float64();
+        else if (kind != "fixed") throw std::invalid_argument("kind: expected 'fixed', 'float32' or 'float64', got '" + kind + "'");
+        check_precision("int_bits, frac_bits", prec);
         float X[3], Y[3];
         const float W[3] = {1.0f, 1.0f, 1.0f};
-        for (int j = 0; j < 3; ++j) X[j] = static_cast<float>(tri.data()[2 * j]), Y[j] = static_cast<float>(tri.data()[2 * j + 1]);
-        // the templates on Fixed: edge set-up (tiletest/edges_2d.h), the affine sample test
-        // (sampletest/hardware.h), the 2D tile test (tiletest/edges_2d.h)
-        const tiletest::Edges2D e = tiletest::edges_2d<Fixed>(X, Y, W);
-        const bool setup_overflow = FixedFormat::overflow;
+        double Xd[3], Yd[3];
+        const double Wd[3] = {1.0, 1.0, 1.0};
+        for (int j = 0; j < 3; ++j) {
+          Xd[j] = tri.data()[2 * j], Yd[j] = tri.data()[2 * j + 1];
+          X[j] = static_cast<float>(Xd[j]), Y[j] = static_cast<float>(Yd[j]);
+        }
+        // the render's kernels: the 2D tile test (tiletest/edges_2d.h edges_2d_in / tile_outside_2d_in)
+        // and the sample test (sampletest/precision.h) in the chosen arithmetic
+        const tiletest::Edges2D e = tiletest::edges_2d_in<double>(prec, X, Y, W);
+        const double setup_abs = prec.kind == PrecisionKind::kFixed ? FixedFormat::max_abs : 0.0;
         const int m_pts = static_cast<int>(points.shape(0)), k = static_cast<int>(tiles.shape(0));
         py::array_t<bool> inside(m_pts), outside(k), ovf_s(m_pts), ovf_t(k);
+        double max_s = 0.0, max_t = setup_abs;
         for (int i = 0; i < m_pts; ++i) {
-          FixedFormat::overflow = false;
-          inside.mutable_data()[i] = hw_inside_affine<Fixed>(e, Fixed(points.data()[2 * i]), Fixed(points.data()[2 * i + 1]));
-          ovf_s.mutable_data()[i] = FixedFormat::overflow || setup_overflow;
+          const double sx = points.data()[2 * i], sy = points.data()[2 * i + 1];
+          bool in, ovf = false;
+          if (prec.kind == PrecisionKind::kFixed) {
+            in = fixed_inside_placed(Xd, Yd, Wd, sx, sy, prec, false, ovf);
+            max_s = std::max(max_s, FixedFormat::max_abs);
+          } else if (prec.kind == PrecisionKind::kFloat32) {
+            float e3[3], det;
+            int n_ties;
+            const float Wf[3] = {1.0f, 1.0f, 1.0f};
+            in = inside_from_vertices<float>(X, Y, Wf, static_cast<float>(sx), static_cast<float>(sy), false, e3, det, n_ties);
+          } else {
+            double e3[3], det;
+            int n_ties;
+            in = inside_from_vertices<double>(Xd, Yd, Wd, sx, sy, false, e3, det, n_ties);
+          }
+          inside.mutable_data()[i] = in;
+          ovf_s.mutable_data()[i] = ovf;
         }
         for (int i = 0; i < k; ++i) {
-          FixedFormat::overflow = false;
           const double* t = tiles.data() + 4 * i;
-          outside.mutable_data()[i] = tiletest::tile_outside_2d<Fixed>(e, t[0], t[1], t[2], t[3]) || !e.valid;
-          ovf_t.mutable_data()[i] = FixedFormat::overflow || setup_overflow;
+          bool ovf;
+          outside.mutable_data()[i] = tiletest::tile_outside_2d_in<double>(e, t[0], t[1], t[2], t[3], ovf) || !e.valid;
+          if (prec.kind == PrecisionKind::kFixed) max_t = std::max(max_t, FixedFormat::max_abs);
+          ovf_t.mutable_data()[i] = ovf;
         }
+        const double unit = prec.kind == PrecisionKind::kFixed ? std::ldexp(1.0, -2 * frac_bits) : 0.0;
         py::dict out;
         out["inside"] = inside;
         out["tile_outside"] = outside;
         out["overflow_sample"] = ovf_s;
         out["overflow_tile"] = ovf_t;
+        out["max_abs_sample"] = max_s * unit;
+        out["max_abs_tile"] = max_t * unit;
         out["valid"] = e.valid;
         return out;
       },
       py::arg("tri"), py::arg("points"), py::arg("tiles"), py::arg("int_bits"), py::arg("frac_bits"),
-      "Fixed-point (int_bits integer bits, inputs snapped to frac_bits, registers with 2 frac_bits; "
-      "core/fixed.h) instantiation of the 2D edge set-up, the affine sample test and "
-      "the 2D tile test for one screen-space triangle tri (3, 2) [px]: inside (M,) at points (M, 2), "
-      "tile_outside (K,) for tiles (K, 4) = (x0, x1, y0, y1), and per-query overflow flags.");
+      py::arg("kind") = "fixed",
+      "The render's 2D tile test (tiletest/edges_2d.h, pipeline.precision.tile) and sample test "
+      "(sampletest/precision.h, pipeline.precision.sample) of one screen-space triangle tri (3, 2) [px] in "
+      "fixed point (int_bits, frac_bits; core/fixed.h), 'float32' or 'float64' (kind): inside (M,) at points "
+      "(M, 2), tile_outside (K,) for tiles (K, 4) = (x0, x1, y0, y1), per-query overflow flags, and the "
+      "largest register magnitudes max_abs_sample / max_abs_tile (fixed: the fewest int_bits n satisfy "
+      "max_abs < 2^n).");
 }
 
 }  // namespace rast5d::bindings

@@ -256,6 +256,18 @@ def pipeline_bin_size(d):
     _render(config=_sim().PipelineConfig(bin_size=12))
 
 
+@case("Python API", "PipelineConfig(precision={'depth': 'float64'})", "ConfigError",
+      r"precision\.depth: expected 'float32' or \{fixed.*'float64'", "the stage, the kinds it accepts and the value")
+def pipeline_precision_kind(d):
+    _sim().PipelineConfig(precision={"depth": "float64"})
+
+
+@case("Python API", "PipelineConfig(precision={'sample': {'fixed': {'int_bits': 0, 'frac_bits': 4}}})", "ConfigError",
+      r"precision\.sample\.fixed\.int_bits: expected an integer in 1\.\.62, got 0", "the bit field, its range and the value")
+def pipeline_precision_bits(d):
+    _sim().PipelineConfig(precision={"sample": {"fixed": {"int_bits": 0, "frac_bits": 4}}})
+
+
 @case("Python API", "an algorithm that needs an interleaved table with a stratified table", "ConfigError",
       r"algorithm: '.*' needs an interleaved sample table", "the algorithm and the table it needs")
 def pipeline_needs_interleaved(d):

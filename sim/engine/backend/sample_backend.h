@@ -10,6 +10,7 @@
 // shading mode or the arithmetic path); depth-read skipping (zmin-culling) changes counters only.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 
@@ -29,7 +30,10 @@ namespace rast5d {
 template <class A>
 class SampleBackend {
  public:
-  SampleBackend(const Frame& f, Counters& c, BinBuffers& buf, ShadeState& sh) : f_(f), c_(c), buf_(buf), sh_(sh) {}
+  SampleBackend(const Frame& f, Counters& c, BinBuffers& buf, ShadeState& sh)
+      : f_(f), c_(c), buf_(buf), sh_(sh),
+        depth_step_(f.p.precision_depth.kind == PrecisionKind::kFixed ? std::ldexp(1.0, -f.p.precision_depth.frac_bits)
+                                                                      : 0.0) {}
 
   // skip_depth_reads: the pair is entirely in front of HiZ zmin (the depth test's result is the
   // same); query: occlusion-query triangle, depth test only.
@@ -56,6 +60,7 @@ class SampleBackend {
       return;
     }
     ++c_[Counter::raster_samples_hit];
+    if (depth_step_ > 0.0) z = G(quantize_depth(raw(z)));  // pipeline.precision.depth: fixed
     if (tri.alpha < 1.0f) {  // stochastic transparency: the sample survives with probability alpha
       ++c_[Counter::alpha_samples_tested];
       if (!alpha_keeps(tri.alpha, px, py, s, f_.table.spp(), f_.p.alpha_stratified, tri.index, alpha_seed_)) {
@@ -91,6 +96,12 @@ class SampleBackend {
   }
 
  private:
+  // The stored depth in a fixed-point depth buffer (pipeline.precision.depth; docs/precision.md): z in
+  // [0, 1] rounded to the nearest multiple of 2^-frac_bits (frac_bits <= 24: exact in float32).
+  float quantize_depth(float z) const {
+    return static_cast<float>(std::nearbyint(static_cast<double>(z) / depth_step_) * depth_step_);
+  }
+
   // Texture the sample's colour (a function of triangle and sample only: the image stays the same
   // for every algorithm and shading mode) and hand the sample to the open shading visit.
   void shade_record(const ShadeFrame& sf, const TriSetup& tri, float e0, float e1, float e2, float sum, int px, int py,
@@ -129,6 +140,7 @@ class SampleBackend {
   Counters& c_;
   BinBuffers& buf_;
   ShadeState& sh_;
+  const double depth_step_;  // pipeline.precision.depth: fixed: 2^-frac_bits, else 0
   const iv::ClipBox clip_ = iv::clip_box(f_.p);
   const bool clip_active_ = clip_.active();
   const std::uint32_t alpha_seed_ = static_cast<std::uint32_t>(f_.p.alpha_seed);

@@ -17,9 +17,13 @@ struct FixedFormat {
   int int_bits = 31, frac_bits = 8;
   static inline thread_local int s_int = 31, s_frac = 8;
   static inline thread_local bool overflow = false;
+  // The largest |register| since set() (precision studies: the fewest int_bits is the smallest n with
+  // max_abs < 2^n).
+  static inline thread_local double max_abs = 0.0;
   static void set(int int_bits, int frac_bits) {
     s_int = int_bits, s_frac = frac_bits;
     overflow = false;
+    max_abs = 0.0;
   }
 };
 
@@ -47,9 +51,22 @@ struct Fixed {
   void check() const {
     const __int128 lim = static_cast<__int128>(1) << (FixedFormat::s_int + 2 * FixedFormat::s_frac);
     if (r >= lim || r <= -lim) FixedFormat::overflow = true;
+    const double a = std::fabs(static_cast<double>(r));
+    if (a > FixedFormat::max_abs) FixedFormat::max_abs = a;
   }
   double to_double() const { return std::ldexp(static_cast<double>(r), -2 * FixedFormat::s_frac); }
 };
+
+// A value already on the register grid (a multiple of 2^-2 frac_bits, e.g. a stored set-up
+// coefficient), without snapping it to frac_bits.
+inline Fixed fixed_exact(double x) {
+  const double s = std::ldexp(x, 2 * FixedFormat::s_frac);
+  if (!(std::fabs(s) < 0x1p100)) {
+    FixedFormat::overflow = true;
+    return Fixed();
+  }
+  return Fixed::raw_value(static_cast<__int128>(std::nearbyint(s)));
+}
 
 inline Fixed operator+(Fixed a, Fixed b) { return Fixed::raw_value(a.r + b.r); }
 inline Fixed operator-(Fixed a, Fixed b) { return Fixed::raw_value(a.r - b.r); }

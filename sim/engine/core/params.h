@@ -101,6 +101,33 @@ struct ChoiceTraits<ZhatMargin> {
   }};
 };
 
+// The arithmetic of one stage (pipeline.precision.{tile, sample, depth}; docs/precision.md): IEEE
+// binary64 or binary32, or fixed point with int_bits integer and frac_bits fraction bits
+// (core/fixed.h). The user writes 'float64', 'float32' or {fixed: {int_bits, frac_bits}}.
+enum class PrecisionKind : int { kFloat64 = 0, kFloat32 = 1, kFixed = 2 };
+struct Precision {
+  PrecisionKind kind = PrecisionKind::kFloat64;
+  int int_bits = 0, frac_bits = 0;  // kFixed only
+  static constexpr Precision float64() { return {PrecisionKind::kFloat64, 0, 0}; }
+  static constexpr Precision float32() { return {PrecisionKind::kFloat32, 0, 0}; }
+  static constexpr Precision fixed(int int_bits, int frac_bits) { return {PrecisionKind::kFixed, int_bits, frac_bits}; }
+  bool operator==(const Precision&) const = default;
+};
+// Limits of a fixed format: registers hold 1 + int_bits + 2 frac_bits bits (core/fixed.h).
+inline constexpr int kFixedMaxIntBits = 62, kFixedMaxFracBits = 24, kFixedMaxRegisterBits = 100;
+// std::invalid_argument naming the field unless p is a valid format.
+inline void check_precision(std::string_view field, const Precision& p) {
+  if (p.kind != PrecisionKind::kFixed) return;
+  if (p.int_bits < 1 || p.int_bits > kFixedMaxIntBits || p.frac_bits < 0 || p.frac_bits > kFixedMaxFracBits ||
+      1 + p.int_bits + 2 * p.frac_bits > kFixedMaxRegisterBits) {
+    std::ostringstream msg;
+    msg << field << ": expected fixed int_bits in [1, " << kFixedMaxIntBits << "] and frac_bits in [0, "
+        << kFixedMaxFracBits << "] with 1 + int_bits + 2 frac_bits <= " << kFixedMaxRegisterBits << ", got int_bits "
+        << p.int_bits << ", frac_bits " << p.frac_bits;
+    throw std::invalid_argument(msg.str());
+  }
+}
+
 // The shading parameter: a registry by name, entries in enum order.
 enum class ShadingMode : int { kPerSample = 0, kMsaa = 1, kPerLensCell = 2, kCache = 3, kNone = 4 };
 template <>
@@ -165,7 +192,17 @@ struct RenderParams {
 // sentinel (" | auto", " | null") the engine default, which the sentinel stands for, is accepted.
 template <class T>
 void check_domain(std::string_view name, T value, T engine_default, std::string_view domain) {
-  if constexpr (std::is_arithmetic_v<T> && !std::is_same_v<T, bool>) {
+  if constexpr (std::is_same_v<T, Precision>) {  // "{float64, float32, fixed}": the kinds accepted
+    static constexpr std::string_view kNames[3] = {"float64", "float32", "fixed"};
+    const std::string_view kind = kNames[static_cast<int>(value.kind)];
+    if (domain.find(kind) == std::string_view::npos) {
+      std::ostringstream msg;
+      msg << name << ": expected one of " << domain << ", got " << kind;
+      throw std::invalid_argument(msg.str());
+    }
+    check_precision(name, value);
+    (void)engine_default;
+  } else if constexpr (std::is_arithmetic_v<T> && !std::is_same_v<T, bool>) {
     const std::size_t bar = domain.find(" | ");
     if (bar != std::string_view::npos) {
       if (value == engine_default) return;

@@ -5,8 +5,12 @@
 // the triangle.
 #pragma once
 
+#include <cmath>
+
 #include "core/arith.h"
 #include "core/costs.h"
+#include "core/fixed.h"
+#include "core/params.h"
 #include "sampletest/sample_test.h"
 #include "tiletest/tile_test.h"
 
@@ -19,11 +23,13 @@ struct Edges2D {
   double A[3], B[3], C[3];  // already multiplied by sigma
   bool x_hi[3], y_hi[3];    // which tile corner maximises edge i
   bool valid = false;       // false: det == 0 (no sample can hit)
+  Precision precision = Precision::float64();  // the arithmetic of tile_outside_2d_in (pipeline.precision.tile)
+  bool overflow = false;                       // fixed point: the set-up reached 2^int_bits
 };
 
 // Cost: cost::kEdges2DSetup.
-template <class D>
-inline Edges2D edges_2d(const float* X, const float* Y, const float* W) {
+template <class D, class In>
+inline Edges2D edges_2d(const In* X, const In* Y, const In* W) {
   Edges2D e;
   D A[3], B[3], C[3];
   for (int i = 0; i < 3; ++i) {
@@ -52,6 +58,62 @@ inline bool tile_outside_2d(const Edges2D& e, double x0, double x1, double y0, d
     if (v < D(0.0)) outside = true;
   }
   return outside;
+}
+
+}  // namespace rast5d::tiletest
+
+namespace rast5d::tiletest {
+
+// ---- the 2D tile test in a chosen arithmetic (pipeline.precision.tile; docs/precision.md) ----------
+// edges_2d_in / tile_outside_2d_in run the D form (counted, as always: precision does not change the
+// operation counts) and, for float32 or fixed, decide with that arithmetic instead:
+//  * float32: the same set-up and evaluation in binary32;
+//  * fixed {int_bits, frac_bits}: each vertex scaled by 1 / |W| to screen pixels (x, y, +-1; a positive
+//    factor keeps every sign) and snapped to the 2^-frac_bits grid with the tile corners; the set-up's
+//    products and the evaluation are exact in core/fixed.h's registers (C keeps its 2 frac_bits
+//    fraction bits), values reaching 2^int_bits set overflow. The snapped triangle lies within
+//    sampletest/precision.h's snap_margin_px of the exact one, by which every tile is widened
+//    (tile_test.h t_snap_margin_px): the fixed-point test stays conservative.
+template <class D>
+inline Edges2D edges_2d_in(const Precision& p, const float* X, const float* Y, const float* W) {
+  Edges2D e = edges_2d<D>(X, Y, W);
+  if (p.kind == PrecisionKind::kFloat64) return e;
+  if (p.kind == PrecisionKind::kFloat32) {
+    e = edges_2d<float>(X, Y, W);
+  } else {
+    double x[3], y[3], w[3];
+    for (int j = 0; j < 3; ++j) {
+      const double s = W[j] != 0.0f ? 1.0 / std::fabs(static_cast<double>(W[j])) : 1.0;
+      x[j] = X[j] * s, y[j] = Y[j] * s, w[j] = W[j] * s;
+    }
+    FixedFormat::set(p.int_bits, p.frac_bits);
+    e = edges_2d<Fixed>(x, y, w);
+    e.overflow = FixedFormat::overflow;
+  }
+  e.precision = p;
+  return e;
+}
+
+// Is the (expanded) tile outside one of the edges, in e's arithmetic? overflow: fixed point only.
+template <class D>
+inline bool tile_outside_2d_in(const Edges2D& e, double x0, double x1, double y0, double y1, bool& overflow) {
+  const bool out = tile_outside_2d<D>(e, x0, x1, y0, y1);
+  overflow = false;
+  switch (e.precision.kind) {
+    case PrecisionKind::kFloat64: return out;
+    case PrecisionKind::kFloat32: return tile_outside_2d<float>(e, x0, x1, y0, y1);
+    default: {
+      FixedFormat::set(e.precision.int_bits, e.precision.frac_bits);
+      bool r = false;
+      for (int i = 0; i < 3; ++i) {  // A, B, C are exact multiples of 2^-2 frac_bits (edges_2d<Fixed>)
+        const Fixed v = madd(fixed_exact(e.A[i]), Fixed(e.x_hi[i] ? x1 : x0),
+                             madd(fixed_exact(e.B[i]), Fixed(e.y_hi[i] ? y1 : y0), fixed_exact(e.C[i])));
+        if (v < Fixed(0.0)) r = true;
+      }
+      overflow = e.overflow || FixedFormat::overflow;
+      return r;
+    }
+  }
 }
 
 }  // namespace rast5d::tiletest

@@ -48,7 +48,12 @@ inline float round_down_to_float(double x) {
 // One bit per lens-grid cell (G <= 16), bit j * G + i.
 using CellMask = std::bitset<256>;
 
-inline double expand_lo(double x) { return x - (kMarginAbs + kMarginRel * std::fabs(x)); }
-inline double expand_hi(double x) { return x + (kMarginAbs + kMarginRel * std::fabs(x)); }
+// Extra widening [px] while the render's sample test decides in fixed point (pipeline.precision.sample:
+// the snapped triangle reaches up to sampletest/precision.h's snap_margin_px beyond the exact one); set
+// by each render worker thread, 0 otherwise.
+inline thread_local double t_snap_margin_px = 0.0;
+
+inline double expand_lo(double x) { return x - (kMarginAbs + t_snap_margin_px + kMarginRel * std::fabs(x)); }
+inline double expand_hi(double x) { return x + (kMarginAbs + t_snap_margin_px + kMarginRel * std::fabs(x)); }
 
 }  // namespace rast5d::tiletest

@@ -9,7 +9,9 @@
 #include <stdexcept>
 #include <thread>
 
+#include "sampletest/precision.h"
 #include "setup/setup.h"
+#include "tiletest/tile_test.h"
 #include "traversal/bin_sample.h"
 #include "traversal/traversal.h"
 
@@ -268,6 +270,7 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
   const Frame frame{p, fc, table};
   auto worker = [&](int t) {
     try {
+      tiletest::t_snap_margin_px = snap_margin_px(p.precision_sample, p.precision_tile);  // this thread's tiles
       ThreadState& ts = states[t];
       auto algo = TraversalRegistry::entries().at(p.algorithm).create(frame, ts, p.op_count == OpCount::kExact);
       const bool per_visit = p.record_timing && p.timing_per_visit;

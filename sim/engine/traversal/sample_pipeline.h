@@ -26,6 +26,7 @@
 #include "core/sample_table.h"
 #include "sampletest/hardware.h"
 #include "sampletest/inside.h"
+#include "sampletest/precision.h"
 #include "sampletest/sample_test.h"
 #include "sampletest/simd_batch.h"
 #include "setup/setup.h"
@@ -62,6 +63,7 @@ class SamplePipeline {
   SamplePipeline(const Frame& f, ThreadState& ts)
       : f_(f), c_(ts.counters), sh_(ts.shade), ts_(ts), backend_(f, ts.counters, ts.buffers, ts.shade), cap_(std::max(kBatch, f.table.spp())),
         model_(f.p.cost_model),
+        precise_(f.p.precision_sample.kind != PrecisionKind::kFloat32),
         cur_(ts.cursor) {
     for (auto* v : {&gx_, &gy_, &gu_, &gv_, &gt_, &bdet_}) v->resize(cap_);
     for (auto* v : {&bpx_, &bpy_, &bs_, &bl_}) v->resize(cap_);
@@ -71,6 +73,7 @@ class SamplePipeline {
 
   // Test canonical sample s of pixel (px, py) against tri with the kernel of tri's class.
   inline void test(const TriSetup& tri, int px, int py, const PixelSamples& ps, int s) {
+    cur_ps_ = &ps;
     test_values(tri, F(static_cast<float>(px) + ps.x[s]), F(static_cast<float>(py) + ps.y[s]), F(ps.u[s]),
                 F(ps.v[s]), F(ps.t[s]), px, py, s);
   }
@@ -80,6 +83,7 @@ class SamplePipeline {
   // result is bit-identical to test().
   inline void test_sheared(const TriSetup& tri, const float Xs[3], const float Ys[3], int px, int py,
                            const PixelSamples& ps, int s) {
+    cur_ps_ = &ps;
     test_sheared_values(tri, Xs, Ys, F(static_cast<float>(px) + ps.x[s]), F(static_cast<float>(py) + ps.y[s]),
                         px, py, s);
   }
@@ -109,7 +113,9 @@ class SamplePipeline {
     xs_ = Xs, ys_ = Ys, stride_ = lens_stride;
   }
   inline void push(int px, int py, const PixelSamples& ps, int s) {
-    if constexpr (A::counting) {
+    bool now = A::counting;
+    if constexpr (!A::counting) now = precise_;  // pipeline.precision.sample not float32: one at a time
+    if (now) {
       if (!sheared_) {
         test(*tri_, px, py, ps, s);
       } else {
@@ -131,6 +137,8 @@ class SamplePipeline {
     at_pixel(px, py);
     const int spp = f_.table.spp();
     if constexpr (A::counting) {
+      for (int s = 0; s < spp; ++s) push(px, py, ps, s);
+    } else if (precise_) {
       for (int s = 0; s < spp; ++s) push(px, py, ps, s);
     } else if (spp >= 32) {
       run_pixel(px, py, ps, nullptr, spp);  // large enough to be its own batch
@@ -155,7 +163,7 @@ class SamplePipeline {
     at_pixel(px, py);
     if constexpr (!A::counting) {
       const int spp = f_.table.spp();
-      if (spp >= 32 && 3 * n_sel >= spp) {
+      if (spp >= 32 && 3 * n_sel >= spp && !precise_) {
         run_pixel(px, py, ps, sel, n_sel);
         return;
       }
@@ -395,6 +403,18 @@ class SamplePipeline {
 
   inline void finish(const TriSetup& tri, bool covered, const F e[3], F det, int n_ties, int px, int py,
                      int s, std::uint64_t test_cost) {
+    F e_precise[3];
+    if (precise_) [[unlikely]] {  // the decision in pipeline.precision.sample (sampletest/precision.h)
+      const PixelSamples& ps = *cur_ps_;
+      double ed[3], detd;
+      bool overflow;
+      covered = precise_inside(tri, f_.fc, f_.p.precision_sample, static_cast<double>(px) + ps.x[s],
+                               static_cast<double>(py) + ps.y[s], ps.u[s], ps.v[s], ps.t[s], f_.p.backface_cull, ed,
+                               detd, overflow);
+      if (overflow) ++c_[Counter::precision_sample_overflows];
+      for (int i = 0; i < 3; ++i) e_precise[i] = F(static_cast<float>(ed[i]));
+      e = e_precise, det = F(static_cast<float>(detd));
+    }
     ++c_[Counter::raster_samples_tested];
     charge<A>(c_[Counter::ops_sample_inside], test_cost);
     if (n_ties) ++c_[Counter::raster_tie_breaks];
@@ -428,6 +448,8 @@ class SamplePipeline {
   int n_ = 0;
   int cap_;
   CostModel model_;
+  bool precise_;                            // pipeline.precision.sample is not float32
+  const PixelSamples* cur_ps_ = nullptr;    // the samples of the pixel under test (precise_ only)
   int uniform_px_ = 0, uniform_py_ = 0;
   bool uniform_ = false;
   const PixelSamples* uniform_ps_ = nullptr;

@@ -79,7 +79,7 @@ class Interleave final : public Traversal {
       // affine 2D sample test uses these edges too (sampletest/hardware.h), so INTERLEAVE pays them;
       // accumulation sets up its pinhole triangle every pass
       if ((kPassSetup || kHier || f_.p.cost_model == CostModel::kHardware) && !tri.moving) {
-        e = tiletest::edges_2d<D>(xs, ys, W);
+        e = tiletest::edges_2d_in<D>(f_.p.precision_tile, xs, ys, W);
         charge<A>(setup_ops, cost::kEdges2DSetup);
       }
       if (x0 >= x1 || y0 >= y1) continue;
@@ -93,9 +93,12 @@ class Interleave final : public Traversal {
           for (int tx = (x0 / HT) * HT; tx < x1; tx += HT) {
             pipe_.at_rect(std::max(tx, x0), std::max(ty, y0), std::min(tx + HT, x1), std::min(ty + HT, y1));
             ++c_[Counter::tile_visited];
-            const bool out = tiletest::tile_outside_2d<D>(e, tiletest::expand_lo(tx), tiletest::expand_hi(tx + HT),
-                                                          tiletest::expand_lo(ty), tiletest::expand_hi(ty + HT)) ||
+            bool overflow;
+            const bool out = tiletest::tile_outside_2d_in<D>(e, tiletest::expand_lo(tx), tiletest::expand_hi(tx + HT),
+                                                             tiletest::expand_lo(ty), tiletest::expand_hi(ty + HT),
+                                                             overflow) ||
                              !e.valid;
+            if (overflow) ++c_[Counter::precision_tile_overflows];
             charge<A>(c_[Counter::ops_tile], cost::kTile2D);
             if (out) {
               ++c_[Counter::tile_culled_2d];

@@ -60,7 +60,7 @@ class Tile final : public Traversal {
   void rasterize_tri(const TriSetup& tri, const BinRect& bin, bool charge_setup) {
     std::uint64_t setup_ops = 0;
     if (tri.cls == DimClass::k2D) {
-      const tiletest::Edges2D e = tiletest::edges_2d<D>(tri.X, tri.Y, tri.W);
+      const tiletest::Edges2D e = tiletest::edges_2d_in<D>(f_.p.precision_tile, tri.X, tri.Y, tri.W);
       if (f_.p.cost_model == CostModel::kHardware)
         discard<A>();  // the hardware model sets these edges up once in triangle setup (sample test)
       else
@@ -131,15 +131,18 @@ class Tile final : public Traversal {
     const int T = f_.p.tile_size;
     const int spp = f_.table.spp();
     pipe_.begin(tri);
-    const double blx = tri.lo_x - (std::fabs(tri.lo_x) * 0x1p-18 + 0x1p-12);
-    const double bhx = tri.hi_x + (std::fabs(tri.hi_x) * 0x1p-18 + 0x1p-12);
-    const double bly = tri.lo_y - (std::fabs(tri.lo_y) * 0x1p-18 + 0x1p-12);
-    const double bhy = tri.hi_y + (std::fabs(tri.hi_y) * 0x1p-18 + 0x1p-12);
+    const double snap = tiletest::t_snap_margin_px;  // pipeline.precision.sample: fixed
+    const double blx = tri.lo_x - (std::fabs(tri.lo_x) * 0x1p-18 + 0x1p-12 + snap);
+    const double bhx = tri.hi_x + (std::fabs(tri.hi_x) * 0x1p-18 + 0x1p-12 + snap);
+    const double bly = tri.lo_y - (std::fabs(tri.lo_y) * 0x1p-18 + 0x1p-12 + snap);
+    const double bhy = tri.hi_y + (std::fabs(tri.hi_y) * 0x1p-18 + 0x1p-12 + snap);
     for_tiles(tri, bin, [&](int tx, int ty, int px0, int py0, int tx1, int ty1) {
       ++c_[Counter::tile_visited];
       const double x0 = tiletest::expand_lo(tx), x1 = tiletest::expand_hi(tx + T);
       const double y0 = tiletest::expand_lo(ty), y1 = tiletest::expand_hi(ty + T);
-      const bool out_edges = tiletest::tile_outside_2d<D>(e, x0, x1, y0, y1) || !e.valid;
+      bool overflow;
+      const bool out_edges = tiletest::tile_outside_2d_in<D>(e, x0, x1, y0, y1, overflow) || !e.valid;
+      if (overflow) ++c_[Counter::precision_tile_overflows];
       const bool b0 = D(x1) < D(blx), b1 = D(x0) > D(bhx), b2 = D(y1) < D(bly), b3 = D(y0) > D(bhy);
       charge<A>(c_[Counter::ops_tile], cost::kTile2D + cost::kBBoxTile);
       if (out_edges || b0 || b1 || b2 || b3) {
