@@ -51,12 +51,6 @@ SampleTable::SampleTable(int period, int spp, const float* samples, int grid,
     }
     bucket_samples(cell.data(), spp, cells, order, off);
   }
-  // Every pixel with the same samples per lens-grid cell (stratified tables): one copy of the
-  // offsets serves all pixels (uniform_cell_offsets()).
-  uniform_cells_ = true;
-  for (std::size_t p = 1; p < npix && uniform_cells_; ++p)
-    uniform_cells_ = std::equal(&cell_offsets_[p * (cells + 1)], &cell_offsets_[(p + 1) * (cells + 1)],
-                                &cell_offsets_[0]);
   if (n_lens_ > 0) {
     lens_u_.resize(n_lens_), lens_v_.resize(n_lens_);
     for (int i = 0; i < n_lens_; ++i) lens_u_[i] = lens_uv[2 * i], lens_v_[i] = lens_uv[2 * i + 1];

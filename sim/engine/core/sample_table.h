@@ -52,7 +52,8 @@ class SampleTable {
   float lens_u(int i) const { return lens_u_[i]; }
   float lens_v(int i) const { return lens_v_[i]; }
 
-  PixelSamples pixel(int px, int py) const {
+  // Inlined so that a caller's unused fields cost nothing (it runs once per pixel visit).
+  [[gnu::always_inline]] inline PixelSamples pixel(int px, int py) const {
     const int P = period_;
     // A power-of-two period (the usual tables): a mask, exact for negative coordinates too.
     const int mx = pow2_mask_ >= 0 ? (px & pow2_mask_) : ((px % P) + P) % P;
@@ -77,10 +78,6 @@ class SampleTable {
     }
     return ps;
   }
-
-  // The lens-grid cell offsets shared by every pixel when each pixel holds the same number of
-  // samples in each cell (cell c has offsets[c + 1] - offsets[c]), else nullptr.
-  const std::int32_t* uniform_cell_offsets() const { return uniform_cells_ ? cell_offsets_.data() : nullptr; }
 
   // Index every pixel's samples by (lens-grid cell, time stratum) with S strata of equal length in
   // t (1 <= S <= 64), so that a traversal can skip the samples outside a time interval without
@@ -110,7 +107,6 @@ class SampleTable {
   int period_, spp_, grid_, n_lens_;
   int pow2_mask_ = -1;  // period - 1 when the period is a power of two, else -1
   int strata_ = 0;
-  bool uniform_cells_ = false;
   std::vector<std::int32_t> ct_order_, ct_offsets_;
   std::vector<float> x_, y_, u_, v_, t_;
   std::vector<std::int32_t> cell_order_, cell_offsets_;

@@ -256,36 +256,25 @@ class Tile final : public Traversal {
                         (tx1 - px0) * (ty1 - py0) * f_.table.spp()))
         return;
       // Samples of surviving cells, each checked against the h_i lines, then inside-tested.
-      const int n_cells = active.list(cell_list_.data(), G);
+      const bool fast_select = !A::counting && active.small;  // vectorised scan: no cell list
+      const int n_cells = fast_select ? 0 : active.list(cell_list_.data(), G);
       const int* const cl = cell_list_.data();
       const std::uint64_t region_cost = static_cast<std::uint64_t>(sx.n_cmp + sy.n_cmp);
       const bool count_opt = p.count_optimal;
       const int spp = f_.table.spp();
       const std::uint64_t active_bits = active.bits64;
-      const bool fast_select = !A::counting && active.small;
       std::uint64_t region_checked = 0;  // fast path: ops.sample_region charged once per tile
-      // Samples per pixel in the active cells, for the whole tile when every pixel has the same
-      // samples per cell (fast path; -1: count per pixel).
-      int tile_checked = -1;
-      if constexpr (!A::counting) {
-        if (const std::int32_t* uo = f_.table.uniform_cell_offsets()) {
-          tile_checked = 0;
-          for (int q = 0; q < n_cells; ++q) tile_checked += uo[cl[q] + 1] - uo[cl[q]];
-        }
-      }
+      // Fast path: a vectorised scan of each pixel's samples, even when the active cells hold few
+      // of them (measured faster than walking the cells' buckets at 64 spp: no per-cell branches).
+      const bool vectorised = fast_select;
       for (int py = py0; py < ty1; ++py)
         for (int px = px0; px < tx1; ++px) {
           const PixelSamples ps = f_.table.pixel(px, py);
           pipe_.at_pixel(px, py);
           // Candidates: samples of the surviving cells whose (u, v) passes the h_i lines.
-          int n = 0, checked = tile_checked;
-          if (checked < 0) {
-            checked = 0;
-            for (int q = 0; q < n_cells; ++q) checked += ps.cell_offsets[cl[q] + 1] - ps.cell_offsets[cl[q]];
-          }
-          const bool vectorised = fast_select && kSelectScan * checked >= spp;
-          if (vectorised) {  // many: vectorised scan of the pixel's samples
-            tiletest::select_candidates<true>(spp, ps.u, ps.v, ps.cell, active_bits, sx, sy, sel_.data());
+          int n = 0, checked = 0;
+          if (vectorised) {  // vectorised scan of the pixel's samples
+            checked = tiletest::select_candidates<true>(spp, ps.u, ps.v, ps.cell, active_bits, sx, sy, sel_.data());
             if (!count_opt) {  // straight to the batch (SamplePipeline::push_flagged)
               if constexpr (!A::counting) {
                 region_checked += static_cast<std::uint64_t>(checked);
@@ -294,13 +283,16 @@ class Tile final : public Traversal {
               continue;
             }
             n = tiletest::compact_flags(sel_.data(), spp, cand_.data());
-          } else {  // few candidates (or the counting path): walk the active cells' buckets
-            for (int q = 0; q < n_cells; ++q)
-              for (int k = ps.cell_offsets[cl[q]]; k < ps.cell_offsets[cl[q] + 1]; ++k) {
+          } else {  // the counting path, or grids above 8 x 8: walk the active cells' buckets
+            for (int q = 0; q < n_cells; ++q) {
+              const int k0 = ps.cell_offsets[cl[q]], k1 = ps.cell_offsets[cl[q] + 1];
+              checked += k1 - k0;
+              for (int k = k0; k < k1; ++k) {
                 const int s = ps.cell_order[k];
                 cand_[n] = s;
                 n += region_cost == 0 || (tiletest::axis_pass(sx, F(ps.u[s])) & tiletest::axis_pass(sy, F(ps.v[s])));
               }
+            }
           }
           if constexpr (A::counting) {  // the tally of this pixel's comparisons is taken here
             if (region_cost) charge<A>(c_[Counter::ops_sample_region], region_cost * checked);
@@ -431,9 +423,6 @@ class Tile final : public Traversal {
   std::uint64_t lens_mask64_ = 0;
   std::vector<std::uint8_t> sel_ =
       std::vector<std::uint8_t>(f_.table.spp() + SamplePipeline<A>::flags_padding(), 0);
-  // The vectorised scan of a pixel's samples replaces the walk over the active cells' buckets when
-  // at least spp / kSelectScan samples lie in those cells.
-  static constexpr int kSelectScan = 8;
   std::vector<float> sx_, sy_;
   AxisCache axes_;  // fast path: h_i sets per tile column and row of the current triangle and bin
   const iv::ClipBox clip_ = iv::clip_box(f_.p);
