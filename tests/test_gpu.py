@@ -269,10 +269,8 @@ def test_table2_constants_floats(method, strip_vertices):
         got.append(s["gpu.gs_floats"])
         per_fragment = s["gpu.interp_floats"] / s["gpu.fragments"]
         assert per_fragment == (39 if constants == "none" else 4)
-        if constants == "none":
-            assert s["ops.ps_setup"] == 6 * s["gpu.fragments"]  # the 4D shear constants, per fragment
-        else:
-            assert s["ops.ps_setup"] == 0
+        # the perturbation-texture coordinate (2) and, without constants, the 4D shear constants (6)
+        assert s["ops.ps_setup"] == (8 if constants == "none" else 2) * s["gpu.fragments"]
     assert tuple(got) == want
 
 
@@ -388,3 +386,167 @@ def test_hexagon3d_of_a_triangle_in_the_focus_plane_is_conservative():
         out[algo] = r.sample_triangle
     assert (out["bruteforce"] >= 0).sum() > 0
     assert np.array_equal(out["bruteforce"], out["gpu_hexagon3d"])
+
+
+# ---- early depth (000 §9.7), the perturbation texture (000 §5.3), overdraw on screen ----
+
+def occluded_scene(n=32):
+    """A wall at depth 3 in front of defocused triangles at depth 6-9: most of their fragments lie
+    behind the wall's stored depths."""
+    rng = np.random.default_rng(11)
+    d = 3.0
+    tris = [[world_from_pixel(-8, -8, d, n, n), world_from_pixel(40, -8, d, n, n), world_from_pixel(-8, 40, d, n, n)],
+            [world_from_pixel(40, -8, d, n, n), world_from_pixel(40, 40, d, n, n), world_from_pixel(-8, 40, d, n, n)]]
+    for _ in range(10):
+        c = rng.uniform(4, 28, size=2)
+        tris.append([world_from_pixel(*(c + rng.uniform(-8, 8, 2)), rng.uniform(6.0, 9.0), n, n) for _ in range(3)])
+    return make_scene(np.array(tris)), sim.Camera(width=n, height=n, coc_px=2.0, focus_distance=3.0)
+
+
+@pytest.mark.parametrize("alg", GPU_ALGORITHMS)
+def test_early_depth_rejects_hidden_fragments_before_the_pixel_shader(alg):
+    """With HiZ (000 §9.7's depth interval) hidden fragments never reach the pixel shader: the image
+    stays bruteforce's, the rasterized fragments are the same (shaded + depth-culled), each culled
+    fragment saves spp pixel-shader sample tests, and the counting path agrees with the documented
+    costs."""
+    scene, cam = occluded_scene()
+    table = sim.SampleTable.stratified(spp=8, seed=2)
+    ref = sim.render(scene, cam, table, sim.PipelineConfig(algorithm="bruteforce", threads=1))
+    off = sim.render(scene, cam, table, sim.PipelineConfig(algorithm=alg, threads=1)).flat_stats
+    for tile in (1, 4):
+        runs = [sim.render(scene, cam, table, sim.PipelineConfig(algorithm=alg, threads=1, op_count=oc, tile_size=tile,
+                                                                 hiz={"enabled": True, "tile_size": tile}))
+                for oc in ("documented", "exact")]
+        for r in runs:
+            assert np.array_equal(r.image, ref.image), (alg, tile)
+        on, exact = runs[0].flat_stats, runs[1].flat_stats
+        assert {k: on[k] for k in on if k.startswith("ops.")} == {k: exact[k] for k in exact if k.startswith("ops.")}
+        culled = on["gpu.fragments_depth_culled"]
+        assert culled > 0.3 * off["gpu.fragments"], (alg, tile, culled)
+        assert on["gpu.fragments"] + culled == off["gpu.fragments"]
+        assert on["zcull.samples_culled"] == 8 * culled
+        assert off["gpu.ps_samples_tested"] - on["gpu.ps_samples_tested"] == 8 * culled
+        assert on["gpu.raster_pixels_tested"] == off["gpu.raster_pixels_tested"]  # rasterized, then culled
+        assert on["gpu.ps_ops"] < off["gpu.ps_ops"]
+    # any thread count and bin size: the same counts
+    other = sim.render(scene, cam, table, sim.PipelineConfig(algorithm=alg, threads=2, bin_size=16, tile_size=1,
+                                                             hiz={"enabled": True, "tile_size": 4})).flat_stats
+    four = sim.render(scene, cam, table, sim.PipelineConfig(algorithm=alg, threads=1, tile_size=1,
+                                                            hiz={"enabled": True, "tile_size": 4})).flat_stats
+    assert {k: v for k, v in other.items() if k.startswith(("gpu.", "ops.", "zcull.", "raster."))} == \
+        {k: v for k, v in four.items() if k.startswith(("gpu.", "ops.", "zcull.", "raster."))}
+
+
+def test_perturbation_texture_fetches_and_coordinates():
+    """000 §5.3: every fragment computes its perturbation-texture coordinate (2 ops) and fetches one
+    texel per sample; the texture unit of the timing model receives the fetches."""
+    scene, cam = scene_and_camera()
+    table = sim.SampleTable.stratified(spp=8, seed=2)
+    for constants, rederive in (("none", 6), ("triangle", 0)):
+        s = sim.render(scene, cam, table, sim.PipelineConfig(algorithm="gpu_hexagon2d", threads=1,
+                                                             gpu_constants=constants)).flat_stats
+        assert s["setup.class_4d"] == s["gpu.gs_triangles_in"]  # every triangle defocused: 6-op re-derivation
+        assert s["gpu.perturb_fetches"] == 8 * s["gpu.fragments"] > 0
+        assert s["ops.ps_setup"] == (2 + rederive) * s["gpu.fragments"]
+        assert s["timing.texture.work"] == s["tex.fetches"] + s["gpu.perturb_fetches"]
+
+
+def pixels_meeting(planes, width, height, eps):
+    """Pixels (px, py) on screen whose square [px, px + 1] x [py, py + 1] meets every half-plane
+    n . p <= h (each widened by eps): independent of the engine's rasterizer."""
+    ys, xs = np.mgrid[0:height, 0:width]
+    ok = np.ones((height, width), dtype=bool)
+    for nx, ny, h in planes:
+        cx = xs + (1.0 if nx < 0 else 0.0)
+        cy = ys + (1.0 if ny < 0 else 0.0)
+        ok &= nx * cx + ny * cy <= h + eps
+    return int(ok.sum())
+
+
+def test_overdraw_is_the_bounds_area_on_screen_beyond_the_setup_box():
+    """A GPU rasterizes the whole bounding polygon inside the viewport: a sliver's parallel-edge
+    triangle spikes far beyond the triangle's screen bounds, and those pixels are fragments too
+    (counted apart, no hit); pixels off screen are never generated. Fragments equal the on-screen
+    pixels meeting the bound's half-planes (numpy, within a rounding band)."""
+    n = 48
+    from sim.render import _camera_params
+
+    cam = sim.Camera(width=n, height=n, coc_px=3.0, focus_distance=5.0)
+    pix = [(3.0, 30.0, 7.0), (45.0, 31.0, 7.0), (24.0, 30.6, 7.0)]  # an obtuse sliver: PE spikes off screen
+    scene = make_scene(np.array([[world_from_pixel(x, y, w, n, n) for x, y, w in pix]]))
+    table = sim.SampleTable.stratified(spp=4, seed=1)
+    ref = sim.render(scene, cam, table, sim.PipelineConfig(algorithm="bruteforce", threads=1))
+    for alg, method in (("gpu_pe_triangle", "pe_triangle"), ("gpu_hexagon2d", "hexagon2d")):
+        r = sim.render(scene, cam, table, sim.PipelineConfig(algorithm=alg, threads=1))
+        s = r.flat_stats
+        assert np.array_equal(r.image, ref.image)
+        b = _core.gpu_bound(method, _camera_params(cam), homog(pix), homog(pix), True)
+        lo, hi = (pixels_meeting(b["planes"], n, n, e) for e in (-1e-3, 1e-3))
+        assert lo <= s["gpu.fragments"] <= hi, (alg, lo, s["gpu.fragments"], hi)
+        if method == "pe_triangle":
+            assert b["vertices"][:, 0].min() < -100 and b["vertices"][:, 0].max() > n + 100  # spikes off screen
+            assert s["gpu.fragments_outside_box"] > 5
+        assert s["gpu.fragments_zero_hit"] >= s["gpu.fragments_outside_box"]
+        assert s["gpu.ps_samples_tested"] == 4 * s["gpu.fragments"]
+
+
+# ---- accumulation buffering of moving triangles ----
+
+def moving_scene(n=32):
+    rng = np.random.default_rng(5)
+    t0, t1 = [], []
+    for _ in range(10):
+        c = rng.uniform(4, 28, size=2)
+        tri = np.array([world_from_pixel(*(c + rng.uniform(-8, 8, 2)), rng.uniform(2.0, 10.0), n, n) for _ in range(3)])
+        t0.append(tri), t1.append(tri + rng.uniform(-0.6, 0.6, 3))
+    tri = np.array([world_from_pixel(10, 10, 3.0, n, n), world_from_pixel(20, 12, 3.0, n, n),
+                    world_from_pixel(14, 22, 3.0, n, n)])
+    t0.append(tri), t1.append(tri + [0.0, 0.0, 3.2])  # passes behind the eye late in the shutter
+    return make_scene(np.array(t0), np.array(t1)), sim.Camera(width=n, height=n, coc_px=4.0, focus_distance=5.0,
+                                                              near=0.1)
+
+
+def test_accumulation_moves_each_triangle_to_its_pass():
+    """Each accumulation pass is a pinhole render at one (u, v, t): moving triangles are placed at the
+    pass's time and lens position and tested in 2D, with no conservative motion path; the image is
+    bruteforce's with the same table and the counting path agrees with the documented costs. On an
+    interleaved table (times differ per pixel) moving triangles take INTERLEAVE's conservative path."""
+    scene, cam = moving_scene()
+    table = sim.SampleTable.accumulation(passes=16, seed=5)
+    ref = sim.render(scene, cam, table, sim.PipelineConfig(algorithm="bruteforce", threads=1))
+    runs = [sim.render(scene, cam, table, sim.PipelineConfig(algorithm="accumulation", threads=1, op_count=oc))
+            for oc in ("documented", "exact")]
+    inter = sim.render(scene, cam, table, sim.PipelineConfig(algorithm="interleave", threads=1)).flat_stats
+    for r in runs:
+        assert np.array_equal(r.image, ref.image)
+    a, e = runs[0].flat_stats, runs[1].flat_stats
+    assert {k: a[k] for k in a if k.startswith("ops.")} == {k: e[k] for k in e if k.startswith("ops.")}
+    assert a["trav.motion_fallback"] == 0 and inter["trav.motion_fallback"] == 11
+    assert a["raster.samples_tested"] == a["raster.samples_tested_2d"] > 0
+    assert a["raster.samples_hit"] == ref.flat_stats["raster.samples_hit"]
+    assert a["raster.samples_tested"] < inter["raster.samples_tested"]
+    other = sim.SampleTable.create("interleaved", spp=16, n_lens=16, seed=4)
+    ref2 = sim.render(scene, cam, other, sim.PipelineConfig(algorithm="bruteforce", threads=1))
+    r2 = sim.render(scene, cam, other, sim.PipelineConfig(algorithm="accumulation", threads=1))
+    assert np.array_equal(r2.image, ref2.image) and r2.flat_stats["trav.motion_fallback"] == 11
+
+
+def test_accumulation_per_pass_motion_on_the_hard_cases():
+    """The per-pass motion path on every moving hard case (behind the camera, crossing the near
+    plane, focus crossing, degenerate...): per-sample winners and image equal bruteforce's with the
+    accumulation table."""
+    from types import SimpleNamespace
+
+    from tests import reference as ref
+
+    table = sim.SampleTable.accumulation(passes=16, seed=23)
+    moving = {k: v for k, v in ref.hard_cases().items() if not np.array_equal(v[1], v[2])}
+    assert len(moving) >= 2
+    rng = np.random.default_rng(3)
+    for name, (cam_kw, p0, p1, _counters) in sorted(moving.items()):
+        scene = SimpleNamespace(positions=p0, positions_t1=p1, colors=rng.uniform(0.2, 1.0, p0.shape))
+        cam = sim.Camera(**cam_kw)
+        base = sim.render(scene, cam, table, sim.PipelineConfig(algorithm="bruteforce", threads=1), export_samples=True)
+        acc = sim.render(scene, cam, table, sim.PipelineConfig(algorithm="accumulation", threads=2), export_samples=True)
+        assert np.array_equal(acc.sample_triangle, base.sample_triangle), name
+        assert np.array_equal(acc.image, base.image), name

@@ -604,13 +604,14 @@ def gpu_table1(df, config) -> list[str]:
         per = lambda c: float((sub[c].astype(float) / n).mean())  # noqa: E731
         area = float((sub["gpu.bound_area"].astype(float) / 1000.0 / hit).mean())
         frag = float((sub["gpu.fragments"].astype(float) / hit).mean())
+        outside = float((sub["gpu.fragments_outside_box"].astype(float) / sub["gpu.fragments"].astype(float)).mean())
         paper = PAPER_GPU_T1.get(m, ("", "", "", ""))
         rows.append([m, f"{per('gpu.gs_vertices'):.2f}", paper[0], f"{per('gpu.gs_triangles'):.2f}", paper[1],
                      f"{per('gpu.gs_ops'):.0f}", paper[2], f"{per('gpu.gs_floats'):.0f}", f"{area:.2f}", f"{frag:.2f}",
-                     f"{float(sub['raster.ste'].mean()):.3f}", paper[3]])
+                     f"{100 * outside:.1f}%", f"{float(sub['raster.ste'].mean()):.3f}", paper[3]])
     return md_table(["method", "vertices / tri", "paper", "triangles / tri", "paper", "GS ops / tri", "paper",
-                     "floats / tri", "bound area / hit px", "fragments / hit fragment", "PS STE",
-                     "paper usability"], rows)
+                     "floats / tri", "bound area / hit px", "fragments / hit fragment", "fragments outside setup box",
+                     "PS STE", "paper usability"], rows)
 
 
 @named_table("gpu_fallbacks")
@@ -709,3 +710,32 @@ def accumulation_k(df, config) -> list[str]:
     return md_table(["scene", "CoC [px]", "N passes", "RMSE accumulation", "RMSE stratified (N spp)",
                      "stratified spp of equal RMSE", "k", "ghosting accumulation", "ghosting stratified",
                      "paper k (000 §9.1, perceived)"], rows)
+
+
+@named_table("gpu_early_depth")
+def gpu_early_depth(df, config) -> list[str]:
+    """Per scene, CoC and algorithm: HiZ off against on (000 §9.7's depth interval for the gpu_*
+    pipeline, ẑ against HiZ for tile): fragments rejected before the pixel shader, pixel-shader sample
+    tests saved, ops and cycles with HiZ over without, and the GPU/tile cycle ratio with HiZ in both."""
+    df = _ok(df)
+    on_col = "pipeline.hiz.enabled"
+    rows = []
+    for s in _scenes(df):
+        for coc in sorted(df["camera.coc_px"].unique()):
+            sub = df[(df["scene.name"] == s) & (df["camera.coc_px"] == coc)]
+            t_on = _first(sub, {"pipeline.algorithm": "tile", on_col: True})
+            for alg in list(dict.fromkeys(sub["pipeline.algorithm"].astype(str))):
+                off, on = _first(sub, {"pipeline.algorithm": alg, on_col: False}), _first(sub, {"pipeline.algorithm": alg, on_col: True})
+                if off is None or on is None:
+                    continue
+                gpu = alg.startswith("gpu_")
+                culled = float(on["gpu.fragments_depth_culled"]) if gpu else math.nan
+                frags = float(off["gpu.fragments"]) if gpu else math.nan
+                saved = (float(off["gpu.ps_samples_tested"]) - float(on["gpu.ps_samples_tested"])) if gpu else \
+                    float(on["zcull.samples_culled"])
+                vs_tile = f"{float(on['timing.cycles']) / float(t_on['timing.cycles']):.2f}" if gpu and t_on is not None else ""
+                rows.append([s, f"{coc:g}", alg, f"{100 * culled / frags:.1f}%" if gpu and frags else "",
+                             f"{saved:.3g}", f"{float(on['ops.total']) / float(off['ops.total']):.3f}",
+                             f"{float(on['timing.cycles']) / float(off['timing.cycles']):.3f}", vs_tile])
+    return md_table(["scene", "CoC [px]", "algorithm", "fragments depth-culled", "sample tests saved",
+                     "ops HiZ / none", "cycles HiZ / none", "cycles GPU / tile (both HiZ)"], rows)

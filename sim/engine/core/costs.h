@@ -14,6 +14,7 @@ inline constexpr std::uint64_t kSetupMotion = 9;       // dX, dY, dW: 9 SUB
 inline constexpr std::uint64_t kSetupShear = 6;        // static cx, cy: 6 MADD
 inline constexpr std::uint64_t kBoundsPoint = 7;       // RCP, 2 MUL, 2 MIN, 2 MAX
 inline constexpr std::uint64_t kBoundsPointLens = 14;  // RCP, 2 MUL, MADD, 2 MUL, 4 ADD, 2 MIN, 2 MAX
+inline constexpr std::uint64_t kFrontCheck = 3;        // 3 CMP: every vertex in front of the eye (W > 0)
 
 // ---- tile tests (tiletest/) ----
 inline constexpr std::uint64_t kLensVertexBase = 6;     // RCP, 2 MUL, MADD, 2 MUL

@@ -55,10 +55,15 @@ inline constexpr std::uint64_t kRasterEdgeSetup = 2;  // 2 CMP: the pixel corner
 inline constexpr std::uint64_t kRasterScanVertex = 4; // 2 MIN, 2 MAX: scan box of the output vertices
 inline constexpr std::uint64_t kRasterEdge = 3;       // per pixel and edge: MUL + MADD, CMP
 
-// ---- pixel shader (gpu/pixel_shader.h; ops.ps_setup) ----
+// ---- pixel shader (gpu/gpu_pipeline.h; ops.ps_setup) ----
 // Sample-kernel constants the pixel shader re-derives per fragment without triangle constants
 // (000 §9.6): static shear coefficients 6 MADD (core kSetupShear); motion deltas 9 SUB.
 inline constexpr std::uint64_t kRederiveShear = 6;
 inline constexpr std::uint64_t kRederiveMotion = 9;
+// Perturbation texture (000 §5.3): its texture coordinate is the fragment's screen position
+// scaled to one texel per pixel of the repeating block, 2 MUL per fragment; then one texel fetch
+// (u, v, t: a 16-byte RGBA32F texel) per sample, counted in gpu.perturb_fetches, not in ops.
+inline constexpr std::uint64_t kPerturbCoord = 2;
+inline constexpr std::uint64_t kPerturbTexelBytes = 16;
 
 }  // namespace rast5d::cost::gpu

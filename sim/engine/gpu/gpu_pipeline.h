@@ -10,7 +10,16 @@
 // Pixel shader (000 §5.1, §9.6): without triangle constants it re-derives the sample kernel's
 // per-triangle constants from the interpolated vertex data for every fragment (ops.ps_setup);
 // with triangle or strip constants the geometry shader derives them once. Interpolation moves
-// 4 + payload floats per fragment without constants, 4 with (gpu.interp_floats).
+// 4 + payload floats per fragment without constants, 4 with (gpu.interp_floats). Its (u, v, t)
+// come from the perturbation texture of 000 §5.3, a pre-computed, stratified block of per-pixel
+// samples repeated over the screen and addressed by the pixel's position: the sample table is that
+// texture (docs/gpu.md), so each fragment pays the texture coordinate (ops.ps_setup) and one texel
+// per sample (gpu.perturb_fetches, timing unit texture).
+//
+// Early depth (000 §5.4, §9.7): the pixel shader writes the depth it computes, so a GPU tests depth
+// after it; with 000 §9.7's depth interval (the triangle's conservative depth range handed to the
+// tiled depth buffer, pipeline hiz.enabled) whole HiZ tiles of fragments are rejected before the
+// pixel shader with the engine's ẑ and HiZ (backend/zcull.h), exactly as `tile` culls its tiles.
 //
 // Counters: gpu.* and ops.ps_setup; the geometry shader's operations go to ops.setup (and
 // gpu.gs_ops), the rasterizer's to ops.tile; once per triangle in its first bin (charge_setup).
@@ -19,6 +28,10 @@
 #include <algorithm>
 #include <cmath>
 
+#include <utility>
+#include <vector>
+
+#include "backend/zcull.h"
 #include "gpu/geometry_shader.h"
 #include "gpu/raster2d.h"
 #include "traversal/traversal.h"
@@ -68,50 +81,148 @@ class GpuBounding final : public Traversal {
 
  public:
   GpuBounding(const Frame& f, ThreadState& ts)
-      : f_(f), c_(ts.counters), pipe_(f, ts), gs_(make_gs_frame(f)) {}
+      : f_(f), c_(ts.counters), pipe_(f, ts), zcull_(f, ts.counters, ts.buffers, pipe_), gs_(make_gs_frame(f)) {}
 
   void rasterize(const TriSetup& tri, const BinRect& bin, bool charge_setup) override {
+    zcull_.begin_triangle(tri, charge_setup);
+    if (zcull_.query_answered()) return;  // interval-based occlusion query already answered
+    rasterize_tri(tri, bin, charge_setup);
+    zcull_.end_triangle();
+  }
+
+ private:
+  void rasterize_tri(const TriSetup& tri, const BinRect& bin, bool charge_setup) {
     std::uint64_t gs_ops = 0, raster_setup_ops = 0;
     const Bound b = gs_.run(kMethod, tri, gs_ops);
     const GpuConstants constants = f_.p.gpu_constants;
     if (constants != GpuConstants::kNone) rederive(tri, gs_ops);  // once, in the geometry shader
     RasterSetup r;
-    raster_setup<A>(b, tri, r, raster_setup_ops);
-    if (charge_setup) account(tri, b, gs_ops, raster_setup_ops);
+    raster_setup<A>(b, tri, f_.p.width, f_.p.height, r, raster_setup_ops);
+    if (charge_setup) {
+      account(tri, b, gs_ops, raster_setup_ops);
+      outside_box(tri, r);
+    }
 
     const int x0 = std::max(r.x0, bin.x0), x1 = std::min(r.x1, bin.x1);
     const int y0 = std::max(r.y0, bin.y0), y1 = std::min(r.y1, bin.y1);
     if (x0 >= x1 || y0 >= y1) return;
-    const int P = payload_floats(f_.p, tri);
-    const std::uint64_t interp = constants == GpuConstants::kNone ? 4 + P : 4;
+    pipe_.begin(tri);
+    // Early depth (000 §9.7's depth interval, pipeline hiz.enabled): the rasterizer's fragments are
+    // grouped by HiZ tile and the triangle's conservative depth interval over the tile, the whole
+    // lens and the shutter (ẑ, intervals/depth_interval.h) is compared with the tile's stored depths
+    // (backend/zcull.h) before the pixel shader runs: a tile behind HiZ's zmax loses its fragments,
+    // one in front of zmin skips the depth reads. Without HiZ one group: the scan box.
+    const bool by_tile = f_.p.hiz_enabled || f_.p.zhat_stats || f_.p.query_mode == QueryMode::kIntervals;
+    const int T = by_tile ? f_.p.hiz_tile_size : std::max(x1 - x0, y1 - y0);
+    const bool lens = tri.cls == DimClass::k4D || tri.cls == DimClass::k5D;
     const int spp = f_.table.spp();
     std::uint64_t raster_ops = 0;
-    pipe_.begin(tri);
-    for (int py = y0; py < y1; ++py)
-      for (int px = x0; px < x1; ++px) {
-        pipe_.at_pixel(px, py);
-        ++c_[Counter::gpu_raster_pixels_tested];
-        if (!pixel_covered<A>(r, px, py, raster_ops)) continue;
-        // A fragment: the pixel shader.
-        ++c_[Counter::gpu_fragments];
-        c_[Counter::gpu_interp_floats] += interp;
-        std::uint64_t ps_setup = 0;
-        if (constants == GpuConstants::kNone) rederive(tri, ps_setup);
-        const std::uint64_t covered0 = c_[Counter::raster_samples_covered];
-        const std::uint64_t ops0 = c_[Counter::ops_sample_inside];
-        pipe_.push_pixel(px, py, f_.table.pixel(px, py));
-        pipe_.flush();
-        if (c_[Counter::raster_samples_covered] == covered0) ++c_[Counter::gpu_fragments_zero_hit];
-        c_[Counter::gpu_ps_samples_tested] += static_cast<std::uint64_t>(spp);
-        c_[Counter::ops_ps_setup] += ps_setup;
-        c_[Counter::gpu_ps_ops] += ps_setup + (c_[Counter::ops_sample_inside] - ops0);
+    for (int ty = by_tile ? bin.y0 + ((y0 - bin.y0) / T) * T : y0; ty < y1; ty += T)
+      for (int tx = by_tile ? bin.x0 + ((x0 - bin.x0) / T) * T : x0; tx < x1; tx += T) {
+        if (zcull_.query_answered()) break;
+        const int rx0 = std::max(tx, x0), rx1 = std::min(tx + T, x1);
+        const int ry0 = std::max(ty, y0), ry1 = std::min(ty + T, y1);
+        pipe_.at_rect(rx0, ry0, rx1, ry1);
+        frags_.clear();
+        for (int py = ry0; py < ry1; ++py)
+          for (int px = rx0; px < rx1; ++px) {
+            pipe_.at_pixel(px, py);
+            ++c_[Counter::gpu_raster_pixels_tested];
+            if (pixel_covered<A>(r, px, py, raster_ops)) frags_.push_back({px, py});
+          }
+        if (frags_.empty()) continue;
+        if (by_tile) {
+          pipe_.at_rect(rx0, ry0, rx1, ry1);
+          const int n = static_cast<int>(frags_.size());
+          const std::uint64_t culled0 = c_[Counter::zcull_pairs_culled];
+          if (!zcull_.check(tri, rx0, ry0, rx0, rx1, ry0, ry1, lens, -1.0, 1.0, -1.0, 1.0, 0.0, 1.0, n * spp)) {
+            // behind zmax (an interval-based occlusion query's pairs also stop here, uncounted)
+            if (c_[Counter::zcull_pairs_culled] != culled0) c_[Counter::gpu_fragments_depth_culled] += static_cast<std::uint64_t>(n);
+            continue;
+          }
+        }
+        for (const auto& fr : frags_) pixel_shader(tri, fr.first, fr.second);
       }
     c_[Counter::ops_tile] += raster_ops;
     pipe_.end_visit();  // a visit = the triangle's fragments in this bin
     pipe_.flush();
   }
 
- private:
+  // One fragment: the pixel shader's perturbation-texture coordinate (000 §5.3) and fetches, its
+  // re-derived setup without triangle constants (000 §9.6), the interpolated floats, and every
+  // sample of the pixel through the exact sample test (000 §5.1).
+  void pixel_shader(const TriSetup& tri, int px, int py) {
+    const int spp = f_.table.spp();
+    ++c_[Counter::gpu_fragments];
+    c_[Counter::gpu_interp_floats] += interp_floats(tri);
+    std::uint64_t ps_setup = 0;
+    perturb_coord(px, py, ps_setup);
+    if (f_.p.gpu_constants == GpuConstants::kNone) rederive(tri, ps_setup);
+    c_[Counter::gpu_perturb_fetches] += static_cast<std::uint64_t>(spp);
+    const std::uint64_t covered0 = c_[Counter::raster_samples_covered];
+    const std::uint64_t ops0 = c_[Counter::ops_sample_inside];
+    pipe_.push_pixel(px, py, f_.table.pixel(px, py));
+    pipe_.flush();
+    if (c_[Counter::raster_samples_covered] == covered0) ++c_[Counter::gpu_fragments_zero_hit];
+    c_[Counter::gpu_ps_samples_tested] += static_cast<std::uint64_t>(spp);
+    c_[Counter::ops_ps_setup] += ps_setup;
+    c_[Counter::gpu_ps_ops] += ps_setup + (c_[Counter::ops_sample_inside] - ops0);
+  }
+
+  // The polygon's on-screen pixels outside the setup box (raster2d.h), once per triangle: the
+  // rasterizer tests and emits them and the pixel shader runs on each, finding no sample inside
+  // (the setup box bounds every hit). Its sample tests are charged at the documented cost of the
+  // triangle's class (sampletest/hardware.h, proven by the counting path on every other test);
+  // they are not run, since they cannot hit and lie outside the bin being rendered.
+  void outside_box(const TriSetup& tri, const RasterSetup& r) {
+    const int spp = f_.table.spp();
+    const std::uint64_t test_cost = sample_test_cost(f_.p.cost_model, tri.cls);
+    std::uint64_t raster_ops = 0, n = 0, ps_setup = 0;
+    for (int py = r.ey0; py < r.ey1; ++py)
+      for (int px = r.ex0; px < r.ex1; ++px) {
+        if (py >= tri.by0 && py < tri.by1 && px >= tri.bx0 && px < tri.bx1) {
+          px = std::max(px, tri.bx1 - 1);  // skip the setup box's span of this row
+          continue;
+        }
+        ++c_[Counter::gpu_raster_pixels_tested];
+        if (!pixel_covered<A>(r, px, py, raster_ops)) continue;
+        ++n;
+        perturb_coord(px, py, ps_setup);
+        if (f_.p.gpu_constants == GpuConstants::kNone) rederive(tri, ps_setup);
+      }
+    c_[Counter::ops_tile] += raster_ops;
+    if (n == 0) return;
+    const std::uint64_t tests = n * static_cast<std::uint64_t>(spp);
+    c_[Counter::gpu_fragments] += n;
+    c_[Counter::gpu_fragments_outside_box] += n;
+    c_[Counter::gpu_fragments_zero_hit] += n;
+    c_[Counter::gpu_interp_floats] += n * interp_floats(tri);
+    c_[Counter::gpu_perturb_fetches] += tests;
+    c_[Counter::gpu_ps_samples_tested] += tests;
+    c_[Counter::raster_samples_tested] += tests;
+    c_[kTestedByClass[static_cast<int>(tri.cls)]] += tests;
+    c_[Counter::ops_sample_inside] += tests * test_cost;
+    c_[Counter::ops_ps_setup] += ps_setup;
+    c_[Counter::gpu_ps_ops] += ps_setup + tests * test_cost;
+  }
+
+  std::uint64_t interp_floats(const TriSetup& tri) const {
+    return f_.p.gpu_constants == GpuConstants::kNone ? 4 + static_cast<std::uint64_t>(payload_floats(f_.p, tri)) : 4;
+  }
+
+  // The perturbation texture's coordinate (000 §5.3): the pixel's position scaled to one texel per
+  // pixel of the sample table's repeating block. Cost kPerturbCoord.
+  void perturb_coord(int px, int py, std::uint64_t& ops) const {
+    const D inv(1.0 / f_.table.period());
+    const D s = D(static_cast<double>(px)) * inv, t = D(static_cast<double>(py)) * inv;
+    sink_ = static_cast<float>(raw(s) + raw(t));
+    charge<A>(ops, cost::gpu::kPerturbCoord);
+  }
+
+  static constexpr Counter kTestedByClass[4] = {
+      Counter::raster_samples_tested_2d, Counter::raster_samples_tested_3d,
+      Counter::raster_samples_tested_4d, Counter::raster_samples_tested_5d};
+
   // The sample kernel's per-triangle constants, derived from the vertex data (000 §9.6): the
   // static shear coefficients (4D) or the motion deltas (3D, 5D). Costs kRederiveShear / Motion.
   void rederive(const TriSetup& tri, std::uint64_t& ops) const {
@@ -167,7 +278,9 @@ class GpuBounding final : public Traversal {
   const Frame& f_;
   Counters& c_;
   SamplePipeline<A> pipe_;
+  DepthCull<A, SamplePipeline<A>> zcull_;
   GeometryShader<A> gs_;
+  std::vector<std::pair<int, int>> frags_;  // the fragments of one HiZ tile
   mutable float sink_ = 0.0f;
 };
 

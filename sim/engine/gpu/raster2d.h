@@ -3,8 +3,11 @@
 // pixel is a fragment when its square [px, px + 1] x [py, py + 1] meets every half-plane of the
 // polygon (one fragment per pixel and triangle, as a convex strip dilated by the pixel gives).
 // Every sample of the pixel can then be tested by the pixel shader, whatever its offset in the
-// pixel. The rasterizer scans the box of the polygon's vertices inside the triangle's setup box
-// (its scissor: no hit lies outside it) and the screen bin.
+// pixel. A GPU rasterizes the whole polygon clipped to the viewport (the screen: pixels off screen
+// are never generated) with no per-triangle scissor, so its fragments beyond the triangle's setup
+// box are overdraw too: the scan box of the bin's fragments is the polygon's box inside the setup
+// box and the bin, and the pipeline counts the polygon's on-screen pixels outside the setup box
+// once per triangle (ex0..ey1; gpu.fragments_outside_box), where no sample can be inside.
 //
 // Costs (gpu/costs.h): per edge kRasterEdgeSetup, per vertex kRasterScanVertex (once per triangle),
 // per (pixel, edge) evaluated kRasterEdge (the test stops at the first edge that rejects).
@@ -26,11 +29,15 @@ struct RasterSetup {
   double nx[kMaxPlanes], ny[kMaxPlanes], h[kMaxPlanes];
   double ox[kMaxPlanes], oy[kMaxPlanes];  // the pixel corner that tests each edge (0 or 1)
   int x0 = 0, x1 = 0, y0 = 0, y1 = 0;     // scan box [x0, x1) x [y0, y1) before the bin
+  // The polygon's box on screen, which a GPU rasterizes whole (no per-triangle scissor); pixels
+  // of it outside the setup box [bx0, bx1) x [by0, by1) cannot hold a hit.
+  int ex0 = 0, ex1 = 0, ey0 = 0, ey1 = 0;
 };
 
 // Edge setup and scan box. Operations go to ops (charged once per triangle by the caller).
 template <class A>
-inline void raster_setup(const Bound& b, const TriSetup& tri, RasterSetup& r, std::uint64_t& ops) {
+inline void raster_setup(const Bound& b, const TriSetup& tri, int width, int height, RasterSetup& r,
+                         std::uint64_t& ops) {
   using D = typename A::f64;
   r.n = b.n_planes;
   for (int i = 0; i < r.n; ++i) {
@@ -39,7 +46,7 @@ inline void raster_setup(const Bound& b, const TriSetup& tri, RasterSetup& r, st
     r.oy[i] = D(b.ny[i]) < D(0.0) ? 1.0 : 0.0;
     charge<A>(ops, cost::gpu::kRasterEdgeSetup);
   }
-  r.x0 = tri.bx0, r.x1 = tri.bx1, r.y0 = tri.by0, r.y1 = tri.by1;
+  r.x0 = r.ex0 = tri.bx0, r.x1 = r.ex1 = tri.bx1, r.y0 = r.ey0 = tri.by0, r.y1 = r.ey1 = tri.by1;
   if (!b.verts_valid || b.n_verts < 3) return;
   D lx = D(b.vx[0]), hx = lx, ly = D(b.vy[0]), hy = ly;
   for (int i = 0; i < b.n_verts; ++i) {
@@ -73,6 +80,8 @@ inline void raster_setup(const Bound& b, const TriSetup& tri, RasterSetup& r, st
   r.x1 = std::min(r.x1, clampi(std::floor(mhx + pad) + 1.0, tri.bx0, tri.bx1));
   r.y0 = std::max(r.y0, clampi(std::floor(mly - pad), tri.by0, tri.by1));
   r.y1 = std::min(r.y1, clampi(std::floor(mhy + pad) + 1.0, tri.by0, tri.by1));
+  r.ex0 = clampi(std::floor(mlx - pad), 0, width), r.ex1 = clampi(std::floor(mhx + pad) + 1.0, 0, width);
+  r.ey0 = clampi(std::floor(mly - pad), 0, height), r.ey1 = clampi(std::floor(mhy + pad) + 1.0, 0, height);
 }
 
 // Does pixel (px, py)'s square meet every half-plane? Operations go to ops.

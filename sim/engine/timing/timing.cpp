@@ -69,7 +69,7 @@ TileWork work_from_counters(const Counters& c) {
   w.ps_ops = d(Counter::gpu_ps_ops);
   w.depth_tests = d(Counter::depth_tests);
   w.quads = d(Counter::shade_quad_requests);
-  w.texel_fetches = d(Counter::tex_fetches);
+  w.texel_fetches = d(Counter::tex_fetches) + d(Counter::gpu_perturb_fetches);  // + the GPU's perturbation texture
   // Memory: per-sample depth traffic and HiZ traffic (depth.*, hiz.*). Texture-cache misses and
   // the line bytes they fetch are added per record by the cache replay after the render
   // (traversal/render.cpp), since the cache is simulated in bin order once all bins are done.

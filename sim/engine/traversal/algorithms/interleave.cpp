@@ -10,7 +10,15 @@
 // positions, sample s = pass s): one full pinhole pass per lens position, the triangle re-sent and
 // set up as an ordinary pinhole triangle every pass (a static triangle's 2D edge setup charged per
 // pass). Its samples tested, images and counts equal INTERLEAVE's on the same table except that setup.
+// A moving triangle is a static one within a pass, since the pass has one shutter time too: on a
+// table whose every pass has one time in all pixels (SampleTable.accumulation), each pass moves the
+// triangle to its time and shears it to its lens position with the 5D kernel's float operations
+// (so the 2D test of the placed vertices is bit-identical to the 5D test), sets up its 2D edges and
+// bounds its pixels by the projected vertices (the setup box when a vertex is behind the eye).
+// On other interleaved tables moving triangles take INTERLEAVE's conservative path.
 #include <algorithm>
+#include <utility>
+#include <vector>
 
 #include "setup/footprint.h"
 #include "tiletest/box_bounds.h"
@@ -26,7 +34,9 @@ class Interleave final : public Traversal {
   using F = typename A::f32;
 
  public:
-  Interleave(const Frame& f, ThreadState& ts) : f_(f), c_(ts.counters), pipe_(f, ts) {}
+  Interleave(const Frame& f, ThreadState& ts) : f_(f), c_(ts.counters), pipe_(f, ts) {
+    if constexpr (kPassSetup) pass_times(f.table);
+  }
 
   void rasterize(const TriSetup& tri, const BinRect& bin, bool charge_setup) override {
     std::uint64_t setup_ops = 0;
@@ -41,8 +51,14 @@ class Interleave final : public Traversal {
       X[j] = F(tri.X[j]), Y[j] = F(tri.Y[j]), cx[j] = F(tri.cx[j]), cy[j] = F(tri.cy[j]);
       W[j] = tri.W[j];
     }
+    const bool per_pass_motion = kPassSetup && tri.moving && !pass_t_.empty() &&
+                                 (tri.cls == DimClass::k3D || tri.cls == DimClass::k5D);
     for (int i = 0; i < N; ++i) {
       const float ui = f_.table.lens_u(i), vi = f_.table.lens_v(i);
+      if (per_pass_motion) {
+        moving_pass(tri, i, bx0, bx1, by0, by1, setup_ops);
+        continue;
+      }
       float xs[3], ys[3];
       if (!tri.moving) {
         F Xs[3], Ys[3];
@@ -97,11 +113,76 @@ class Interleave final : public Traversal {
     if (charge_setup) {
       c_[Counter::ops_setup] += setup_ops;
       c_[Counter::trav_passes] += static_cast<std::uint64_t>(N);
-      if (tri.moving) ++c_[Counter::trav_motion_fallback];
+      if (tri.moving && !per_pass_motion) ++c_[Counter::trav_motion_fallback];
     }
   }
 
  private:
+  // The shutter time of every pass when it is the same in every pixel of the table (accumulation
+  // tables); else pass_t_ stays empty.
+  void pass_times(const SampleTable& table) {
+    const int N = table.n_lens(), P = table.period(), spp = table.spp();
+    if (N <= 0) return;
+    std::vector<float> t(static_cast<std::size_t>(N), 0.0f);
+    std::vector<char> seen(static_cast<std::size_t>(N), 0);
+    for (int py = 0; py < P; ++py)
+      for (int px = 0; px < P; ++px) {
+        const PixelSamples ps = table.pixel(px, py);
+        for (int s = 0; s < spp; ++s) {
+          const int i = ps.lens_index[s];
+          if (!seen[i]) seen[i] = 1, t[i] = ps.t[s];
+          else if (t[i] != ps.t[s]) return;
+        }
+      }
+    pass_t_ = std::move(t);
+  }
+
+  // One pass of a moving triangle: the pinhole triangle at the pass's time and lens position.
+  void moving_pass(const TriSetup& tri, int i, int bx0, int bx1, int by0, int by1, std::uint64_t& setup_ops) {
+    F X0[3], Y0[3], W0[3], dX[3], dY[3], dW[3], Xt[3], Yt[3], Wt[3], Xs[3], Ys[3];
+    for (int j = 0; j < 3; ++j) {
+      X0[j] = F(tri.X[j]), Y0[j] = F(tri.Y[j]), W0[j] = F(tri.W[j]);
+      dX[j] = F(tri.dX[j]), dY[j] = F(tri.dY[j]), dW[j] = F(tri.dW[j]);
+    }
+    lerp_vertices(X0, Y0, W0, dX, dY, dW, F(pass_t_[i]), Xt, Yt, Wt);
+    charge<A>(setup_ops, cost::kLerp);
+    if (tri.cls == DimClass::k5D) {
+      shear_moving(Xt, Yt, Wt, F(f_.fc.kx), F(f_.fc.neg_kx_f), F(f_.fc.ky), F(f_.fc.neg_ky_f),
+                   F(f_.table.lens_u(i)), F(f_.table.lens_v(i)), Xs, Ys);
+      charge<A>(setup_ops, cost::kShearMoving);
+    } else {
+      for (int j = 0; j < 3; ++j) Xs[j] = Xt[j], Ys[j] = Yt[j];
+    }
+    // The pass's pinhole triangle: the placed vertices (the backend reads W through it).
+    pass_tri_ = tri;
+    for (int j = 0; j < 3; ++j) {
+      pass_xs_[j] = raw(Xs[j]), pass_ys_[j] = raw(Ys[j]);
+      pass_tri_.W[j] = raw(Wt[j]);
+    }
+    tiletest::edges_2d<D>(pass_xs_, pass_ys_, pass_tri_.W);
+    charge<A>(setup_ops, cost::kEdges2DSetup);
+    int x0 = bx0, x1 = bx1, y0 = by0, y1 = by1;
+    bool front = true;
+    for (int j = 0; j < 3; ++j) front = (D(pass_tri_.W[j]) > D(0.0)) && front;
+    charge<A>(setup_ops, cost::kFrontCheck);
+    if (front) {  // the projected vertices' box (tiletest::pixel_range widens it for rounding)
+      D lx(tiletest::kInf), hx(-tiletest::kInf), ly(tiletest::kInf), hy(-tiletest::kInf);
+      for (int j = 0; j < 3; ++j) {
+        const D r = rcp(D(pass_tri_.W[j]));
+        const D x = D(pass_xs_[j]) * r, y = D(pass_ys_[j]) * r;
+        lx = vmin(lx, x), hx = vmax(hx, x), ly = vmin(ly, y), hy = vmax(hy, y);
+      }
+      charge<A>(setup_ops, 3 * cost::kBoundsPoint);
+      tiletest::pixel_range(raw(lx), raw(hx), bx0, bx1, x0, x1);
+      tiletest::pixel_range(raw(ly), raw(hy), by0, by1, y0, y1);
+    }
+    if (x0 >= x1 || y0 >= y1) return;
+    pipe_.begin_sheared(pass_tri_, pass_xs_, pass_ys_, 0);
+    pass(i, x0, x1, y0, y1);
+    pipe_.end_visit();  // a visit = one pass
+    pipe_.flush();      // pass_tri_ and the vertices are this pass's
+  }
+
   // Inside-test the samples of lens coordinate i in the pixel rectangle, row by row.
   void pass(int i, int x0, int x1, int y0, int y1) {
     for (int py = y0; py < y1; ++py)
@@ -115,6 +196,9 @@ class Interleave final : public Traversal {
   const Frame& f_;
   Counters& c_;
   SamplePipeline<A> pipe_;
+  std::vector<float> pass_t_;  // accumulation: each pass's shutter time (empty: not one per pass)
+  TriSetup pass_tri_;
+  float pass_xs_[3], pass_ys_[3];
 };
 
 template <class A>
