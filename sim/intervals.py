@@ -101,7 +101,8 @@ def occlusion_query(occluders, query, camera: Camera, table, pipeline: PipelineC
     sample (lens point and time)?
 
     mode="samples": the query triangles are rasterized with the samples of the 5D rasterizer and
-    the samples passing the depth test are counted (nothing written); visible iff any passes.
+    the samples passing the depth test are counted (nothing written); visible iff any passes. It needs
+    an algorithm with a depth-cull stage: "tile", "tile_interleaved" or a gpu_* method.
     mode="intervals": the tile algorithm compares each (query triangle, tile) ẑ with the HiZ
     zmax of the occluders and aborts at the first pair that may be visible; no sample is touched.
     It needs algorithm "tile" and runs single-threaded (the abort order must be deterministic);

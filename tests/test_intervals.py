@@ -399,6 +399,14 @@ def test_occlusion_queries(coc):
             assert v.work["occlusion.pairs_tested"] == 1  # aborted at the first visible tile
     with pytest.raises(sim.ConfigError, match="tile"):
         sim.occlusion_query(wall, hidden, cam, table(), sim.PipelineConfig(algorithm="bruteforce"), mode="intervals")
+    # Sample-based queries through the gpu_* depth-cull stage give the same answers; the algorithms without
+    # that stage are refused (they would draw the query as an occluder and report it hidden).
+    gpu = sim.PipelineConfig(algorithm="gpu_hexagon2d")
+    assert not sim.occlusion_query(wall, hidden, cam, table(), gpu).visible
+    assert sim.occlusion_query(wall, front, cam, table(), gpu).visible
+    for algorithm in ("bruteforce", "interval", "laine"):
+        with pytest.raises((sim.ConfigError, ValueError), match=f"occlusion queries.*got '{algorithm}'"):
+            sim.occlusion_query(wall, front, cam, table(), sim.PipelineConfig(algorithm=algorithm))
 
 
 def test_config_errors():

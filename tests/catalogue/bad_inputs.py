@@ -263,6 +263,16 @@ def pipeline_needs_interleaved(d):
     _render(config=sim.PipelineConfig(algorithm=sim.interleaved_algorithms()[0]))
 
 
+@case("Python API", "a sample-based occlusion query with an algorithm that has no depth-cull stage (bruteforce)",
+      "ConfigError", r"algorithm: occlusion queries are answered by .*got 'bruteforce'",
+      "the algorithms that answer queries and the one given")
+def occlusion_query_algorithm(d):
+    sim = _sim()
+    occluder, query = _Arrays(_tri(z=-3.0)), _Arrays(_tri(z=-2.0))
+    sim.occlusion_query(occluder, query, sim.Camera(width=16, height=16), sim.SampleTable.create("stratified", spp=4, seed=1),
+                        sim.PipelineConfig(algorithm="bruteforce"))
+
+
 @case("Python API", "a frame whose buffers exceed the memory limit (16384^2 px, 4096 spp)", "ConfigError",
       r"memory: estimated .* GiB exceeds PipelineConfig\.memory_limit_bytes.*largest: .*Lower .*raise the limit",
       "the estimate, the limit, the sizes behind it, the two largest parts, what to lower and how to raise the limit")
