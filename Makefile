@@ -10,7 +10,7 @@ SOURCES := $(shell find sim/engine sim/bindings -type f 2>/dev/null) CMakeLists.
 INSTALL_PYTHONS ?= 3.12 3.13
 export CMAKE_BUILD_PARALLEL_LEVEL ?= $(shell nproc 2>/dev/null || echo 2)
 
-.PHONY: install run test test-all test-install bench golden report report-quick clean sanitize
+.PHONY: install run test test-all test-install test-lowest bench golden report report-quick clean sanitize
 
 install: $(STAMPS)/install
 
@@ -69,6 +69,25 @@ test-install:
 	  (cd $$dir && env/bin/python $(CURDIR)/tests/install_smoke.py); \
 	  echo "test-install: Python $$v passed in $$(( $$(date +%s) - start )) s"; \
 	done
+
+# The lowest dependency versions pyproject.toml allows (constraints-lowest.txt) in a fresh venv of
+# LOWEST_PYTHON: the package installed there (editable, its own build directory) and the fast test
+# tier run against it, so the lower ends of pyproject.toml's ranges are tested, not guessed.
+LOWEST_PYTHON ?= 3.11
+LOWEST := build/test-lowest
+test-lowest:
+	@set -e; v=$(LOWEST_PYTHON); \
+	  py=$$(ls -d $$(pyenv root 2>/dev/null)/versions/$$v.*/bin/python3 2>/dev/null | sort -V | tail -1); \
+	  if [ -z "$$py" ]; then py=$$(command -v python$$v || true); fi; \
+	  if [ -z "$$py" ]; then echo "test-lowest: no Python $$v (pyenv or python$$v on PATH)"; exit 1; fi; \
+	  rm -rf $(LOWEST); $$py -m venv $(LOWEST)/env; start=$$(date +%s); \
+	  $(LOWEST)/env/bin/python -m pip install --quiet --upgrade "pip>=23.2"; \
+	  $(LOWEST)/env/bin/python -m pip install --quiet -c $(CONSTRAINTS) scikit-build-core pybind11; \
+	  $(LOWEST)/env/bin/python -m pip install --quiet --no-build-isolation -c constraints-lowest.txt \
+	    --config-settings=build-dir=$(LOWEST)/cmake -e ".[test]"; \
+	  $(LOWEST)/env/bin/python -m pip list --format=freeze | grep -iE "^($$(sed -n 's/==.*//p' constraints-lowest.txt | paste -sd'|'))==" ; \
+	  $(LOWEST)/env/bin/python -m pytest -q -p no:cacheprovider; \
+	  echo "test-lowest: Python $$v passed in $$(( $$(date +%s) - start )) s"
 
 bench: install
 	$(PY) -m pytest -q -s -m bench

@@ -12,7 +12,9 @@ The triangles (``adversarial_scene``): small ones spread over the frame, ones cr
 plane, with a vertex exactly on it, with vertices behind the camera or between it and the near
 plane, moving through the near plane, far off screen (10^2 to 10^6 px out), slivers, and ones so
 close to the lens that their blur covers much of the frame. Slow: run with `-m slow`; the counts
-are printed (``-s``)."""
+are printed (``-s``). RAST5D_ADVERSARIAL_TABLES and RAST5D_ADVERSARIAL_ALGORITHMS (comma-separated
+names) restrict a run to some table kinds or algorithms, so the full product (about 15 algorithms x 7
+table kinds, one to a few CPU-minutes per render) can be split over processes or machines."""
 from __future__ import annotations
 
 import os
@@ -42,9 +44,11 @@ def adversarial_scene(n: int = N, seed: int = 17):
     F, W = cam.focus_distance, cam.width
     # Triangles that cover much of the frame (clipped at the near plane, behind the camera, huge
     # blur, long ones through the frame from far off screen) cost brute force up to the whole frame
-    # each: they are a few hundred, the rest are cheap.
+    # each: they are a few hundred (at 10^5 triangles, brute force tests about 2e9 samples per table
+    # with these shares, two thirds of them for the far-off-screen and near-plane classes); the rest
+    # are cheap.
     shares = {"small": 0.6, "crosses_focus": 0.15, "vertex_on_focus": 0.05, "sliver": 0.08, "moving": 0.08,
-              "far_off_screen": 0.03, "behind_camera": 0.001, "behind_near": 0.001, "through_near": 0.001,
+              "far_off_screen": 0.003, "behind_camera": 0.0005, "behind_near": 0.0005, "through_near": 0.0005,
               "huge_blur": 0.001}
     counts = {k: int(round(v * n)) for k, v in shares.items()}
     counts["small"] += n - sum(counts.values())
@@ -125,9 +129,18 @@ class _Scene:
         self.colors = rng.uniform(0.1, 1, (len(p0), 3, 3))
 
 
+def _chosen(env: str, names):
+    """names, restricted to the comma-separated list in the environment variable env if set."""
+    wanted = [n for n in os.environ.get(env, "").split(",") if n]
+    unknown = sorted(set(wanted) - set(names))
+    if unknown:
+        raise ValueError(f"{env}: unknown {unknown}; choose from {sorted(names)}")
+    return [n for n in names if not wanted or n in wanted]
+
+
 def _tables():
     out = {}
-    for kind in sim.SampleTable.generators():
+    for kind in _chosen("RAST5D_ADVERSARIAL_TABLES", sim.SampleTable.generators()):
         params = dict(spp=SPP, seed=3, period=32)
         if kind == "multiview":
             params["views"] = 2
@@ -165,7 +178,7 @@ def test_no_algorithm_misses_a_sample_brute_force_hits():
         report.append(f"{kind}: bruteforce {time.perf_counter() - t0:.1f} s, "
                       f"{int(np.isfinite(ref.sample_depth).sum()):,} samples hit, "
                       f"setup: {({k: v for k, v in ref.flat_stats.items() if k.startswith('setup.') and v})}")
-        for algorithm in sim.algorithm_names():
+        for algorithm in _chosen("RAST5D_ADVERSARIAL_ALGORITHMS", sim.algorithm_names()):
             if algorithm == "bruteforce" or (algorithm in interleaved and not has_lens_index):
                 continue
             t0 = time.perf_counter()

@@ -10,18 +10,21 @@ wild ones (NaN, inf, huge, negative, wrong shapes and types).
 
 The fast tier runs a fixed, derandomised set of examples per entry point (RAST5D_FUZZ_EXAMPLES,
 default 25); `-m slow` runs the long variant (RAST5D_FUZZ_SLOW_EXAMPLES per entry point, default
-2000, random). RAST5D_FUZZ_LOG names a JSON file that receives the count of inputs tried per entry
+2000, random). RAST5D_FUZZ_SECONDS bounds the long variant by time instead: each entry point gets an
+equal share and runs rounds of RAST5D_FUZZ_SLOW_EXAMPLES examples under successive seeds (from
+RAST5D_FUZZ_SEED, default 0) until its share is spent, all in one process. RAST5D_FUZZ_LOG names a JSON file that receives the count of inputs tried per entry
 point (per process, `<RAST5D_FUZZ_LOG>.<pid>.json`, for the record of a long run)."""
 from __future__ import annotations
 
 import atexit
 import json
 import os
+import time
 from collections import Counter
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings, strategies as st
+from hypothesis import HealthCheck, given, seed, settings, strategies as st
 
 import sim
 from sim import params as sp
@@ -412,7 +415,17 @@ CASES = {"render": lambda d: _render_case(d, False), "occlusion_query": lambda d
 
 @pytest.mark.slow
 @pytest.mark.parametrize("entry", sorted(CASES))
-@LONG
-@given(data=st.data())
-def test_fuzz_long(entry, data):
-    CASES[entry](data)
+def test_fuzz_long(entry):
+    def run(data):
+        CASES[entry](data)
+
+    share = float(os.environ.get("RAST5D_FUZZ_SECONDS", 0)) / len(CASES)
+    first = int(os.environ.get("RAST5D_FUZZ_SEED", 0))
+    if share <= 0:
+        LONG(given(data=st.data())(run))()
+        return
+    end, n = time.monotonic() + share, first
+    while time.monotonic() < end:
+        seed(n)(LONG(given(data=st.data())(run)))()
+        TRIED[f"{entry}.rounds"] += 1
+        n += 1

@@ -248,7 +248,8 @@ def main(only=None, workers=None, scheduler=None, force=False, quick=False, conf
             text += md
         (page_dir / f"{page}.md").write_text("\n".join(text) + "\n")
         print(f"wrote {(page_dir / f'{page}.md').relative_to(out_root.parent if quick else REPORTS.parent)}")
-    if not only:
+    # The index lists the pages on disk, so a partial run that wrote a paper page refreshes it too.
+    if not only or any(folder == "paper" for folder, _ in sections):
         write_index(out_root, out_root / "paper", quick, time.perf_counter() - t_all, counts)
     return 1 if failures else 0
 
