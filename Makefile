@@ -82,11 +82,11 @@ test-lowest:
 	  if [ -z "$$py" ]; then echo "test-lowest: no Python $$v (pyenv or python$$v on PATH)"; exit 1; fi; \
 	  rm -rf $(LOWEST); $$py -m venv $(LOWEST)/env; start=$$(date +%s); \
 	  $(LOWEST)/env/bin/python -m pip install --quiet --upgrade "pip>=23.2"; \
-	  $(LOWEST)/env/bin/python -m pip install --quiet -c $(CONSTRAINTS) scikit-build-core pybind11; \
+	  $(LOWEST)/env/bin/python -m pip install --quiet -c constraints-lowest.txt scikit-build-core pybind11; \
 	  $(LOWEST)/env/bin/python -m pip install --quiet --no-build-isolation -c constraints-lowest.txt \
 	    --config-settings=build-dir=$(LOWEST)/cmake -e ".[test]"; \
 	  $(LOWEST)/env/bin/python -m pip list --format=freeze | grep -iE "^($$(sed -n 's/==.*//p' constraints-lowest.txt | paste -sd'|'))==" ; \
-	  $(LOWEST)/env/bin/python -m pytest -q -p no:cacheprovider; \
+	  RAST5D_CONSTRAINTS=constraints-lowest.txt $(LOWEST)/env/bin/python -m pytest -q -p no:cacheprovider; \
 	  echo "test-lowest: Python $$v passed in $$(( $$(date +%s) - start )) s"
 
 bench: install

@@ -86,6 +86,7 @@ def objects(positions: np.ndarray) -> np.ndarray:
 
 def _indexed(pos: np.ndarray, col: np.ndarray):
     pts, inv = np.unique(pos.reshape(-1, 3), axis=0, return_inverse=True)
+    inv = inv.reshape(-1)  # numpy 2.0.0 returns it as (n, 1) with axis=0
     faces = inv.reshape(-1, 3)
     vcol = np.zeros((pts.shape[0], 3))
     cnt = np.zeros(pts.shape[0])

@@ -26,6 +26,7 @@ class RenderParams:
     lens_grid: int  # G of the G x G lens-grid cells (1, 2, 4, 8, 16) or 'auto' (4; 8 at >= 256 spp); default 4
     halfspace_h: bool  # Use the h_i half-space lines; default True
     halfspace_H: bool  # Use the H_j half-space lines; default True
+    halfspace_H5: bool  # tile, moving triangles (motion_test 'intervals'): the H_j lines extended to time, culling lens cells per tile over each t̂_k (docs/tile_tests.md H5); off by default; default False
     selective_H: bool  # 001 Appendix A oracle: disable H_j lines on edges where they are not expected to pay; default True
     oracle: str  # Oracle estimate: 'simplified' (001 Eq. 15, the paper's) or 'full' (Eq. 11-12) (oracle_modes: simplified, full); default 'simplified'
     c_sample: float  # Oracle C_sample; null = the documented 4D sample-test cost of the cost model [ops]; default -1.0

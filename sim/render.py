@@ -143,7 +143,30 @@ def memory_parts(camera: Camera, spp: int, n_triangles: int, config: PipelineCon
         "sample index (period^2 x lens cells x time strata)":
             period * period * (grid * grid * config.time_strata + 1 + spp) * 4,
         "per-pixel statistics (width x height x maps)": camera.width * camera.height * pixel_maps * 8 * 2,
+        "segment buffers (threads x bin_size^2 x n_lines x buffer_size)": _segment_buffer_bytes(camera, spp, config,
+                                                                                                threads),
     }
+
+
+# A buffered segment (lines/segment_buffer.h: 13 floats) and a std::vector header per line.
+_SEGMENT_BYTES = 52
+_SEGMENT_VECTOR_BYTES = 24
+# An unlimited buffer (pipeline.lines.buffer_size 0) grows with the depth complexity along each
+# line; the estimate assumes this many segments (it is then no bound).
+_SEGMENTS_UNLIMITED = 64
+
+
+def _segment_buffer_bytes(camera: Camera, n_lines: int, config: PipelineConfig, threads: int) -> int:
+    """Line samples: every worker keeps one segment buffer per line of its bin (the bin clipped to
+    the frame), each a vector that grows by doubling up to pipeline.lines.buffer_size segments and
+    keeps its storage from bin to bin: the bound is every buffer full."""
+    if config.algorithm != "lines" and not config.algorithm.startswith("lines_"):
+        return 0
+    b = config.bin_size
+    cap = int(config.lines["buffer_size"]) or _SEGMENTS_UNLIMITED
+    cap = 1 << (cap - 1).bit_length()  # vector capacity after doubling
+    lines = min(b, camera.width) * min(b, camera.height) * n_lines
+    return threads * lines * (_SEGMENT_VECTOR_BYTES + cap * _SEGMENT_BYTES)
 
 
 def memory_estimate(camera: Camera, spp: int, n_triangles: int, config: PipelineConfig, threads: int,
@@ -161,11 +184,13 @@ def _memory_message(need: int, parts: dict, camera: Camera, spp: int, n: int, co
     gib = 2**30
     top = sorted(parts.items(), key=lambda kv: -kv[1])[:2]
     largest = ", ".join(f"{name} {size / gib:.2f} GiB" for name, size in top)
+    spp_is_lines = parts.get("segment buffers (threads x bin_size^2 x n_lines x buffer_size)", 0) > 0
     return (f"memory: estimated {need / gib:.2f} GiB exceeds PipelineConfig.memory_limit_bytes="
             f"{config.memory_limit_bytes / gib:.2f} GiB (width={camera.width}, height={camera.height}, "
             f"spp={spp}, triangles={n}, threads={threads}); largest: {largest}. Lower what the largest "
             f"parts grow with (spp, the frame size, pipeline.bin_size or pipeline.threads; export_samples "
-            f"and timing=False where they apply), or raise the limit if the machine has the memory: "
+            f"and timing=False where they apply{'; n_lines and pipeline.lines.buffer_size' if spp_is_lines else ''}"
+            f"), or raise the limit if the machine has the memory: "
             f"PipelineConfig(memory_limit_bytes={_round_up_gib(need)}) or pipeline.memory_limit_bytes in a config")
 
 

@@ -26,7 +26,8 @@ DERIVED: tuple[Derived, ...] = (
             "raster.samples_tested / tile.samples_optimal (001 Table 1; tile algorithms only)",
             lambda s: ratio(s["raster.samples_tested"], s["tile.samples_optimal"])),
     Derived("tile.culled", "tiles", "Tiles culled by any tile test",
-            lambda s: s["tile.culled_2d"] + s["tile.culled_h"] + s["tile.culled_lens"] + s["tile.culled_H"]),
+            lambda s: s["tile.culled_2d"] + s["tile.culled_h"] + s["tile.culled_lens"] + s["tile.culled_H"]
+            + s["tile.culled_H5"]),
     Derived("tile.cull_rate", "ratio", "tile.culled / tile.visited",
             lambda s: ratio(s["tile.culled"], s["tile.visited"])),
     Derived("tile.cells_cull_rate", "ratio", "tile.cells_culled / tile.cells_tested",

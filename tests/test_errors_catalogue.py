@@ -1,5 +1,6 @@
 """The bad-input catalogue (tests/catalogue/bad_inputs.py): every case raises the documented
 exception with a message naming what it should, within a time bound; docs/errors.md is fresh."""
+import os
 import re
 import signal
 
@@ -35,6 +36,9 @@ def test_bad_input_is_refused_clearly(case, tmp_path):
     assert re.search(case.match, str(info.value), flags=re.S), str(info.value)
 
 
+@pytest.mark.skipif(os.environ.get("RAST5D_CONSTRAINTS", "constraints.txt") != "constraints.txt",
+                    reason="docs/errors.md quotes messages of the pinned environment (constraints.txt); other "
+                           "dependency versions word some library errors differently")
 def test_docs_errors_md_is_fresh():
     page = (cat.Path(cat.__file__).resolve().parents[2] / "docs" / "errors.md").read_text()
     assert page == cat.page(), "docs/errors.md is stale: run `python -m tests.catalogue.bad_inputs`"

@@ -197,3 +197,23 @@ def test_yaml_lines_config(tmp_path):
     bad.write_text("scene: {name: spot_wall}\nsamples: {kind: stratified, n_lines: 8}\n")
     with pytest.raises(ValueError, match="n_lines"):
         build(load_config(bad))
+
+
+def test_composite_is_timed():
+    """The segment buffers' work reaches the timing model: each offered segment and each composite
+    step (004 Fig. 3) is one depth-unit item, the composite as one record per bin after the bin's
+    triangles. With a slow depth unit the frame is depth-bound, and removing the end-of-bin
+    records (re-timing the rest) lowers the estimated cycles."""
+    cam = sim.Camera(width=80, height=72, focus_distance=5.0, coc_px=6.0, fov_y_deg=30.0)
+    hw = sim.HardwareConfig(depth={"throughput": 0.25})
+    r = sim.render(_layered_scene(), cam, sim.SampleTable.lines(n_lines=8, seed=7),
+                   sim.PipelineConfig(algorithm="lines", threads=2, bin_size=32), hardware=hw)
+    s, recs = r.flat_stats, r.timing_records
+    assert s["lines.composite_steps"] > 0
+    assert recs["depth_tests"].sum() == s["lines.segments"] + s["lines.composite_steps"]
+    end_of_bin = (recs["triangles"] == 0) & (recs["sample_tests"] == 0) & (recs["depth_tests"] > 0)
+    assert recs["depth_tests"][end_of_bin].sum() == s["lines.composite_steps"]
+    assert set(recs["bin"][end_of_bin]) == set(range(3 * 3))  # every bin with lines composites once
+    assert s["timing.cycles"] >= (s["lines.segments"] + s["lines.composite_steps"]) / 0.25
+    without = sim.timing.estimate(recs[~end_of_bin], hw)["timing.cycles"]
+    assert s["timing.cycles"] - without >= 0.9 * s["lines.composite_steps"] / 0.25

@@ -98,3 +98,59 @@ def test_the_limit_message_says_what_to_lower_and_how_to_raise_it():
                                period=32)
     suggested = int(text.split("PipelineConfig(memory_limit_bytes=")[1].split(")")[0])
     assert suggested >= need
+
+
+LINES_CHILD = r"""
+import json, sys
+import numpy as np
+import sim
+
+w, h, n_lines, n, threads, cap, bin_size = (int(a) for a in sys.argv[1:8])
+rng = np.random.default_rng(1)
+# n large triangles over the frame at depth 3..6: about 8 layers along every line, so that with
+# occlusion and merging off the segment buffers fill up to their capacity
+c = np.stack([rng.uniform(-1.5, 1.5, n), rng.uniform(-1.5, 1.5, n), -rng.uniform(3, 6, n)], axis=1)
+
+class S:
+    positions = c[:, None, :] + rng.normal(0, 0.5, (n, 3, 3))
+    colors = np.repeat(rng.uniform(0, 1, (n, 1, 3)), 3, axis=1)
+
+camera = sim.Camera(width=w, height=h, coc_px=6, focus_distance=4)
+table = sim.SampleTable.lines(n_lines=n_lines, seed=1)
+config = sim.PipelineConfig(algorithm="lines", threads=threads, bin_size=bin_size,
+                            lines={"buffer_size": cap, "occlusion": False, "merge": False, "min_weight": 0.0})
+est = sim.memory_estimate(camera, n_lines, n, config, threads, period=table.samples(camera.lens).shape[0])
+
+def status(key):
+    for line in open("/proc/self/status"):
+        if line.startswith(key):
+            return int(line.split()[1]) * 1024
+before = status("VmRSS:")
+open("/proc/self/clear_refs", "w").write("5")  # reset the peak RSS to the current RSS
+r = sim.render(S(), camera, table, config)
+peak = status("VmHWM:")
+print(json.dumps({"estimate": est, "peak_increase": peak - before, "overflows": r.flat_stats["lines.overflows"]}))
+"""
+
+
+@pytest.mark.parametrize("size", [(128, 128, 16, 400, 1, 8, 128), (128, 128, 16, 400, 1, 32, 128)])
+def test_memory_estimate_bounds_a_line_render(size):
+    """Line samples: the segment buffers (one per line of a worker's bin, each up to
+    pipeline.lines.buffer_size segments) are a named part of the estimate; with buffers that fill
+    (8 segments: they overflow) and with buffers that stay part-empty (32), the same margins hold."""
+    from sim.render import memory_parts
+
+    out = subprocess.run([sys.executable, "-c", LINES_CHILD, *map(str, size)], capture_output=True, text=True,
+                         check=True)
+    m = json.loads(out.stdout.strip().splitlines()[-1])
+    _check(m)
+    w, h, n_lines, n, threads, cap, bin_size = size
+    config = sim.PipelineConfig(algorithm="lines", threads=threads, bin_size=bin_size, lines={"buffer_size": cap})
+    part = memory_parts(sim.Camera(width=w, height=h), n_lines, n, config, threads)[
+        "segment buffers (threads x bin_size^2 x n_lines x buffer_size)"]
+    assert part == threads * min(bin_size, w) * min(bin_size, h) * n_lines * (24 + cap * 52)
+    if cap == 8:
+        assert m["overflows"] > 0  # the buffers were full
+    # point-sample algorithms have no segment buffers
+    assert memory_parts(sim.Camera(width=w, height=h), 16, n, sim.PipelineConfig(), threads)[
+        "segment buffers (threads x bin_size^2 x n_lines x buffer_size)"] == 0

@@ -24,3 +24,15 @@ def test_equal_error_interpolation():
                       "metric.rmse": [0.1, 0.01, 0.001]})
     assert math.isclose(tables._interp_work(g, 0.01), 1e7, rel_tol=1e-9)
     assert math.isclose(tables._interp_work(g, 10 ** -1.5), 10 ** 6.5, rel_tol=1e-9)
+
+
+def test_pareto_front():
+    pts = [(1.0, 0.5, "a"), (2.0, 0.6, "b"), (2.0, 0.3, "c"), (4.0, 0.3, "d"), (8.0, 0.1, "e")]
+    assert [lab for _c, _e, lab in tables._pareto(pts)] == ["a", "c", "e"]
+
+
+def test_equal_error_cost_follows_the_work_order():
+    """Wall time (or cycles) at equal error: interpolated between the same bracketing points."""
+    g = pd.DataFrame({"ops.total": [1e6, 1e7, 1e8], "ops.interp": [0, 0, 0], "ops.segments": [0, 0, 0],
+                      "metric.rmse": [0.1, 0.01, 0.001], "time.wall_s": [0.1, 1.0, 10.0]})
+    assert math.isclose(tables._interp_work(g, 10 ** -1.5, tables._wall), 10 ** -0.5, rel_tol=1e-9)

@@ -3,6 +3,7 @@ satisfy them (and that this environment was installed from), the version on the 
 the licence and citation files. `make test-install` installs a built wheel into fresh 3.12/3.13 venvs."""
 from __future__ import annotations
 
+import os
 import re
 import subprocess
 import sys
@@ -19,9 +20,14 @@ REPO = Path(__file__).resolve().parents[1]
 PYPROJECT = tomllib.loads((REPO / "pyproject.toml").read_text())
 
 
-def _pins() -> dict[str, str]:
+# The constraints file this environment was installed from: constraints.txt for `make install`,
+# constraints-lowest.txt for `make test-lowest` (which sets RAST5D_CONSTRAINTS).
+CONSTRAINTS = os.environ.get("RAST5D_CONSTRAINTS", "constraints.txt")
+
+
+def _pins(name: str = "constraints.txt") -> dict[str, str]:
     pins = {}
-    for line in (REPO / "constraints.txt").read_text().splitlines():
+    for line in (REPO / name).read_text().splitlines():
         line = line.split("#")[0].strip()
         if line:
             name, _, pinned = line.partition("==")
@@ -55,9 +61,28 @@ def test_dependencies_are_ranges_pinned_in_constraints():
         assert req.specifier.contains(pins[name]), f"constraints.txt pins {req.name}=={pins[name]} outside {req}"
 
 
+@pytest.mark.parametrize("name", ["constraints.txt", "constraints-lowest.txt"])
+def test_constraint_files_pin_every_dependency_inside_its_range(name):
+    """Both constraint files pin every direct dependency inside its range; constraints-lowest.txt
+    pins each at the lower end of its range (the release the `>=` bound names, or its first patch)."""
+    from packaging.version import Version
+
+    pins = _pins(name)
+    for req in _requirements():
+        pinned = pins.get(_norm(req.name))
+        assert pinned is not None, f"{name}: no pin for {req.name}"
+        assert req.specifier.contains(pinned), f"{name} pins {req.name}=={pinned} outside {req}"
+        if name == "constraints-lowest.txt":
+            low = [Version(s.version) for s in req.specifier if s.operator == ">="]
+            assert low, f"{req.name}: no lower bound in {req}"
+            got = Version(pinned).release
+            assert got[: len(low[0].release)] == low[0].release, f"{name} pins {req.name}=={pinned}, not the lower end of {req}"
+
+
 def test_environment_installed_from_constraints():
-    """make install uses constraints.txt: each direct dependency here is the pinned version."""
-    pins = _pins()
+    """make install uses constraints.txt (make test-lowest constraints-lowest.txt): each direct
+    dependency here is the pinned version."""
+    pins = _pins(CONSTRAINTS)
     for req in _requirements():
         assert version(req.name) == pins[_norm(req.name)], req.name
 

@@ -417,17 +417,21 @@ def _fit_alpha(x, y):
 
 
 def _families(sub):
-    """(family name, rows) of the methods whose error falls with work: points per (kind, algorithm)
-    and lines (no LoD, no clip)."""
+    """(family name, rows) of the methods whose error falls with work: points per (kind, algorithm),
+    lines, lines with the tile clip, each with level of detail off and (where swept) on."""
     out = []
-    no_lod = sub[~_on(sub, "pipeline.lod.enabled")]
-    pts = no_lod[no_lod["pipeline.algorithm"] != "lines"]
-    for (kind, algo), g in pts.groupby(["samples.kind", "pipeline.algorithm"]):
-        if g["samples.spp"].nunique() >= 2:
-            out.append((f"points {kind} / {algo}", g))
-    ln = no_lod[(no_lod["pipeline.algorithm"] == "lines").to_numpy() & ~_on(no_lod, "pipeline.lines.tile_clip")]
-    if len(ln) >= 2:
-        out.append(("lines", ln))
+    for lod in (False, True):
+        part = sub[_on(sub, "pipeline.lod.enabled") == lod]
+        tag = " +LoD" if lod else ""
+        pts = part[part["pipeline.algorithm"] != "lines"]
+        for (kind, algo), g in pts.groupby(["samples.kind", "pipeline.algorithm"]):
+            if g["samples.spp"].nunique() >= 2:
+                out.append((f"points {kind} / {algo}{tag}", g))
+        is_line = (part["pipeline.algorithm"] == "lines").to_numpy()
+        for clip in (False, True):
+            ln = part[is_line & (_on(part, "pipeline.lines.tile_clip") == clip)]
+            if len(ln) >= 2:
+                out.append((f"lines{' clip' if clip else ''}{tag}", ln))
     return out
 
 
@@ -463,10 +467,13 @@ def methods_alpha(df, config) -> list[str]:
     return md_table(["scene", "CoC", "method family", "alpha (RMSE ∝ ops^-alpha)", "95% CI", "points"], rows)
 
 
-def _interp_work(g, target):
-    """Work a point-sample family needs to reach RMSE `target` (log-log interpolation between the two
-    bracketing points; extrapolated along the last segment), or nan."""
-    pts = sorted(((_work(r), float(r["metric.rmse"])) for _, r in g.iterrows()), key=lambda p: p[0])
+def _interp_work(g, target, cost=None):
+    """Work (or another cost, `cost(row)`, e.g. wall time) a point-sample family needs to reach RMSE
+    `target` (log-log interpolation between the two bracketing points, ordered by work; extrapolated
+    along the last segment), or nan."""
+    cost = cost or _work
+    pts = sorted(((_work(r), float(r["metric.rmse"]), float(cost(r))) for _, r in g.iterrows()), key=lambda p: p[0])
+    pts = [(c, e) for _w, e, c in pts]
     if len(pts) < 2:
         return math.nan
     for (w0, e0), (w1, e1) in zip(pts, pts[1:]):
@@ -478,36 +485,83 @@ def _interp_work(g, target):
     return math.nan
 
 
+def _wall(r) -> float:
+    return float(r["time.wall_s"])
+
+
+def _cycles(r) -> float:
+    return float(r.get("timing.cycles", math.nan))
+
+
 @named_table("methods_claim")
 def methods_claim(df, config) -> list[str]:
-    """004's claim, 16 lines against 256 points (4-5x faster at better quality), on our scenes."""
+    """004's claim, 16 lines against 256 points (4-5x faster at better quality), on our scenes: the
+    ratios at 256 points, and at equal RMSE (the work, cycles and wall time the point family needs to
+    reach the 16 lines' RMSE, interpolated along its spp sweep) against `tile` and `bruteforce`."""
     df = _ok(df)
     rows = []
     for s in _scenes(df):
         for coc in sorted(df[df["scene.name"] == s]["camera.coc_px"].unique()):
             sub = df[(df["scene.name"] == s) & (df["camera.coc_px"] == coc)
                      & ~_on(df, "pipeline.lod.enabled")]
-            ln = sub[(sub["pipeline.algorithm"] == "lines").to_numpy() & (np.asarray(_col(sub, "samples.n_lines"), float) == 16)
-                     & ~_on(sub, "pipeline.lines.tile_clip")]
+            is16 = (sub["pipeline.algorithm"] == "lines").to_numpy() & (np.asarray(_col(sub, "samples.n_lines"), float) == 16)
+            ln = sub[is16 & ~_on(sub, "pipeline.lines.tile_clip")]
+            lc = sub[is16 & _on(sub, "pipeline.lines.tile_clip")]
             tile = sub[(sub["pipeline.algorithm"] == "tile") & (sub["samples.kind"] == "stratified")]
             bf = sub[(sub["pipeline.algorithm"] == "bruteforce") & (sub["samples.kind"] == "stratified")]
             p256 = tile[tile["samples.spp"] == 256]
+            b256 = bf[bf["samples.spp"] == 256]
             if not len(ln) or not len(p256):
                 continue
             l, p = ln.iloc[0], p256.iloc[0]
-            lw, pw = _work(l), _work(p)
-            eq = _interp_work(tile, float(l["metric.rmse"]))
-            # BRUTEFORCE's work is linear in spp (its sample loop): scale its 16-spp point to 256.
-            bf256 = _work(bf[bf["samples.spp"] == 16].iloc[0]) * 16 if len(bf[bf["samples.spp"] == 16]) else math.nan
-            rows.append([s, f"{coc:g}", f"{float(l['metric.rmse']):.4f}", f"{float(p['metric.rmse']):.4f}",
-                         f"{pw / lw:.2f}", f"{bf256 / lw:.2f}", f"{eq / lw:.2f}",
-                         f"{float(p['time.wall_s']) / float(l['time.wall_s']):.2f}",
+            c = lc.iloc[0] if len(lc) else None
+            lw, target = _work(l), float(l["metric.rmse"])
+            bf256 = _work(b256.iloc[0]) if len(b256) else math.nan
+
+            def ratio(g, cost, of=l):
+                return f"{_interp_work(g, target, cost) / cost(of):.2f}" if len(g) >= 2 else ""
+
+            rows.append([s, f"{coc:g}", f"{target:.4f}", f"{float(p['metric.rmse']):.4f}",
+                         f"{_work(p) / lw:.2f}", f"{bf256 / lw:.2f}",
+                         ratio(tile, _work), ratio(tile, _work, c) if c is not None else "",
+                         ratio(tile, _cycles), ratio(tile, _wall),
+                         ratio(bf, _work), ratio(bf, _wall),
                          fmt(l.get("metric.flip", math.nan), "{:.4f}"), fmt(p.get("metric.flip", math.nan), "{:.4f}")])
     rows.append(["**004 (GTX 580, 6 scenes)**", "", "lower noise", "", "", "4-5 (fps, naive point sampler)", "",
-                 "4.2-4.8", "", ""])
+                 "", "", "4.2-4.8 (fps)", "", "", "", ""])
     return md_table(["scene", "CoC", "RMSE 16 lines", "RMSE 256 pts", "ops 256 pts (tile) / 16 lines",
-                     "ops 256 pts (bruteforce) / 16 lines", "ops at equal RMSE (tile) / 16 lines",
-                     "wall 256 pts (tile) / 16 lines", "FLIP 16 lines", "FLIP 256 pts"], rows)
+                     "ops 256 pts (bruteforce) / 16 lines", "equal RMSE: ops tile / lines",
+                     "equal RMSE: ops tile / lines clip", "equal RMSE: est. cycles tile / lines",
+                     "equal RMSE: wall tile / lines", "equal RMSE: ops bruteforce / lines",
+                     "equal RMSE: wall bruteforce / lines", "FLIP 16 lines", "FLIP 256 pts"], rows)
+
+
+def _pareto(points):
+    """The Pareto front of (cost, error, label) triples: no other point is both cheaper and better."""
+    front, best = [], math.inf
+    for c, e, lab in sorted(points, key=lambda p: (p[0], p[1])):
+        if e < best:
+            front.append((c, e, lab))
+            best = e
+    return front
+
+
+@named_table("methods_pareto")
+def methods_pareto(df, config) -> list[str]:
+    """The Pareto fronts (RMSE against all counted operations and against wall time) per scene and
+    CoC: the methods on the front, cheapest first, with their RMSE."""
+    df = _ok(df).dropna(subset=["metric.rmse"])
+    rows = []
+    for s in _scenes(df):
+        for coc in sorted(df[df["scene.name"] == s]["camera.coc_px"].unique()):
+            sub = df[(df["scene.name"] == s) & (df["camera.coc_px"] == coc)]
+            for axis, cost in (("ops (all)", _work), ("wall", _wall)):
+                pts = [(cost(r), float(r["metric.rmse"]), method_label(r)) for _, r in sub.iterrows()]
+                front = _pareto(pts)
+                n_lines = sum(lab.startswith("lines") for _c, _e, lab in front)
+                rows.append([s, f"{coc:g}", axis, f"{n_lines} / {len(front)}",
+                             "; ".join(f"{lab} ({e:.4f})" for _c, e, lab in front)])
+    return md_table(["scene", "CoC", "cost", "lines on the front", "front, cheapest first (RMSE)"], rows)
 
 
 @named_table("methods_lod")

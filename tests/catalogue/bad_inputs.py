@@ -401,6 +401,62 @@ def texture_odd_size(d):
     assert r.flat_stats["raster.samples_hit"] > 0
 
 
+
+def _lines_table():
+    return _sim().SampleTable.lines(n_lines=4, seed=1)
+
+
+@case("Python API", "a line-sample table (SampleTable.lines) with a point-sample algorithm", "ConfigError",
+      r"algorithm: a line-sample table \(SampleTable\.lines\) needs algorithm 'lines', got 'bruteforce'",
+      "the table, the algorithm it needs and the one given")
+def lines_table_point_algorithm(d):
+    _render(table=_lines_table())
+
+
+@case("Python API", "algorithm 'lines' with a point-sample table", "ConfigError",
+      r"algorithm: 'lines' needs a line-sample table .* got a stratified point-sample table",
+      "the algorithm, the table it needs and the one given")
+def lines_algorithm_point_table(d):
+    _render(config=_sim().PipelineConfig(algorithm="lines"))
+
+
+@case("Python API", "algorithm 'lines' on a moving scene (positions_t1 differs)", "ConfigError",
+      r"algorithm: 'lines' renders static scenes only .* motion blur needs point samples",
+      "the algorithm, the moving positions and what to use instead")
+def lines_motion_blur(d):
+    _render(_Arrays(_tri(), _tri() + [0.1, 0.0, 0.0]), table=_lines_table(),
+            config=_sim().PipelineConfig(algorithm="lines"))
+
+
+@case("Python API", "algorithm 'lines' on a textured render (texture_count 1)", "ConfigError",
+      r"texture_count: texturing is not modelled for line samples \(algorithm 'lines'\); use 0",
+      "the parameter, the algorithm and the value to use (the scene's vertex colours then shade it)")
+def lines_texture(d):
+    import models
+
+    sim = _sim()
+    uv = np.array([[[0, 0], [1, 0], [0.5, 1]]], np.float64)
+    scene = models.Scene.from_arrays(_tri(), uvs=uv, texture=np.full((4, 4, 3), 0.5, np.float32))
+    _render(scene, table=_lines_table(), config=sim.PipelineConfig(algorithm="lines", texture_count=1))
+
+
+@case("Python API", "algorithm 'lines' with a shading mode (shading: msaa)", "ConfigError",
+      r"shading: line samples shade each segment once at its midpoint.*use 'none' with algorithm 'lines'",
+      "the parameter, why and the value to use")
+def lines_shading(d):
+    _render(table=_lines_table(), config=_sim().PipelineConfig(algorithm="lines", shading="msaa"))
+
+
+@case("Python API", "line samples whose segment buffers exceed the memory limit (64 lines, 4096-segment buffers)",
+      "ConfigError", r"memory: estimated .* largest: segment buffers \(threads x bin_size\^2 x n_lines x buffer_size\)"
+      r".*n_lines and pipeline\.lines\.buffer_size",
+      "the estimate, the segment buffers as the largest part and the two settings to lower")
+def lines_memory(d):
+    sim = _sim()
+    config = sim.PipelineConfig(algorithm="lines", threads=2, bin_size=512, lines={"buffer_size": 4096})
+    _render(camera=sim.Camera(width=512, height=512, coc_px=2), table=sim.SampleTable.lines(n_lines=64, seed=1),
+            config=config)
+
 # ---- bindings (sim._core, raw arrays) ------------------------------------------------------------------
 
 @case("bindings", "_core.render with v0 of shape (1, 3, 4)", "ValueError", r"v0: unexpected shape \(1, 3, 4\)",

@@ -42,6 +42,19 @@ def algorithms() -> tuple[tuple[str, ...], tuple[str, ...]]:
     return (tuple(n for n in names if n not in interleaved), tuple(n for n in names if n in interleaved))
 
 
+@functools.cache
+def line_algorithms() -> tuple[str, ...]:
+    """The line-sample algorithms (sim.line_algorithms()): they render SampleTable.lines tables."""
+    import sim
+
+    return tuple(sim.line_algorithms())
+
+
+# Line-sample cases: static scenes (line samples do not model motion blur) and their CoCs
+# (modern_hall's 30k triangles at CoC 50 would take half a minute).
+LINE_SCENES = {"spot": (0.0, 10.0, 50.0), "modern_hall": (0.0, 10.0), "focus_crossing": (0.0, 10.0, 50.0)}
+
+
 # Variants: the scene column reads "<scene>+<variant>" and the variant adds pipeline settings.
 VARIANTS = {
     "splits4": {"time_splits": 4},
@@ -58,7 +71,14 @@ VARIANTS = {
     "cache_tex": {"shading": "cache", "texture_count": 2, "texture_layout": "morton"},
     # the hardware operation-cost model (fixed-point affine edge functions)
     "hardware": {"cost_model": "hardware"},
+    # moving triangles: the H5 planes (with and without the selective oracle), t̂ without lens sets
+    "h5": {"halfspace": {"h": True, "H": True, "H5": True}},
+    "h5_all_edges": {"halfspace": {"h": True, "H": True, "H5": True}, "selective_H": False},
+    "h5_splits4": {"halfspace": {"h": True, "H": True, "H5": True}, "time_splits": 4},
+    "no_lens_sets": {"halfspace": {"h": False, "H": True}},
 }
+# Variants of the line-sample cases only: the tile's h_i lens region clips the lines.
+LINE_VARIANTS = {"tile_clip": {"lines": {"tile_clip": True}}}
 # Timing-model figures kept in the golden file (rounded to whole clocks), so a change to the timing
 # model or to the work it is fed shows up in review like an operation count.
 TIMING_FIGURES = ("timing.cycles",)
@@ -75,6 +95,8 @@ class Case:
 
     @property
     def table(self) -> str:
+        if self.algorithm in line_algorithms():
+            return "lines"  # the spp column holds n_lines
         return "interleaved64" if self.algorithm in algorithms()[1] else "stratified"
 
     def key(self) -> tuple:
@@ -107,6 +129,12 @@ def cases() -> list[Case]:
         for coc in (0.0, 10.0):
             out.append(Case("bunny+hardware", algorithm, coc))
     out.append(Case("moving_quads+hardware", "tile", 10.0))
+    for algorithm in line_algorithms():  # line samples: n_lines x CoC, with and without the tile clip
+        for scene, cocs in LINE_SCENES.items():
+            for n_lines in (4, 16):
+                for coc in cocs:
+                    for variant in ("", "+tile_clip"):
+                        out.append(Case(scene + variant, algorithm, coc, spp=n_lines))
     return out
 
 
@@ -127,12 +155,14 @@ def compute(case: Case) -> dict[str, int]:
     w, h = spec["size"]
     camera = sim.Camera(width=w, height=h, fov_y_deg=hint.get("fov_y_deg", 45.0),
                         focus_distance=hint["focus_distance"], coc_px=case.coc)
-    if case.table == "stratified":
+    if case.table == "lines":
+        table = sim.SampleTable.lines(n_lines=case.spp, seed=7)
+    elif case.table == "stratified":
         table = sim.SampleTable.stratified(spp=case.spp, seed=7)
     else:
         table = sim.SampleTable.interleaved(spp=case.spp, n_lens=64, seed=7)
     config = sim.PipelineConfig(algorithm=case.algorithm, tile_size=case.tile, lens_grid=case.grid, threads=2,
-                                count_optimal=True, **VARIANTS.get(variant, {}))
+                                count_optimal=True, **{**VARIANTS, **LINE_VARIANTS}.get(variant, {}))
     result = sim.render(scene, camera, table, config)
     raw = set(sim._core.counter_docs())
     out = {k: int(v) for k, v in result.flat_stats.items() if k in raw}

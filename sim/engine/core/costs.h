@@ -45,6 +45,38 @@ inline constexpr std::uint64_t kBoxBoundsAxisPoint = 1;
 inline constexpr std::uint64_t kBoxBoundsAxisBox = 2;
 // LAINE's per-sample lens-region test against an empty region (u_min > u_max): 4 CMP that fail.
 inline constexpr std::uint64_t kSampleRegionEmpty = 4;
+// H5: H_j lines extended to time for moving triangles (tiletest/halfspace_5d.h).
+// Setup per sub-interval with every vertex in front: 2 MUL (K F); per edge 2 x the 7 constants
+// (Q 6, d 3, a0 2, a1 1, b0 2, b1 1), Δq and Δr 6 SUB, Q2 = Δq x Δr 6, 2 MUL, 7 SUB (f1 - f0).
+inline constexpr std::uint64_t kH5EdgeFields = 15;
+inline constexpr std::uint64_t kH5SubEdges = 2 + 3 * (2 * kH5EdgeFields + 6 + 6 + 2 + 7);  // 155
+// Orientation per lens corner (4 with a lens, 1 without): shear 12 MADD (lens only), 8 det (9
+// each), 4 ADD (Bernstein sums), 3 ADD + 2 MUL (margin), 8 CMP.
+inline constexpr std::uint64_t kH5OrientCorner = 72 + 4 + 5 + 8;
+inline constexpr std::uint64_t kH5SubSetup5D = kH5SubEdges + 4 * (12 + kH5OrientCorner);  // 559
+inline constexpr std::uint64_t kH5SubSetup3D = kH5SubEdges + kH5OrientCorner;             // 244
+// Selective oracle per sub-interval (001 Eq. 15 and 13): mid vertices 3 x (3 x (ADD + MUL) + RCP +
+// 2 MUL), budget MUL, per edge 2 SUB, 3 MUL, CMP.
+inline constexpr std::uint64_t kH5Oracle = 3 * 9 + 1 + 3 * 6;  // 46
+// Per (tile, sub-interval): s_lo, s_hi 2 MADD, SUB, 2 MUL (remainder factor), 2 SUB (s - 1).
+inline constexpr std::uint64_t kH5TileBase = 7;
+// Per edge: the constants at both ends of t̂_k, 2 MADD each (5D: 7 constants, 3D: cx, cy, c0).
+inline constexpr std::uint64_t kH5EdgeEnds5D = 2 * 7 * 2;  // 28
+inline constexpr std::uint64_t kH5EdgeEnds3D = 2 * 3 * 2;  // 12
+// Per corner: C2 2 MADD, ρ (5D: 2 ADD + MUL; 3D: MUL); per end the line (5D: 4 MADD + MADD for
+// σ C + ρ; 3D: 2 MADD + MADD + CMP).
+inline constexpr std::uint64_t kH5Corner5D = 2 + 3 + 2 * 5;  // 15
+inline constexpr std::uint64_t kH5Corner3D = 2 + 1 + 2 * 4;  // 11
+// Per corner line and end: the box pre-test over the cells' rectangle (2 CMP signs, 4 MADD, 2 CMP);
+// lines that straddle the box then cost line_cells_cost (tiletest/halfspace_edges.h).
+inline constexpr std::uint64_t kH5LineBox = 8;
+// Per edge: the first corner, from the signs of Q_x and Q_y at the lens centre (2 CMP).
+inline constexpr std::uint64_t kH5CornerOrder = 2;
+// Per edge: the support corner, the signs of the corner gradient (b1 v + cx, a1 u + cy) over the
+// lens rectangle and t̂_k: 5D 8 MADD, 6 MIN + 6 MAX, 2 MUL (s^2 terms), 4 CMP; 3D 2 MIN + 2 MAX,
+// 2 MUL, 4 CMP.
+inline constexpr std::uint64_t kH5Support5D = 8 + 12 + 2 + 4;  // 26
+inline constexpr std::uint64_t kH5Support3D = 4 + 2 + 4;       // 10
 
 // ---- time intervals t̂ and the clip box (intervals/time_interval.h, intervals/clip.h) ----
 inline constexpr std::uint64_t kFormCull = 7;  // SUB, RCP, MUL, 2 CMP, MAX, MIN

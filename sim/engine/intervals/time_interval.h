@@ -207,10 +207,12 @@ struct TileIntervals {
 
 // Per sub-interval: 5D lens sets from the h_i lines of its six end vertices (clipped), then the
 // time interval for the hull of those sets. Tile-stage operations go to ops; the per-class
-// evaluation counters to c. Returns false when every sub-interval is empty.
+// evaluation counters to c. Returns false when every sub-interval is empty. lens_sets = false
+// (tile with halfspace.h off): no h_i lines, t̂ for the whole lens (the clip box still applies).
 template <class A>
 inline bool motion_tile_intervals(const MotionSetup& ms, const ClipBox& clip, DimClass cls, double x0, double x1,
-                                  double y0, double y1, TileIntervals& ti, std::uint64_t& ops, Counters& c) {
+                                  double y0, double y1, TileIntervals& ti, std::uint64_t& ops, Counters& c,
+                                  bool lens_sets = true) {
   ti.n_active = 0;
   ti.u0 = ti.v0 = ti.t0 = kInfD;
   ti.u1 = ti.v1 = ti.t1 = -kInfD;
@@ -223,7 +225,7 @@ inline bool motion_tile_intervals(const MotionSetup& ms, const ClipBox& clip, Di
     sx = tiletest::full_axis(), sy = tiletest::full_axis();
     if (ms.lens) {
       ++c[is5 ? Counter::interval_lens_tests_5d : Counter::interval_lens_tests_3d];
-      if (si.lens_ok) tiletest::tile_h_sets<A>(si.lv, si.n_lv, x0, x1, y0, y1, sx, sy, ops);  // empty sets: caught below
+      if (si.lens_ok && lens_sets) tiletest::tile_h_sets<A>(si.lv, si.n_lv, x0, x1, y0, y1, sx, sy, ops);  // empty sets: caught below
       if (!clip_lens<A>(clip, sx, sy, ops) || sx.empty || sy.empty) continue;
     }
     const double u0 = ms.lens ? sx.iv_lo[0] : 0.0, u1 = ms.lens ? sx.iv_hi[sx.n_intervals - 1] : 0.0;

@@ -67,7 +67,10 @@ TileWork work_from_counters(const Counters& c) {
   w.gs_floats = d(Counter::gpu_gs_floats);
   w.raster_pixels = d(Counter::gpu_raster_pixels_tested);
   w.ps_ops = d(Counter::gpu_ps_ops);
-  w.depth_tests = d(Counter::depth_tests);
+  // Line samples: a segment offered to its line's buffer and a composite step (the nearest
+  // covering segment of one elementary interval) are one depth-unit item each, as a covered
+  // point sample's depth test is.
+  w.depth_tests = d(Counter::depth_tests) + d(Counter::lines_segments) + d(Counter::lines_composite_steps);
   w.quads = d(Counter::shade_quad_requests);
   w.texel_fetches = d(Counter::tex_fetches) + d(Counter::gpu_perturb_fetches);  // + the GPU's perturbation texture
   // Memory: per-sample depth traffic and HiZ traffic (depth.*, hiz.*). Texture-cache misses and
@@ -172,7 +175,7 @@ TimingResult simulate_timing(const TileWork* records, std::size_t n, const Timin
 std::vector<TimingFigure> timing_figures() {
   std::vector<TimingFigure> out = {
       {"timing.cycles", "clocks", "Estimated clocks per frame: the last work record leaves the last unit (docs/timing.md)"},
-      {"timing.records", "records", "Work records fed to the timing model (one per triangle and screen bin visited, one per culled triangle)"},
+      {"timing.records", "records", "Work records fed to the timing model (one per triangle and screen bin visited, one per culled triangle, one per bin with end-of-bin work)"},
       {"timing.cores", "pipelines", "Parallel pipelines modelled (hardware.cores); per-unit clocks are summed over them"},
   };
   for (const auto& u : kUnitInfo)

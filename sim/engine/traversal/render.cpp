@@ -335,7 +335,21 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
           if (track_stream_ends)
             bin_stream_ends[b].push_back(static_cast<std::uint32_t>(shade_frame.streams[b].size()));
         }
-        algo->end_bin(r);
+        {
+          // End-of-bin work (the line-sample composite): its own record, after the bin's triangles.
+          const TileWork before = p.record_timing ? work_from_counters(ts.counters) : TileWork{};
+          algo->end_bin(r);
+          if (p.record_timing) {
+            TileWork w = work_from_counters(ts.counters).since(before);
+            w.bin = b;
+            if (w.depth_tests || w.sample_tests || w.tile_tests || w.quads || w.texel_fetches || w.memory_bytes ||
+                w.gs_ops || w.gs_floats || w.raster_pixels || w.ps_ops) {
+              bin_records[b].push_back(w);
+              if (track_stream_ends)
+                bin_stream_ends[b].push_back(static_cast<std::uint32_t>(shade_frame.streams[b].size()));
+            }
+          }
+        }
         ts.shade.close_visit();  // algorithms end their visits; this only guards the contract
         if (ts.cursor) {
           ts.cursor->commit(ts.counters);

@@ -23,6 +23,7 @@
 #include "tiletest/candidates.h"
 #include "tiletest/edges_2d.h"
 #include "tiletest/exact_region.h"
+#include "tiletest/halfspace_5d.h"
 #include "tiletest/halfspace_edges.h"
 #include "tiletest/halfspace_lens.h"
 #include "tiletest/lens_shape.h"
@@ -71,6 +72,10 @@ class Tile final : public Traversal {
     }
     if (tri.moving && f_.p.motion_test == MotionTest::kIntervals && !kInterleaved) {
       iv::motion_setup<A>(tri, f_.fc, f_.p.time_splits, ms_, setup_ops);
+      if (f_.p.halfspace_H5) {  // H5 planes per sub-interval (tiletest/halfspace_5d.h)
+        tiletest::h5_setup<A>(ms_, f_.fc, h5_oracle(tri), h5_, setup_ops);
+        if (charge_setup) c_[Counter::tile_H5_sub_unoriented] += static_cast<std::uint64_t>(h5_.n_unoriented);
+      }
       if (charge_setup) c_[Counter::ops_setup] += setup_ops;
       raster_motion(tri, bin);
       return;
@@ -325,13 +330,14 @@ class Tile final : public Traversal {
       ++c_[Counter::tile_visited];
       const double x0 = tiletest::expand_lo(tx), x1 = tiletest::expand_hi(tx + T);
       const double y0 = tiletest::expand_lo(ty), y1 = tiletest::expand_hi(ty + T);
-      if (!iv::motion_tile_intervals<A>(ms_, clip_, tri.cls, x0, x1, y0, y1, ti, c_[Counter::ops_tile], c_)) {
+      if (!iv::motion_tile_intervals<A>(ms_, clip_, tri.cls, x0, x1, y0, y1, ti, c_[Counter::ops_tile], c_, p.halfspace_h)) {
         ++c_[Counter::interval_culled_t];
         return;
       }
       // Lens cells per active sub-interval (5D: inside its lens sets; 3D: every cell on the lens).
       int n_cells[iv::kMaxSplits];
       int total_cells = 0;
+      bool h5_culled = false;  // H5 removed the last cells of some sub-interval
       for (int k = 0; k < S; ++k) {
         n_cells[k] = 0;
         if (!ti.active[k]) continue;
@@ -342,7 +348,9 @@ class Tile final : public Traversal {
           by = tiletest::axis_cells<D>(ti.sy[k], G);
           charge<A>(c_[Counter::ops_tile], ti.sx[k].n_cmp + ti.sy[k].n_cmp);
         }
-        n_cells[k] = active_cells(bx, by, G, lens_mask_, lens_mask64_).list(list, G);
+        ActiveCells cells = active_cells(bx, by, G, lens_mask_, lens_mask64_);
+        if (p.halfspace_H5 && h5_.sub[k].usable && !cells.none()) h5_cull(k, x0, x1, y0, y1, ti, cells, h5_culled);
+        n_cells[k] = cells.list(list, G);
         total_cells += n_cells[k];
         // Time strata of the table index that overlap t̂_k: samples outside are never touched.
         const D slo = D(ti.tlo[k]) * D(NT), shi = D(ti.thi[k]) * D(NT);
@@ -351,7 +359,7 @@ class Tile final : public Traversal {
         strata_hi_[k] = std::min((k + 1) * per_sub - 1, static_cast<int>(std::floor(raw(shi))));
       }
       if (total_cells == 0) {
-        ++c_[Counter::tile_culled_lens];
+        ++c_[h5_culled ? Counter::tile_culled_H5 : Counter::tile_culled_lens];
         return;
       }
       ++c_[Counter::tile_accepted];
@@ -412,6 +420,38 @@ class Tile final : public Traversal {
     pipe_.flush();
   }
 
+  // The H5 oracle's inputs (selective_H; c_sample as the H_j oracle's, at the triangle's class).
+  tiletest::H5Oracle h5_oracle(const TriSetup& tri) const {
+    const RenderParams& p = f_.p;
+    tiletest::H5Oracle o;
+    o.on = p.selective_H;
+    const int T = p.tile_size;
+    o.n_tiles = static_cast<double>((tri.bx1 - 1) / T - tri.bx0 / T + 1) * static_cast<double>((tri.by1 - 1) / T - tri.by0 / T + 1);
+    o.spp = f_.table.spp();
+    o.c_sample = p.c_sample >= 0 ? p.c_sample : static_cast<double>(sample_test_cost(p.cost_model, tri.cls));
+    o.c_tile = static_cast<double>(tiletest::h5_edge_tile_cost(tri.defocused, p.lens_grid));
+    return o;
+  }
+
+  // H5 hook: remove the lens cells of sub-interval k that its planes cull over t̂_k.
+  void h5_cull(int k, double x0, double x1, double y0, double y1, const iv::TileIntervals& ti, ActiveCells& cells,
+               bool& emptied) {
+    std::uint64_t lines = 0;
+    const tiletest::CellMask culled =
+        tiletest::h5_culled_cells<A>(h5_, k, x0, x1, y0, y1, ti.tlo[k], ti.thi[k], f_.p.lens_grid, cells.i0, cells.i1,
+                                     cells.j0, cells.j1, c_[Counter::ops_tile], lines);
+    c_[Counter::tile_H5_lines] += lines;
+    const std::uint64_t before = cells.small ? static_cast<std::uint64_t>(__builtin_popcountll(cells.bits64)) : cells.bits.count();
+    if (cells.small)
+      cells.bits64 &= ~(culled & low64_).to_ullong();
+    else
+      cells.bits &= ~culled;
+    const std::uint64_t after = cells.small ? static_cast<std::uint64_t>(__builtin_popcountll(cells.bits64)) : cells.bits.count();
+    c_[Counter::tile_H5_cells_tested] += before;
+    c_[Counter::tile_H5_cells_culled] += before - after;
+    emptied |= after == 0;
+  }
+
   const Frame& f_;
   Counters& c_;
   SamplePipeline<A> pipe_;
@@ -427,6 +467,7 @@ class Tile final : public Traversal {
   AxisCache axes_;  // fast path: h_i sets per tile column and row of the current triangle and bin
   const iv::ClipBox clip_ = iv::clip_box(f_.p);
   iv::MotionSetup ms_;
+  tiletest::MotionH5 h5_;
   iv::TileIntervals ti_;
   int strata_lo_[iv::kMaxSplits], strata_hi_[iv::kMaxSplits];
   std::vector<int> cell_lists_ = std::vector<int>(256 * iv::kMaxSplits);
