@@ -52,7 +52,8 @@ class SampleTable {
   float lens_u(int i) const { return lens_u_[i]; }
   float lens_v(int i) const { return lens_v_[i]; }
 
-  PixelSamples pixel(int px, int py) const {
+  // Inlined so that a caller's unused fields cost nothing (it runs once per pixel visit).
+  [[gnu::always_inline]] inline PixelSamples pixel(int px, int py) const {
     const int P = period_;
     // A power-of-two period (the usual tables): a mask, exact for negative coordinates too.
     const int mx = pow2_mask_ >= 0 ? (px & pow2_mask_) : ((px % P) + P) % P;

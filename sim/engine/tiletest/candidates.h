@@ -16,21 +16,25 @@ namespace rast5d::tiletest {
 
 // Fast-path candidate selection for one pixel: flag[s] = sample s is in an active lens cell
 // (bit cell[s] of active, G * G <= 64; kCells = false: every cell) and passes both axis sets.
+// Returns how many samples lie in active cells (the samples whose (u, v) was compared).
 template <bool kCells>
-[[gnu::noinline]] inline void select_candidates(int spp, const float* __restrict u, const float* __restrict v,
+[[gnu::noinline]] inline int select_candidates(int spp, const float* __restrict u, const float* __restrict v,
                                                  const std::uint8_t* __restrict cell, std::uint64_t active,
                                                  const AxisSet& su, const AxisSet& sv,
                                                  std::uint8_t* __restrict flags) {
   const float a0 = su.fl_lo[0], b0 = su.fl_hi[0], a1 = su.fl_lo[1], b1 = su.fl_hi[1];
   const float c0 = sv.fl_lo[0], d0 = sv.fl_hi[0], c1 = sv.fl_lo[1], d1 = sv.fl_hi[1];
+  int in_cells = 0;
   for (int s = 0; s < spp; ++s) {
     const float x = u[s], y = v[s];
     const int in_u = ((x > a0) & (x < b0)) | ((x > a1) & (x < b1));
     const int in_v = ((y > c0) & (y < d0)) | ((y > c1) & (y < d1));
     int act = 1;
     if constexpr (kCells) act = static_cast<int>((active >> cell[s]) & 1u);
+    in_cells += act;
     flags[s] = static_cast<std::uint8_t>(act & (1 - in_u) & (1 - in_v));
   }
+  return in_cells;
 }
 
 // Indices of the set flags, in order (skipping 8 zero flags at a time).

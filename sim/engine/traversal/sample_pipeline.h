@@ -65,8 +65,9 @@ class SamplePipeline {
         model_(f.p.cost_model),
         precise_(f.p.precision_sample.kind != PrecisionKind::kFloat32),
         cur_(ts.cursor) {
-    for (auto* v : {&gx_, &gy_, &gu_, &gv_, &gt_, &bdet_}) v->resize(cap_);
-    for (auto* v : {&bpx_, &bpy_, &bs_, &bl_}) v->resize(cap_);
+    for (auto* v : {&gx_, &gy_, &gu_, &gv_, &gt_, &bdet_}) v->resize(cap_ + kSlack);
+    for (auto* v : {&bpx_, &bpy_, &bs_, &bl_}) v->resize(cap_ + kSlack);
+    sel_index_.resize(cap_);
     be_.resize(3 * static_cast<std::size_t>(cap_));
     flags_.assign(cap_ + 8, 0);
   }
@@ -171,6 +172,54 @@ class SamplePipeline {
     for (int i = 0; i < n_sel; ++i) push(px, py, ps, idx[i]);
   }
 
+  // Fast path: the samples s of pixel (px, py) with sel[s] != 0, where sel holds spp flags followed
+  // by zeros up to a multiple of 16 (flags_padding()). Same results and counts as
+  // push_pixel_masked(): many selected samples go through run_pixel() with the mask; few are
+  // appended to the batch by SIMD compression (no per-sample branch or index list).
+  inline void push_flagged(int px, int py, const PixelSamples& ps, const std::uint8_t* sel) {
+    static_assert(!A::counting, "push_flagged is the fast path's");
+    const int spp = f_.table.spp();
+#if defined(__AVX512F__) && defined(__AVX512BW__)
+    int n_sel = 0;
+    for (int w = 0; w < spp; w += 16) {
+      const __m128i f = _mm_loadu_si128(reinterpret_cast<const __m128i*>(sel + w));
+      n_sel += __builtin_popcount(_mm_test_epi8_mask(f, f));
+    }
+    at_pixel(px, py);
+    if (spp >= 32 && 3 * n_sel >= spp) {
+      run_pixel(px, py, ps, sel, n_sel);
+      return;
+    }
+    if (n_sel == 0) return;
+    if (n_ + spp > cap_) flush();
+    const __m512 fx = _mm512_set1_ps(static_cast<float>(px)), fy = _mm512_set1_ps(static_cast<float>(py));
+    const __m512i vpx = _mm512_set1_epi32(px), vpy = _mm512_set1_epi32(py);
+    const __m512i iota = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+    for (int w = 0; w < spp; w += 16) {
+      const __m128i f = _mm_loadu_si128(reinterpret_cast<const __m128i*>(sel + w));
+      const __mmask16 m = _mm_test_epi8_mask(f, f);
+      if (!m) continue;
+      const int i = n_;  // 16 lanes stored from i: the arrays have kSlack lanes beyond cap_
+      _mm512_storeu_ps(&gx_[i], _mm512_maskz_compress_ps(m, _mm512_add_ps(fx, _mm512_maskz_loadu_ps(m, ps.x + w))));
+      _mm512_storeu_ps(&gy_[i], _mm512_maskz_compress_ps(m, _mm512_add_ps(fy, _mm512_maskz_loadu_ps(m, ps.y + w))));
+      _mm512_storeu_ps(&gu_[i], _mm512_maskz_compress_ps(m, _mm512_maskz_loadu_ps(m, ps.u + w)));
+      _mm512_storeu_ps(&gv_[i], _mm512_maskz_compress_ps(m, _mm512_maskz_loadu_ps(m, ps.v + w)));
+      _mm512_storeu_ps(&gt_[i], _mm512_maskz_compress_ps(m, _mm512_maskz_loadu_ps(m, ps.t + w)));
+      _mm512_storeu_si512(&bpx_[i], vpx);
+      _mm512_storeu_si512(&bpy_[i], vpy);
+      _mm512_storeu_si512(&bs_[i], _mm512_maskz_compress_epi32(m, _mm512_add_epi32(iota, _mm512_set1_epi32(w))));
+      if (stride_)
+        _mm512_storeu_si512(&bl_[i], _mm512_maskz_compress_epi32(m, _mm512_maskz_loadu_epi32(m, ps.lens_index + w)));
+      n_ += __builtin_popcount(m);
+    }
+#else
+    const int n_sel = compact_index(sel, spp);
+    push_pixel_masked(px, py, ps, sel, sel_index_.data(), n_sel);
+#endif
+  }
+  // sel arrays for push_flagged(): spp flags and this many more, zero.
+  static constexpr int flags_padding() { return 16; }
+
   // Depth-test switches set by z-culling (backend/zcull.h, backend/sample_backend.h). Flush before
   // changing them: they apply to the samples evaluated by the next flush.
   void set_depth_mode(bool skip_depth_reads, bool query) {
@@ -210,6 +259,22 @@ class SamplePipeline {
       Counter::raster_samples_tested_2d, Counter::raster_samples_tested_3d,
       Counter::raster_samples_tested_4d, Counter::raster_samples_tested_5d};
   static constexpr int kBatch = 1024;  // small enough for the batch to stay in L1/L2
+  static constexpr int kSlack = 16;    // push_flagged() stores whole SIMD vectors past the batch's end
+
+  // Indices of the set flags of sel[0..n) into sel_index_ (tiletest/candidates.h compact_flags).
+  int compact_index(const std::uint8_t* sel, int n) {
+    int m = 0;
+    for (int w = 0; w < n; w += 8) {
+      std::uint64_t word = 0;
+      std::memcpy(&word, sel + w, 8);
+      if (!word) continue;
+      for (int i = w; i < std::min(n, w + 8); ++i) {
+        sel_index_[m] = i;
+        m += sel[i];
+      }
+    }
+    return m;
+  }
 
   void retarget(int x0, int y0, int x1, int y1, int kind) {
     if (cur_->x0 == x0 && cur_->y0 == y0 && cur_->x1 == x1 && cur_->y1 == y1) return;
@@ -455,6 +520,7 @@ class SamplePipeline {
   const PixelSamples* uniform_ps_ = nullptr;
   std::vector<float> gx_, gy_, gu_, gv_, gt_, be_, bdet_;
   std::vector<int> bpx_, bpy_, bs_, bl_;
+  std::vector<int> sel_index_;  // push_flagged() without SIMD compression
   std::vector<std::uint8_t> flags_;
   PixelCursor* cur_;
 };
