@@ -211,8 +211,11 @@ def test_ctrl_c_stops_and_keeps_the_finished_points(tmp_path):
     env = {**os.environ, "RAST5D_RESULTS": str(tmp_path / "results")}
     cfg = write(tmp_path, "slow.yaml", BASE.replace("width: 24, height: 24", "width: 256, height: 256")
                 + "sweep:\n  samples.spp: [1, 2, 4096, 4096, 4096, 4096]\n  samples.seed: [1, 2]\n")
+    # SIGINT as at a terminal: a suite started in the background by a non-interactive shell hands its
+    # children SIGINT ignored, and the sweep would then run to its end (see test_interrupt.py).
     proc = subprocess.Popen([sys.executable, "-m", "experiments.cli", "run", str(cfg), "--workers", "1"],
-                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     points = tmp_path / "results" / "points"
     # Generous waits: on a loaded machine the interpreter start and the first two points can take
     # minutes; what is tested is the state after the signal, not how fast it comes.
