@@ -179,6 +179,12 @@ class SamplePipeline {
   inline void push_flagged(int px, int py, const PixelSamples& ps, const std::uint8_t* sel) {
     static_assert(!A::counting, "push_flagged is the fast path's");
     const int spp = f_.table.spp();
+    if (precise_) [[unlikely]] {  // pipeline.precision.sample not float32: one at a time, as push() does
+      at_pixel(px, py);
+      for (int s = 0; s < spp; ++s)
+        if (sel[s]) push(px, py, ps, s);
+      return;
+    }
 #if defined(__AVX512F__) && defined(__AVX512BW__)
     int n_sel = 0;
     for (int w = 0; w < spp; w += 16) {
