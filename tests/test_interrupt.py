@@ -1,5 +1,4 @@
 """Ctrl-C interrupts a long render promptly (the GIL is released; the engine polls for signals)."""
-import os
 import signal
 import subprocess
 import sys
@@ -27,21 +26,31 @@ except KeyboardInterrupt:
 """
 
 
+def interrupt(proc: subprocess.Popen, ready) -> tuple[str, str, float]:
+    """Call ready() (it waits for, and checks, the child's sign that it is busy), send SIGINT and wait:
+    (stdout, stderr, seconds the child took to stop). The child is killed if it has not ended, so a
+    failed check never leaves a long render running."""
+    try:
+        ready()
+        t0 = time.perf_counter()
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=60)
+        return out, err, time.perf_counter() - t0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+
+
 @pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
 def test_ctrl_c_interrupts_render():
     with subprocess.Popen([sys.executable, "-c", SCRIPT], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                           text=True) as proc:
-        try:
+        def ready():
             assert proc.stdout.readline().strip() == "started"
             time.sleep(1.0)
-            t0 = time.perf_counter()
-            proc.send_signal(signal.SIGINT)
-            out, err = proc.communicate(timeout=60)
-            waited = time.perf_counter() - t0
-        finally:
-            if proc.poll() is None:
-                proc.kill()
-                proc.communicate()
+
+        out, err, waited = interrupt(proc, ready)
     assert "interrupted" in out, (out, err)
     assert proc.returncode == 0, err
     assert waited < 5.0, f"took {waited:.1f} s to stop"

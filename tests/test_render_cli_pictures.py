@@ -2,13 +2,13 @@
 from __future__ import annotations
 
 import os
-import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
+
+from tests.test_interrupt import interrupt
 
 from experiments.cli import main
 
@@ -73,17 +73,11 @@ def test_ctrl_c_with_progress_bar():
             "--set", "pipeline.algorithm=bruteforce", "--progress-delay", "0"]
     with subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT,
                           env={**os.environ, "PYTHONUNBUFFERED": "1"}) as proc:
-        try:
+        def ready():
             line = proc.stderr.readline()
             assert "render [" in line and "bins" in line, line
-            t0 = time.perf_counter()
-            proc.send_signal(signal.SIGINT)
-            out, err = proc.communicate(timeout=60)
-            waited = time.perf_counter() - t0
-        finally:
-            if proc.poll() is None:
-                proc.kill()
-                proc.communicate()
+
+        out, err, waited = interrupt(proc, ready)
     assert proc.returncode == 130, (out, err)
     assert "interrupted" in err
     assert waited < 5.0, f"took {waited:.1f} s to stop"
