@@ -37,6 +37,25 @@ template <bool kCells>
   return in_cells;
 }
 
+// One tile's selection bounds for SamplePipeline::push_selected (the fused fast path): the same
+// active cells (bit c of active) and the same float cut bounds as select_candidates, set up once
+// per tile.
+struct SelectBounds {
+  std::uint64_t active;
+  float a0, b0, a1, b1;  // u cuts (AxisSet::fl_lo / fl_hi)
+  float c0, d0, c1, d1;  // v cuts
+  // Cut k of an axis can flag a sample only if lo < hi (else (x > lo) & (x < hi) is false for
+  // every x, NaN included), so the others are skipped without changing a flag.
+  bool u0, u1, v0, v1;
+
+  void set(std::uint64_t active_cells, const AxisSet& su, const AxisSet& sv) {
+    active = active_cells;
+    a0 = su.fl_lo[0], b0 = su.fl_hi[0], a1 = su.fl_lo[1], b1 = su.fl_hi[1];
+    c0 = sv.fl_lo[0], d0 = sv.fl_hi[0], c1 = sv.fl_lo[1], d1 = sv.fl_hi[1];
+    u0 = a0 < b0, u1 = a1 < b1, v0 = c0 < d0, v1 = c1 < d1;
+  }
+};
+
 // Indices of the set flags, in order (skipping 8 zero flags at a time).
 inline int compact_flags(const std::uint8_t* flags, int n, int* out) {
   int m = 0;

@@ -30,6 +30,7 @@
 #include "sampletest/sample_test.h"
 #include "sampletest/simd_batch.h"
 #include "setup/setup.h"
+#include "tiletest/candidates.h"
 #include "timing/timing.h"
 
 namespace rast5d {
@@ -70,6 +71,7 @@ class SamplePipeline {
     sel_index_.resize(cap_);
     be_.resize(3 * static_cast<std::size_t>(cap_));
     flags_.assign(cap_ + 8, 0);
+    sel_bytes_.assign(64, 0);
   }
 
   // Test canonical sample s of pixel (px, py) against tri with the kernel of tri's class.
@@ -132,6 +134,34 @@ class SamplePipeline {
       bpx_[i] = px, bpy_[i] = py, bs_[i] = s;
       if (stride_) bl_[i] = ps.lens_index[s];
     }
+  }
+  // Samples idx[0..n) of pixel (px, py), in order: push() of each, with the batch bookkeeping
+  // once per list on the fast path.
+  inline void push_list(int px, int py, const PixelSamples& ps, const std::int32_t* idx, int n) {
+    bool one_by_one = A::counting;
+    if constexpr (!A::counting) one_by_one = precise_ || sheared_ || n > cap_;
+    if (one_by_one) {
+      for (int i = 0; i < n; ++i) push(px, py, ps, idx[i]);
+      return;
+    }
+    if (n_ + n > cap_) flush();
+    const int i0 = n_;
+    float* __restrict gx = gx_.data() + i0;
+    float* __restrict gy = gy_.data() + i0;
+    float* __restrict gu = gu_.data() + i0;
+    float* __restrict gv = gv_.data() + i0;
+    float* __restrict gt = gt_.data() + i0;
+    int* __restrict bpx = bpx_.data() + i0;
+    int* __restrict bpy = bpy_.data() + i0;
+    int* __restrict bs = bs_.data() + i0;
+    const float fx = static_cast<float>(px), fy = static_cast<float>(py);
+    for (int i = 0; i < n; ++i) {
+      const int s = idx[i];
+      gx[i] = fx + ps.x[s], gy[i] = fy + ps.y[s];
+      gu[i] = ps.u[s], gv[i] = ps.v[s], gt[i] = ps.t[s];
+      bpx[i] = px, bpy[i] = py, bs[i] = s;
+    }
+    n_ = i0 + n;
   }
   // Every sample of pixel (px, py).
   inline void push_pixel(int px, int py, const PixelSamples& ps) {
@@ -223,6 +253,98 @@ class SamplePipeline {
     push_pixel_masked(px, py, ps, sel, sel_index_.data(), n_sel);
 #endif
   }
+#if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512VBMI__)
+  static constexpr bool kFusedSelect = true;
+#else
+  static constexpr bool kFusedSelect = false;
+#endif
+  // Fast path, fused (kFusedSelect builds, spp <= 64): tiletest::select_candidates<true> and
+  // push_flagged() of pixel (px, py) in one pass, without the flag bytes in between. The cell
+  // test is a byte permute of the tile's active cells (b.active as 64 bytes), the cut tests the same ordered
+  // float compares as select_candidates (lanes outside active cells are not compared: their flag
+  // is 0 either way). Same samples pushed, same results and counts. Returns how many samples lie
+  // in active cells (select_candidates' return).
+  [[gnu::always_inline]] inline int push_selected(int px, int py, const PixelSamples& ps,
+                                                  const tiletest::SelectBounds& b) {
+    static_assert(!A::counting, "push_selected is the fast path's");
+#if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512VBMI__)
+    const int spp = f_.table.spp();
+    const std::uint64_t tail = spp >= 64 ? ~std::uint64_t(0) : ((std::uint64_t(1) << spp) - 1);
+    const __m512i cells = _mm512_maskz_loadu_epi8(tail, ps.cell);
+    const __m512i act_bytes = _mm512_permutexvar_epi8(cells, _mm512_maskz_set1_epi8(b.active, 1));
+    const std::uint64_t act = _mm512_test_epi8_mask(act_bytes, act_bytes) & tail;
+    const int in_cells = __builtin_popcountll(act);
+    // Every group of 16 is compared (no data-dependent branch: at a few selected samples per pixel
+    // the branches would mispredict); the per-tile cut switches are predictable.
+    const __m512 a0 = _mm512_set1_ps(b.a0), b0 = _mm512_set1_ps(b.b0), a1 = _mm512_set1_ps(b.a1),
+                 b1 = _mm512_set1_ps(b.b1), c0 = _mm512_set1_ps(b.c0), d0 = _mm512_set1_ps(b.d0),
+                 c1 = _mm512_set1_ps(b.c1), d1 = _mm512_set1_ps(b.d1);
+    std::uint64_t sel = 0;
+    for (int w = 0; w < spp; w += 16) {
+      const __mmask16 lanes = static_cast<__mmask16>(tail >> w);
+      __mmask16 keep = static_cast<__mmask16>(act >> w);
+      const __m512 u = _mm512_maskz_loadu_ps(lanes, ps.u + w);
+      const __m512 v = _mm512_maskz_loadu_ps(lanes, ps.v + w);
+      if (b.u0) keep &= ~_mm512_mask_cmp_ps_mask(_mm512_cmp_ps_mask(u, a0, _CMP_GT_OQ), u, b0, _CMP_LT_OQ);
+      if (b.u1) keep &= ~_mm512_mask_cmp_ps_mask(_mm512_cmp_ps_mask(u, a1, _CMP_GT_OQ), u, b1, _CMP_LT_OQ);
+      if (b.v0) keep &= ~_mm512_mask_cmp_ps_mask(_mm512_cmp_ps_mask(v, c0, _CMP_GT_OQ), v, d0, _CMP_LT_OQ);
+      if (b.v1) keep &= ~_mm512_mask_cmp_ps_mask(_mm512_cmp_ps_mask(v, c1, _CMP_GT_OQ), v, d1, _CMP_LT_OQ);
+      sel |= static_cast<std::uint64_t>(keep) << w;
+    }
+    const int n_sel = __builtin_popcountll(sel);
+    at_pixel(px, py);
+    if (n_sel == 0) return in_cells;
+    if (precise_ || (spp >= 32 && 3 * n_sel >= spp)) [[unlikely]] {  // through the byte flags
+      _mm512_storeu_si512(sel_bytes_.data(), _mm512_maskz_set1_epi8(sel, 1));
+      if (precise_) {
+        for (int s = 0; s < spp; ++s)
+          if (sel_bytes_[s]) push(px, py, ps, s);
+      } else {
+        run_pixel(px, py, ps, sel_bytes_.data(), n_sel);
+      }
+      return in_cells;
+    }
+    if (n_ + spp > cap_) flush();
+    int n = n_;  // 16 lanes stored from n: the arrays have kSlack lanes beyond cap_
+    float* __restrict gx = gx_.data();
+    float* __restrict gy = gy_.data();
+    float* __restrict gu = gu_.data();
+    float* __restrict gv = gv_.data();
+    float* __restrict gt = gt_.data();
+    int* __restrict bpx = bpx_.data();
+    int* __restrict bpy = bpy_.data();
+    int* __restrict bs = bs_.data();
+    const __m512 fx = _mm512_set1_ps(static_cast<float>(px)), fy = _mm512_set1_ps(static_cast<float>(py));
+    const __m512i vpx = _mm512_set1_epi32(px), vpy = _mm512_set1_epi32(py);
+    const __m512i iota = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+    // The groups of 16 holding selected samples, lowest first (one loop exit to predict, not one
+    // branch per group).
+    unsigned groups = 0;
+    for (int g = 0; g < 4; ++g) groups |= static_cast<unsigned>(((sel >> (16 * g)) & 0xffffu) != 0) << g;
+    for (; groups; groups &= groups - 1) {
+      const int w = 16 * __builtin_ctz(groups);
+      const __mmask16 m = static_cast<__mmask16>(sel >> w);
+      _mm512_storeu_ps(gx + n, _mm512_maskz_compress_ps(m, _mm512_add_ps(fx, _mm512_maskz_loadu_ps(m, ps.x + w))));
+      _mm512_storeu_ps(gy + n, _mm512_maskz_compress_ps(m, _mm512_add_ps(fy, _mm512_maskz_loadu_ps(m, ps.y + w))));
+      _mm512_storeu_ps(gu + n, _mm512_maskz_compress_ps(m, _mm512_maskz_loadu_ps(m, ps.u + w)));
+      _mm512_storeu_ps(gv + n, _mm512_maskz_compress_ps(m, _mm512_maskz_loadu_ps(m, ps.v + w)));
+      _mm512_storeu_ps(gt + n, _mm512_maskz_compress_ps(m, _mm512_maskz_loadu_ps(m, ps.t + w)));
+      _mm512_storeu_si512(bpx + n, vpx);
+      _mm512_storeu_si512(bpy + n, vpy);
+      _mm512_storeu_si512(bs + n, _mm512_maskz_compress_epi32(m, _mm512_add_epi32(iota, _mm512_set1_epi32(w))));
+      if (stride_)
+        _mm512_storeu_si512(bl_.data() + n,
+                            _mm512_maskz_compress_epi32(m, _mm512_maskz_loadu_epi32(m, ps.lens_index + w)));
+      n += __builtin_popcount(m);
+    }
+    n_ = n;
+    return in_cells;
+#else
+    (void)px, (void)py, (void)ps, (void)b;
+    return 0;  // not compiled in (kFusedSelect false): callers take select_candidates + push_flagged
+#endif
+  }
+
   // sel arrays for push_flagged(): spp flags and this many more, zero.
   static constexpr int flags_padding() { return 16; }
 
@@ -527,6 +649,7 @@ class SamplePipeline {
   std::vector<float> gx_, gy_, gu_, gv_, gt_, be_, bdet_;
   std::vector<int> bpx_, bpy_, bs_, bl_;
   std::vector<int> sel_index_;  // push_flagged() without SIMD compression
+  std::vector<std::uint8_t> sel_bytes_;  // push_selected(): one pixel's flags, when they are needed
   std::vector<std::uint8_t> flags_;
   PixelCursor* cur_;
 };

@@ -48,8 +48,8 @@ class Interval final : public Traversal {
             for (int px = std::max(tx, x0); px < std::min(tx + T, x1); ++px) {
               const PixelSamples ps = f_.table.pixel(px, py);
               pipe_.at_pixel(px, py);
-              for (int k = ps.cell_offsets[c]; k < ps.cell_offsets[c + 1]; ++k)
-                pipe_.push(px, py, ps, ps.cell_order[k]);
+              const int k0 = ps.cell_offsets[c], k1 = ps.cell_offsets[c + 1];
+              pipe_.push_list(px, py, ps, ps.cell_order + k0, k1 - k0);
             }
       pipe_.end_visit();  // a visit = one lens-cell pass
     }

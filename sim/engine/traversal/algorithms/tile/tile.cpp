@@ -275,6 +275,19 @@ class Tile final : public Traversal {
       // Fast path: a vectorised scan of each pixel's samples, even when the active cells hold few
       // of them (measured faster than walking the cells' buckets at 64 spp: no per-cell branches).
       const bool vectorised = fast_select;
+      if constexpr (!A::counting) {
+        // Select and push in one SIMD pass per pixel (SamplePipeline::push_selected), the tile's
+        // bounds set up once.
+        if (vectorised && !count_opt && fused_select_) {
+          tiletest::SelectBounds sb;
+          sb.set(active_bits, sx, sy);
+          for (int py = py0; py < ty1; ++py)
+            for (int px = px0; px < tx1; ++px)
+              region_checked += static_cast<std::uint64_t>(pipe_.push_selected(px, py, f_.table.pixel(px, py), sb));
+          c_[Counter::ops_sample_region] += region_cost * region_checked;
+          return;
+        }
+      }
       for (int py = py0; py < ty1; ++py)
         for (int px = px0; px < tx1; ++px) {
           const PixelSamples ps = f_.table.pixel(px, py);
@@ -467,6 +480,8 @@ class Tile final : public Traversal {
   std::vector<std::uint8_t> sel_ =
       std::vector<std::uint8_t>(f_.table.spp() + SamplePipeline<A>::flags_padding(), 0);
   std::vector<float> sx_, sy_;
+  // Fast path: SamplePipeline::push_selected in place of select_candidates + push_flagged.
+  const bool fused_select_ = SamplePipeline<A>::kFusedSelect && f_.p.simd && f_.table.spp() <= 64;
   AxisCache axes_;  // fast path: h_i sets per tile column and row of the current triangle and bin
   const iv::ClipBox clip_ = iv::clip_box(f_.p);
   iv::MotionSetup ms_;
