@@ -109,11 +109,15 @@ inline Line line_at_corner(const EdgeH& e, double xc, double yc, int sigma) {
   return Line{s * raw(A), s * raw(B), s * raw(C)};
 }
 
+// Cell masks: a CellMask, or a 64-bit integer for grids up to 8 x 8 (the fast path's).
+inline void set_cell(CellMask& m, int c) { m.set(c); }
+inline void set_cell(std::uint64_t& m, int c) { m |= std::uint64_t(1) << c; }
+
 // Evaluate a line at the most positive corner of each lens cell in the rectangle
 // [i0, i1] x [j0, j1] of a G x G grid; bit (j * G + i) of `negative` is set where the line is
-// negative over the whole cell. Cost: line_cells_cost(rows, cols).
-template <class D>
-inline CellMask line_cells(const Line& l, int grid, int i0, int i1, int j0, int j1) {
+// negative over the whole cell. Cost: line_cells_cost(rows, cols). M = std::uint64_t needs G <= 8.
+template <class D, class M = CellMask>
+inline M line_cells(const Line& l, int grid, int i0, int i1, int j0, int j1) {
   const double step = 2.0 / grid;
   const bool a_pos = D(l.A) >= D(0.0);
   const bool b_pos = D(l.B) >= D(0.0);
@@ -121,12 +125,12 @@ inline CellMask line_cells(const Line& l, int grid, int i0, int i1, int j0, int 
   const double v_first = -1.0 + step * (b_pos ? j0 + 1 : j0);
   const D su = D(l.A) * D(step), sv = D(l.B) * D(step);
   D row = madd(D(l.A), D(u_first), madd(D(l.B), D(v_first), D(l.C))) - su;
-  CellMask negative;
+  M negative{};
   for (int j = j0; j <= j1; ++j) {
     D val = row;
     for (int i = i0; i <= i1; ++i) {
       val = val + su;
-      if (val < D(0.0)) negative.set(j * grid + i);
+      if (val < D(0.0)) set_cell(negative, j * grid + i);
     }
     row = row + sv;
   }

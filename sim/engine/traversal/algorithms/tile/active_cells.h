@@ -34,6 +34,13 @@ struct ActiveCells {
     }
   }
 
+  // remove() for small grids, the culled cells as a 64-bit mask.
+  void remove64(std::uint64_t culled64, Counters& c) {
+    c[Counter::tile_cells_tested] += static_cast<std::uint64_t>(__builtin_popcountll(bits64));
+    c[Counter::tile_cells_culled] += static_cast<std::uint64_t>(__builtin_popcountll(bits64 & culled64));
+    bits64 &= ~culled64;
+  }
+
   // The active cells' indices in increasing order; returns how many.
   int list(int* out, int grid) const {
     int n = 0;

@@ -248,10 +248,16 @@ class Tile final : public Traversal {
       // H_j lines: conservative overlap bitmask over the cells (001 §5.1).
       if (use_H) {
         bool any_line;
-        const tiletest::CellMask culled =
-            hj_culled_cells<A>(fp, x0, x1, y0, y1, G, active.i0, active.i1, active.j0, active.j1, c_, any_line);
+        if (!A::counting && active.small) {  // the same bits as a 64-bit mask
+          const std::uint64_t culled = hj_culled_cells<A, std::uint64_t>(fp, x0, x1, y0, y1, G, active.i0, active.i1,
+                                                                         active.j0, active.j1, c_, any_line);
+          if (any_line) active.remove64(culled, c_);
+        } else {
+          const tiletest::CellMask culled =
+              hj_culled_cells<A>(fp, x0, x1, y0, y1, G, active.i0, active.i1, active.j0, active.j1, c_, any_line);
+          if (any_line) active.remove(culled, low64_, c_);
+        }
         if (any_line) {
-          active.remove(culled, low64_, c_);
           if (active.none()) {
             ++c_[Counter::tile_culled_H];
             return;
