@@ -54,6 +54,12 @@ struct SelectBounds {
     c0 = sv.fl_lo[0], d0 = sv.fl_hi[0], c1 = sv.fl_lo[1], d1 = sv.fl_hi[1];
     u0 = a0 < b0, u1 = a1 < b1, v0 = c0 < d0, v1 = c1 < d1;
   }
+  // Every sample of the cells in active_cells, no cuts.
+  void set_cells(std::uint64_t active_cells) {
+    active = active_cells;
+    a0 = b0 = a1 = b1 = c0 = d0 = c1 = d1 = 0.0f;
+    u0 = u1 = v0 = v1 = false;
+  }
 };
 
 // Indices of the set flags, in order (skipping 8 zero flags at a time).

@@ -345,6 +345,12 @@ class SamplePipeline {
 #endif
   }
 
+  // Nothing observes the order in which one triangle's samples are tested: no shading visits or
+  // texture stream are recorded (shading none), no per-visit timing records, no per-pixel
+  // statistics. Then depth slots, colours and every counter depend only on the set of samples
+  // pushed (each sample is tested once per triangle and owns its depth slot).
+  bool order_free() const { return !sh_.counting() && !ts_.visit_records && !cur_; }
+
   // sel arrays for push_flagged(): spp flags and this many more, zero.
   static constexpr int flags_padding() { return 16; }
 

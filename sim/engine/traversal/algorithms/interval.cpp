@@ -6,6 +6,7 @@
 
 #include "setup/footprint.h"
 #include "tiletest/box_bounds.h"
+#include "tiletest/candidates.h"
 #include "tiletest/lens_shape.h"
 #include "traversal/traversal.h"
 
@@ -28,6 +29,18 @@ class Interval final : public Traversal {
     const int by0 = std::max(tri.by0, bin.y0), by1 = std::min(tri.by1, bin.y1);
     std::uint64_t passes = 0;
     pipe_.begin(tri);
+    if constexpr (!A::counting) {
+      if (fused_ && pipe_.order_free()) {
+        fused_passes(tri, fp, bx0, bx1, by0, by1, setup_ops, passes);
+        pipe_.flush();
+        if (charge_setup) {
+          c_[Counter::ops_setup] += setup_ops;
+          c_[Counter::trav_passes] += passes;
+          if (tri.moving) ++c_[Counter::trav_motion_fallback];
+        }
+        return;
+      }
+    }
     for (int c = 0; c < G * G; ++c) {
       if (!lens_mask_.test(c)) continue;
       const int ci = c % G, cj = c / G;
@@ -62,10 +75,66 @@ class Interval final : public Traversal {
   }
 
  private:
+  // Fast path (SamplePipeline::order_free(): nothing observes the test order): the passes' pixel
+  // rectangles and charges as above, then one walk over the pixels of their union, pushing per
+  // pixel the samples of every cell whose rectangle holds it (SamplePipeline::push_selected with
+  // no cuts). The same samples are tested as by the passes, each once.
+  void fused_passes(const TriSetup& tri, const Footprint& fp, int bx0, int bx1, int by0, int by1,
+                    std::uint64_t& setup_ops, std::uint64_t& passes) {
+    const int G = f_.p.lens_grid;
+    int ux0 = bx1, ux1 = bx0, uy0 = by1, uy1 = by0;
+    int rx0[64], rx1[64], ry0[64], ry1[64];
+    std::uint64_t cells = 0;
+    for (int c = 0; c < G * G; ++c) {
+      if (!lens_mask_.test(c)) continue;
+      const int ci = c % G, cj = c / G;
+      int x0 = bx0, x1 = bx1, y0 = by0, y1 = by1;
+      if (fp.h_valid) {
+        double lx, hx, ly, hy;
+        tiletest::box_bounds<D>(fp.lv, fp.n, SampleTable::cell_lo(ci, G), SampleTable::cell_hi(ci, G),
+                                SampleTable::cell_lo(cj, G), SampleTable::cell_hi(cj, G), lx, hx, ly, hy);
+        charge<A>(setup_ops, tiletest::box_bounds_cost(fp.lv, fp.n, false));
+        tiletest::pixel_range(lx, hx, bx0, bx1, x0, x1);
+        tiletest::pixel_range(ly, hy, by0, by1, y0, y1);
+      }
+      ++passes;
+      pipe_.end_visit();  // a visit = one lens-cell pass (records nothing here: order_free)
+      rx0[c] = x0, rx1[c] = x1, ry0[c] = y0, ry1[c] = y1;
+      if (x0 >= x1 || y0 >= y1) continue;
+      cells |= std::uint64_t(1) << c;
+      ux0 = std::min(ux0, x0), ux1 = std::max(ux1, x1), uy0 = std::min(uy0, y0), uy1 = std::max(uy1, y1);
+    }
+    if (!cells) return;
+    col_.assign(static_cast<std::size_t>(ux1 - ux0), 0);
+    for (std::uint64_t m = cells; m; m &= m - 1) {
+      const int c = __builtin_ctzll(m);
+      for (int x = rx0[c]; x < rx1[c]; ++x) col_[static_cast<std::size_t>(x - ux0)] |= std::uint64_t(1) << c;
+    }
+    tiletest::SelectBounds sb;
+    for (int py = uy0; py < uy1; ++py) {
+      std::uint64_t row = 0;
+      for (std::uint64_t m = cells; m; m &= m - 1) {
+        const int c = __builtin_ctzll(m);
+        row |= static_cast<std::uint64_t>(py >= ry0[c] && py < ry1[c]) << c;
+      }
+      if (!row) continue;
+      for (int px = ux0; px < ux1; ++px) {
+        const std::uint64_t act = row & col_[static_cast<std::size_t>(px - ux0)];
+        if (!act) continue;
+        sb.set_cells(act);
+        pipe_.push_selected(px, py, f_.table.pixel(px, py), sb);
+      }
+    }
+  }
+
   const Frame& f_;
   Counters& c_;
   SamplePipeline<A> pipe_;
   tiletest::CellMask lens_mask_;
+  // Fast path: fused_passes() (grids up to 8 x 8, spp up to 64, SIMD on, float32 sample test).
+  const bool fused_ = SamplePipeline<A>::kFusedSelect && f_.p.simd && f_.table.spp() <= 64 &&
+                      f_.p.lens_grid * f_.p.lens_grid <= 64 && f_.p.precision_sample.kind == PrecisionKind::kFloat32;
+  std::vector<std::uint64_t> col_;  // fused_passes(): per pixel column, the cells whose rectangle holds it
 };
 
 }  // namespace
