@@ -105,18 +105,26 @@ class Interval final : public Traversal {
       ux0 = std::min(ux0, x0), ux1 = std::max(ux1, x1), uy0 = std::min(uy0, y0), uy1 = std::max(uy1, y1);
     }
     if (!cells) return;
-    col_.assign(static_cast<std::size_t>(ux1 - ux0), 0);
-    for (std::uint64_t m = cells; m; m &= m - 1) {
-      const int c = __builtin_ctzll(m);
-      for (int x = rx0[c]; x < rx1[c]; ++x) col_[static_cast<std::size_t>(x - ux0)] |= std::uint64_t(1) << c;
-    }
-    tiletest::SelectBounds sb;
-    for (int py = uy0; py < uy1; ++py) {
-      std::uint64_t row = 0;
+    // Per column (row) the cells whose rectangle spans it: cells start at x0 and end at x1.
+    const int W = ux1 - ux0, H = uy1 - uy0;
+    col_.assign(static_cast<std::size_t>(W + 1), 0);
+    row_.assign(static_cast<std::size_t>(H + 1), 0);
+    end_.assign(static_cast<std::size_t>(std::max(W, H) + 1), 0);
+    auto spans = [&](std::vector<std::uint64_t>& out, const int* lo, const int* hi, int origin, int len) {
+      std::fill(end_.begin(), end_.begin() + len + 1, 0);
       for (std::uint64_t m = cells; m; m &= m - 1) {
         const int c = __builtin_ctzll(m);
-        row |= static_cast<std::uint64_t>(py >= ry0[c] && py < ry1[c]) << c;
+        out[static_cast<std::size_t>(lo[c] - origin)] |= std::uint64_t(1) << c;
+        end_[static_cast<std::size_t>(hi[c] - origin)] |= std::uint64_t(1) << c;
       }
+      std::uint64_t cur = 0;
+      for (int k = 0; k < len; ++k) cur = (cur & ~end_[static_cast<std::size_t>(k)]) | out[static_cast<std::size_t>(k)], out[static_cast<std::size_t>(k)] = cur;
+    };
+    spans(col_, rx0, rx1, ux0, W);
+    spans(row_, ry0, ry1, uy0, H);
+    tiletest::SelectBounds sb;
+    for (int py = uy0; py < uy1; ++py) {
+      const std::uint64_t row = row_[static_cast<std::size_t>(py - uy0)];
       if (!row) continue;
       for (int px = ux0; px < ux1; ++px) {
         const std::uint64_t act = row & col_[static_cast<std::size_t>(px - ux0)];
@@ -134,7 +142,7 @@ class Interval final : public Traversal {
   // Fast path: fused_passes() (grids up to 8 x 8, spp up to 64, SIMD on, float32 sample test).
   const bool fused_ = SamplePipeline<A>::kFusedSelect && f_.p.simd && f_.table.spp() <= 64 &&
                       f_.p.lens_grid * f_.p.lens_grid <= 64 && f_.p.precision_sample.kind == PrecisionKind::kFloat32;
-  std::vector<std::uint64_t> col_;  // fused_passes(): per pixel column, the cells whose rectangle holds it
+  std::vector<std::uint64_t> col_, row_, end_;  // fused_passes(): per pixel column / row, the cells spanning it
 };
 
 }  // namespace
