@@ -84,18 +84,29 @@ class Interval final : public Traversal {
     const int G = f_.p.lens_grid;
     int ux0 = bx1, ux1 = bx0, uy0 = by1, uy1 = by0;
     int rx0[64], rx1[64], ry0[64], ry1[64];
+    // A cell's x bounds depend only on its u range (its column), its y bounds only on its v range
+    // (its row): box_bounds' x and y parts are separate computations, so they are evaluated once
+    // per column and row (the same float operations); every pass is still charged its bounds.
+    int cx0[8], cx1[8], cy0[8], cy1[8];
+    std::uint64_t bounds_cost = 0;
+    if (fp.h_valid) {
+      bounds_cost = tiletest::box_bounds_cost(fp.lv, fp.n, false);
+      for (int k = 0; k < G; ++k) {
+        double lx, hx, ly, hy;
+        tiletest::box_bounds<D>(fp.lv, fp.n, SampleTable::cell_lo(k, G), SampleTable::cell_hi(k, G),
+                                SampleTable::cell_lo(k, G), SampleTable::cell_hi(k, G), lx, hx, ly, hy);
+        tiletest::pixel_range(lx, hx, bx0, bx1, cx0[k], cx1[k]);
+        tiletest::pixel_range(ly, hy, by0, by1, cy0[k], cy1[k]);
+      }
+    }
     std::uint64_t cells = 0;
     for (int c = 0; c < G * G; ++c) {
       if (!lens_mask_.test(c)) continue;
       const int ci = c % G, cj = c / G;
       int x0 = bx0, x1 = bx1, y0 = by0, y1 = by1;
       if (fp.h_valid) {
-        double lx, hx, ly, hy;
-        tiletest::box_bounds<D>(fp.lv, fp.n, SampleTable::cell_lo(ci, G), SampleTable::cell_hi(ci, G),
-                                SampleTable::cell_lo(cj, G), SampleTable::cell_hi(cj, G), lx, hx, ly, hy);
-        charge<A>(setup_ops, tiletest::box_bounds_cost(fp.lv, fp.n, false));
-        tiletest::pixel_range(lx, hx, bx0, bx1, x0, x1);
-        tiletest::pixel_range(ly, hy, by0, by1, y0, y1);
+        charge<A>(setup_ops, bounds_cost);
+        x0 = cx0[ci], x1 = cx1[ci], y0 = cy0[cj], y1 = cy1[cj];
       }
       ++passes;
       pipe_.end_visit();  // a visit = one lens-cell pass (records nothing here: order_free)
