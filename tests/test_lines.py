@@ -121,7 +121,7 @@ def test_tile_clip_same_image_fewer_tests():
     assert sb["lines.segments"] == sa["lines.segments"]
 
 
-@pytest.mark.parametrize("variant", ["default", "small_buffer", "tile_clip", "near"])
+@pytest.mark.parametrize("variant", ["default", "small_buffer", "tile_clip", "near", "textured"])
 def test_documented_costs_equal_counted(variant):
     """Every counter, operations included, is the same on the fast path (documented costs) and
     the counting scalar path."""
@@ -138,10 +138,15 @@ def test_documented_costs_equal_counted(variant):
         scene = Scene.concat(scene, Scene.from_arrays(pos, colors=(0.7, 0.7, 0.2)))
     table = sim.SampleTable.lines(n_lines=8, seed=7)
     cfg = sim.PipelineConfig(algorithm="lines", threads=1, lines=lines)
+    if variant == "textured":  # textured segments, their shading lanes and fetches
+        scene = Scene.from_arrays(scene.positions, colors=scene.colors,
+                                  uvs=(scene.positions[..., :2] * 0.3 + 0.5).astype(np.float32),
+                                  texture=np.random.default_rng(1).uniform(0, 1, (32, 32, 3)).astype(np.float32))
+        cfg = cfg.replace(texture_count=1, shading="per_sample")
     doc = sim.render(scene, cam, table, cfg, timing=False)
     exact = sim.render(scene, cam, table, cfg.replace(op_count="exact"), timing=False)
     assert np.array_equal(doc.image, exact.image)
-    keys = [k for k in doc.flat_stats if k.startswith(("ops.", "lines.", "tile."))]
+    keys = [k for k in doc.flat_stats if k.startswith(("ops.", "lines.", "tile.", "shade.", "tex."))]
     assert {k: doc.flat_stats[k] for k in keys} == {k: exact.flat_stats[k] for k in keys}
     if variant == "small_buffer":
         assert doc.flat_stats["lines.overflows"] > 0
@@ -173,8 +178,8 @@ def test_wrong_combinations_are_clear_errors():
     with pytest.raises(sim.ConfigError, match="lens_shape"):
         sim.render(scene, sim.Camera(width=8, height=8, coc_px=4.0, lens="square"), lines_table,
                    sim.PipelineConfig(algorithm="lines"))
-    with pytest.raises(sim.ConfigError, match="shading"):
-        sim.render(scene, cam, lines_table, sim.PipelineConfig(algorithm="lines", shading="msaa"))
+    with pytest.raises(sim.ConfigError, match="shading.*per_lens_cell"):
+        sim.render(scene, cam, lines_table, sim.PipelineConfig(algorithm="lines", shading="per_lens_cell"))
     with pytest.raises(sim.ConfigError, match="buffer_size"):
         sim.PipelineConfig(algorithm="lines", lines={**sim.PipelineConfig().lines, "buffer_size": -1})
     with pytest.raises(sim.ConfigError, match="min_weight"):
@@ -217,3 +222,128 @@ def test_composite_is_timed():
     assert s["timing.cycles"] >= (s["lines.segments"] + s["lines.composite_steps"]) / 0.25
     without = sim.timing.estimate(recs[~end_of_bin], hw)["timing.cycles"]
     assert s["timing.cycles"] - without >= 0.9 * s["lines.composite_steps"] / 0.25
+
+
+# ---- texturing: each segment textured at its midpoint (004 §3.1.2 "Shading") ---------------------------
+
+def _textured_square(z=-6.0, texels=4, seed=3):
+    """A square (two triangles) parallel to the lens at view depth -z with uv = its own (x, y)
+    normalised, and a random texels x texels texture."""
+    x0, x1, y0, y1 = -0.9, 0.7, -0.6, 0.5
+    a, b, c, d = (x0, y0, z), (x1, y0, z), (x1, y1, z), (x0, y1, z)
+    pos = np.array([[a, b, c], [a, c, d]], dtype=np.float64)
+    uv_of = lambda p: ((p[0] - x0) / (x1 - x0), (p[1] - y0) / (y1 - y0))  # noqa: E731
+    uvs = np.array([[uv_of(p) for p in tri] for tri in pos])
+    tex = np.random.default_rng(seed).uniform(0.1, 1.0, (texels, texels, 3)).astype(np.float32)
+    return pos, uv_of, tex, Scene.from_arrays(pos, uvs=uvs, texture=tex)
+
+
+def test_textured_segments_match_a_numpy_reference():
+    """Heuristics off: each pixel is the mean over its lines of Σ κ(segment) · texture(uv at the
+    segment's midpoint). The reference casts float64 rays (tests/reference/raycaster.py) from the two
+    ends of each line through the pixel's screen point: on a plane parallel to the lens the hit point
+    is affine in the line parameter p, so each triangle's segment is an intersection of three
+    half-lines, its midpoint's uv is affine, and the texture is read by models.textures'
+    sample_bilinear (texels larger than pixels: level 0)."""
+    from models.textures import sample_bilinear
+    from tests.reference import raycaster as rc
+
+    w, h = 24, 16
+    cam = sim.Camera(width=w, height=h, focus_distance=5.0, coc_px=20.0, fov_y_deg=30.0)
+    z = -6.0
+    pos, uv_of, tex, scene = _textured_square(z)
+    table = sim.SampleTable.lines(n_lines=8, seed=3)
+    res = sim.render(scene, cam, table, _lines_config().replace(texture_count=1, texture_filter="bilinear"),
+                     timing=False)
+    smp = table.samples("disk").astype(np.float64)
+    ref = np.zeros((h, w, 3))
+    for py in range(h):
+        for px in range(w):
+            for sx, sy, c, s, _ in smp[py % table.period, px % table.period]:
+                ends = np.array([[px + sx, py + sy, -c, -s, 0.0], [px + sx, py + sy, c, s, 0.0]])
+                org, d = rc.sample_rays(cam, ends)
+                hit = (org + (-z / cam.focus_distance) * d)[:, :2]  # view depth -z
+                h0, h1 = (hit[0] + hit[1]) / 2, (hit[1] - hit[0]) / 2  # hit(p) = h0 + p h1
+                for tri in pos:
+                    lo, hi, empty = -1.0, 1.0, False
+                    for i in range(3):
+                        A, B = tri[i, :2], tri[(i + 1) % 3, :2]
+                        g = lambda q: (B[0] - A[0]) * (q[1] - A[1]) - (B[1] - A[1]) * (q[0] - A[0])  # noqa: E731
+                        g0, g1 = g(h0), g(h0 + h1) - g(h0)
+                        if g1 == 0:
+                            empty |= g0 < 0
+                        elif g1 > 0:
+                            lo = max(lo, -g0 / g1)
+                        else:
+                            hi = min(hi, -g0 / g1)
+                    if empty or lo >= hi:
+                        continue
+                    col = sample_bilinear(tex, np.array(uv_of(h0 + 0.5 * (lo + hi) * h1))).astype(np.float64)
+                    ref[py, px] += _kappa(lo, hi) * col / table.spp
+    assert ref.max() > 0.3 and (ref == 0).any()
+    np.testing.assert_allclose(res.image, ref, atol=2e-5)
+    # Without a shading mode the texture colours the image but no shading or fetch work is counted.
+    assert res.flat_stats["tex.fetches"] == 0 and res.flat_stats["shade.quad_requests"] == 0
+
+
+def test_textured_lines_agree_with_point_sampling():
+    """Heuristics off, unlimited buffers, a texture that varies slowly across the frame (a planar
+    map in world x, y, one period per 12 units: the frame spans 1-6 units at these depths): 64 lines
+    agree with 1024 stratified textured points (brute force) within Monte Carlo error plus the
+    midpoint shading's bias. That bias is second order in the texture's variation along a segment;
+    a texture that varies within the blur is not blurred by the lines (a line fully inside one
+    triangle is shaded at the lens centre), 004 §5's limitation of shading at the midpoint."""
+    cam = sim.Camera(width=W, height=16, focus_distance=5.0, coc_px=6.0, fov_y_deg=30.0)
+    scene = _layered_scene()
+    uvs = (scene.positions[..., :2] / 12.0 + 0.5).astype(np.float32)  # planar map in world x, y
+    yy, xx = np.mgrid[0:16, 0:16] / 16.0
+    tex = np.stack([0.5 + 0.4 * np.sin(2 * np.pi * xx), 0.5 + 0.4 * np.cos(2 * np.pi * yy),
+                    np.full_like(xx, 0.8)], axis=-1).astype(np.float32)
+    scene = Scene.from_arrays(scene.positions, colors=scene.colors, uvs=uvs, texture=tex)
+    lines = sim.render(scene, cam, sim.SampleTable.lines(n_lines=64, seed=1), _lines_config().replace(texture_count=1),
+                       timing=False)
+    points = sim.render(scene, cam, sim.SampleTable.stratified(spp=1024, seed=5, time=False),
+                        sim.PipelineConfig(algorithm="bruteforce", threads=1, texture_count=1), timing=False)
+    untextured = sim.render(_layered_scene(), cam, sim.SampleTable.lines(n_lines=64, seed=1), _lines_config(),
+                            timing=False)
+    diff = lines.image - points.image
+    assert np.abs(diff.mean()) < 2e-3
+    assert np.sqrt((diff ** 2).mean()) < 0.02
+    assert np.abs(lines.image - untextured.image).max() > 0.1  # the texture did colour the image
+
+
+@pytest.mark.parametrize("texels, levels", [(4, 1), (256, 2)])
+def test_segment_texture_fetches_go_through_the_shading_model(texels, levels):
+    """shading: per_sample: every shaded segment (offered and not occluded) is one live shader lane;
+    every lane, helpers included, fetches a 2x2 footprint per mip level (trilinear: two levels when
+    the triangle's level of detail lies between them); the cache sees one access per distinct line
+    of a footprint; the timing records carry the quads, fetches and misses. The modes change the
+    counts, never the image; the tile clip and the thread count change neither."""
+    cam = sim.Camera(width=32, height=24, focus_distance=5.0, coc_px=20.0, fov_y_deg=30.0)
+    _, _, _, scene = _textured_square(texels=texels)
+    table = sim.SampleTable.lines(n_lines=8, seed=3)
+    cfg = sim.PipelineConfig(algorithm="lines", threads=1, texture_count=1, shading="per_sample")
+    r = sim.render(scene, cam, table, cfg)
+    s, recs = r.flat_stats, r.timing_records
+    assert s["shade.lanes_live"] == s["lines.segments"] - s["lines.rejected_occluded"] > 0
+    assert s["shade.invocations"] == 4 * s["shade.quad_requests"] == s["shade.lanes_live"] + s["shade.lanes_helper"]
+    assert s["tex.fetches"] == 4 * levels * s["shade.invocations"]
+    assert s["tex.fetches"] / 4 <= s["tex.cache.accesses"] <= s["tex.fetches"]
+    assert s["tex.cache.hits"] + s["tex.cache.misses"] == s["tex.cache.accesses"]
+    assert s["tex.cache.misses"] >= 1
+    assert recs["quads"].sum() == s["shade.quad_requests"]
+    assert recs["texel_fetches"].sum() == s["tex.fetches"]
+    assert recs["tex_misses"].sum() == s["tex.cache.misses"]
+    visit = sim.render(scene, cam, table, cfg, hardware=sim.HardwareConfig(timing={"granularity": "visit"}))
+    assert visit.timing_records["tex_misses"].sum() == s["tex.cache.misses"]
+    assert visit.timing_records["texel_fetches"].sum() == s["tex.fetches"]
+    none = sim.render(scene, cam, table, cfg.replace(shading="none"), timing=False)
+    assert np.array_equal(none.image, r.image)
+    for mode in ("msaa", "cache"):
+        m = sim.render(scene, cam, table, cfg.replace(shading=mode), timing=False)
+        assert np.array_equal(m.image, r.image)
+        assert 0 < m.flat_stats["shade.lanes_live"] < s["shade.lanes_live"]
+    clip = sim.render(scene, cam, table, cfg.replace(threads=2, lines={**cfg.lines, "tile_clip": True}), timing=False)
+    assert np.array_equal(clip.image, r.image)
+    for k in ("shade.quad_requests", "shade.lanes_live", "tex.fetches", "tex.cache.accesses", "tex.cache.misses"):
+        assert clip.flat_stats[k] == s[k], k
