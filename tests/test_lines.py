@@ -347,3 +347,81 @@ def test_segment_texture_fetches_go_through_the_shading_model(texels, levels):
     assert np.array_equal(clip.image, r.image)
     for k in ("shade.quad_requests", "shade.lanes_live", "tex.fetches", "tex.cache.accesses", "tex.cache.misses"):
         assert clip.flat_stats[k] == s[k], k
+
+
+# ---- the tile clip on sub-pixel triangles: what it drops is float32 slivers of the line test ----------
+
+# Seven ceiling triangles of modern_hall (world space, default camera pose), 0.005-0.01 units across at
+# view depth ~14: at CoC 50 px they are ~0.07 px wide, and the float32 line test's interval ends carry
+# errors of ~1e-6..1e-5 in the line parameter (cancellation in e_0 and in the slopes).
+_TINY = np.array([
+    [[-5.666111851751825, 3.957722652117028, -13.927814346589525], [-5.658331453028531, 3.957722651892046, -13.923009236454034], [-5.658896069442316, 3.9572936518447706, -13.921999541715204]],
+    [[-5.561584071151593, 3.9577226517591932, -13.920171801976785], [-5.561080170713249, 3.9572936517104282, -13.919130296531288], [-5.56956885572266, 3.957293651538991, -13.915468765465686]],
+    [[-5.561584071151593, 3.9577226517591932, -13.920171801976785], [-5.56956885572266, 3.957293651538991, -13.915468765465686], [-5.56998009613181, 3.957722651589647, -13.916550658153419]],
+    [[-5.56998009613181, 3.957722651589647, -13.916550658153419], [-5.56956885572266, 3.957293651538991, -13.915468765465686], [-5.5783429177964585, 3.957293651402804, -13.912560099047163]],
+    [[-5.56998009613181, 3.957722651589647, -13.916550658153419], [-5.5783429177964585, 3.957293651402804, -13.912560099047163], [-5.578658943298755, 3.957722651454889, -13.913672506152718]],
+    [[-5.73955589480047, 3.9639746549925516, -13.989229330900141], [-5.741261819628672, 3.963974655537028, -14.000858186997466], [-5.741040582743953, 3.9632046555380867, -14.000880798112206]],
+    [[-5.511016870596178, 3.964006657889444, -14.051100751716492], [-5.514567479643722, 3.9648976582756217, -14.059348712403807], [-5.514567479643722, 3.9640066582756224, -14.059348712445523]],
+])
+
+
+def _exact_line_length(cam, tri, pts):
+    """float64 length of the part of each line inside the triangle (0: none): the edge functions are
+    the triple products det(V_j - L, V_k - L, Q - L) of the ray from lens point L through the focus-plane
+    point Q (tests/reference/raycaster.py's camera model), affine in the line parameter p."""
+    from tests.reference import raycaster as rc
+
+    V = rc.world_to_view(cam, tri)
+    ends = []
+    for sign in (-1.0, 1.0):
+        p = pts.copy()
+        p[..., 2:4] *= sign
+        org, d = rc.sample_rays(cam, p)
+        q = org + d
+        ends.append(np.stack([np.einsum("...i,...i->...", np.cross(V[(i + 1) % 3] - org, V[(i + 2) % 3] - org), q - org)
+                              for i in range(3)], axis=-1))
+    f0, f1 = (ends[0] + ends[1]) / 2, (ends[1] - ends[0]) / 2
+    best = np.zeros(f0.shape[:-1])
+    for sign in (1.0, -1.0):
+        a, b = sign * f0, sign * f1
+        with np.errstate(divide="ignore", invalid="ignore"):
+            r = -a / b
+        lo = np.maximum(np.max(np.where(b > 0, r, -1.0), axis=-1), -1.0)
+        hi = np.minimum(np.min(np.where(b < 0, r, 1.0), axis=-1), 1.0)
+        ok = ~np.any((b == 0) & (a <= 0), axis=-1) & (hi > lo)
+        best = np.maximum(best, np.where(ok, hi - lo, 0.0))
+    return best
+
+
+def test_tile_clip_drops_only_rounding_slivers():
+    """The bound the clipped path keeps on sub-pixel triangles (docs/op_costs.md): it skips a line only
+    when the line cannot meet the exact lens region, so every segment it drops is one the float32 line
+    test made up: a line whose exact (float64) coverage is empty at that pixel, of weight κ < 1e-4.
+    One line per render (the same line in every pixel), each triangle alone, heuristics off: a pixel
+    is the κ of its line's segment."""
+    cam = sim.Camera(width=128, height=72, fov_y_deg=42.99566141876367, focus_distance=6.539783842510974,
+                     coc_px=50.0)
+    off = {"buffer_size": 0, "min_weight": 0.0, "occlusion": False, "merge": False}
+    plain = sim.PipelineConfig(algorithm="lines", threads=1, tile_size=2, lines={**sim.PipelineConfig().lines, **off})
+    clipped = plain.replace(lines={**plain.lines, "tile_clip": True})
+    yy, xx = np.mgrid[0:72, 0:128]
+    dropped = kept_exact = 0
+    for seed in range(6):
+        table = sim.SampleTable.lines(n_lines=1, wheel=1, period=1, seed=seed)
+        line = table.samples("disk")[0, 0, 0].astype(np.float64)
+        pts = np.stack([xx + line[0], yy + line[1], np.full(xx.shape, line[2]), np.full(xx.shape, line[3]),
+                        np.zeros(xx.shape)], axis=-1)
+        for tri in _TINY:
+            one = Scene.from_arrays(tri[None])
+            a = sim.render(one, cam, table, plain, timing=False).image[..., 0]
+            b = sim.render(one, cam, table, clipped, timing=False).image[..., 0]
+            diff = a != b
+            if not diff.any():
+                continue
+            exact = _exact_line_length(cam, tri, pts)
+            assert np.all(b[diff] == 0.0)           # whole segments dropped, nothing added
+            assert np.all(exact[diff] == 0.0)       # ... only where the exact line misses the triangle
+            assert a[diff].max() < 1e-4             # ... and they are slivers
+            dropped += int(diff.sum())
+            kept_exact += int(((exact > 0) & (b > 0)).sum())
+    assert dropped > 0 and kept_exact > 0
