@@ -7,7 +7,9 @@
 // segment buffer (lines/segment_buffer.h). When the bin's triangles are done, end_bin() composites
 // each line (κ-weighted, 004 §3.1.2) into the bin's sample colours, which resolve() averages.
 // With pipeline.lines.tile_clip the triangle's h_i lens region of each screen tile (001 §4.2)
-// first tells which lines can meet the triangle there; the others skip the test (same image).
+// first tells which lines can meet the triangle there; the others skip the test: the same image,
+// but for float32 slivers of the line test outside the exact coverage on sub-pixel triangles, which
+// the clip may drop (each of κ < 1e-4; docs/op_costs.md, test_tile_clip_drops_only_rounding_slivers).
 //
 // Texturing: the segment's colour is textured at its midpoint, at the uv of the midpoint's hit point
 // and the triangle's texture level of detail (backend/texture.h: the analytic screen -> uv map, as
