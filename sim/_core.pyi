@@ -48,7 +48,7 @@ class RenderParams:
     lines_merge_depth: float  # Merge: largest difference of midpoint depth z; default 0.001
     lines_merge_color: float  # Merge: largest Euclidean distance of linear RGB colours; default 0.05
     lines_merge_gap: float  # Merge: largest gap between the two intervals along the line (0: touching or overlapping); default 0.0
-    lines_tile_clip: bool  # Skip line-triangle tests of lines that miss the tile's h_i lens region (same image); default False
+    lines_tile_clip: bool  # Skip line-triangle tests of lines that miss the tile's h_i lens region (the same image, but for float32 slivers of the line test outside the exact coverage on sub-pixel triangles: docs/op_costs.md); default False
     sample_fraction: float  # Sampled simulation: traverse this fraction of the screen bins that hold triangles (2 per stratum of bins with similar brute-force work), scale the counters to the frame and give 95% confidence half-widths (Result.ci95); 1 = the whole frame, exact; default 1.0
     sample_seed: int  # Seed of the sampled bins (sample_fraction < 1); default 0
     shading: str  # What costs a shader lane: 'per_sample' (supersampling), 'msaa' (one per pixel per visit), 'per_lens_cell' (one per pixel and lens-grid cell per visit), 'cache' (memoising shading cache, 002 §2) or 'none' (not modelled: no shade.*/tex.* counts, fastest); the image is the same in every mode (shading_modes: per_sample, msaa, per_lens_cell, cache, none); default 'none'

@@ -36,3 +36,19 @@ def test_equal_error_cost_follows_the_work_order():
     g = pd.DataFrame({"ops.total": [1e6, 1e7, 1e8], "ops.interp": [0, 0, 0], "ops.segments": [0, 0, 0],
                       "metric.rmse": [0.1, 0.01, 0.001], "time.wall_s": [0.1, 1.0, 10.0]})
     assert math.isclose(tables._interp_work(g, 10 ** -1.5, tables._wall), 10 ** -0.5, rel_tol=1e-9)
+
+
+def test_alpha_before_the_interleaved_floor():
+    """An interleaved family gets a second fit over spp <= its lens positions (before the discrete-lens
+    floor); the full fit is flattened by the floor, the restricted one recovers the power law."""
+    spp = np.array([4, 16, 32, 64, 128, 256, 512, 1024], float)
+    ops = 1e6 * spp
+    rmse = np.maximum(0.2 * spp ** -0.5, 0.02)  # floor from 100 spp on
+    g = pd.DataFrame({"samples.spp": spp, "samples.n_lens": 64.0, "ops.total": ops, "ops.interp": 0.0,
+                      "ops.segments": 0.0, "metric.rmse": rmse})
+    pre, n = tables._before_lens_floor(g)
+    assert n == 64 and list(pre["samples.spp"]) == [4, 16, 32, 64]
+    a_pre, _hw, _n = tables._fit_alpha(pre["ops.total"], pre["metric.rmse"])
+    a_all, _hw, _n = tables._fit_alpha(g["ops.total"], g["metric.rmse"])
+    assert abs(a_pre - 0.5) < 1e-9 and a_all < 0.4
+    assert tables._before_lens_floor(g.assign(**{"samples.n_lens": np.nan})) is None

@@ -469,11 +469,30 @@ def methods_alpha(df, config) -> list[str]:
         for coc in sorted(df[df["scene.name"] == s]["camera.coc_px"].unique()):
             sub = df[(df["scene.name"] == s) & (df["camera.coc_px"] == coc)]
             for fam, g in _families(sub):
-                work = [_work(r) for _, r in g.iterrows()]
-                a, hw, n = _fit_alpha(work, g["metric.rmse"].to_numpy(float))
-                ci = "" if hw != hw else f"[{a - hw:.2f}, {a + hw:.2f}]"
-                rows.append([s, f"{coc:g}", fam, f"{a:.2f}", ci, str(n)])
+                parts = [(fam, g)]
+                pre = _before_lens_floor(g)
+                if pre is not None:
+                    parts.append((f"{fam} (spp ≤ {int(pre[1])}, before the floor)", pre[0]))
+                for name, part in parts:
+                    work = [_work(r) for _, r in part.iterrows()]
+                    a, hw, n = _fit_alpha(work, part["metric.rmse"].to_numpy(float))
+                    ci = "" if hw != hw else f"[{a - hw:.2f}, {a + hw:.2f}]"
+                    rows.append([s, f"{coc:g}", name, f"{a:.2f}", ci, str(n)])
     return md_table(["scene", "CoC", "method family", "alpha (RMSE ∝ ops^-alpha)", "95% CI", "points"], rows)
+
+
+def _before_lens_floor(g):
+    """An interleaved family (N discrete lens positions) converges to the N-point lens average, not to
+    the disk's integral: past spp = N its error flattens onto that bias. (the points with spp <= N,
+    N) when the family also has points beyond N and at least three up to it, else None."""
+    n_lens = np.asarray(_col(g, "samples.n_lens"), float)
+    if not np.isfinite(n_lens).any():
+        return None
+    n = float(np.nanmax(n_lens))
+    spp = g["samples.spp"].to_numpy(float)
+    if (spp <= n).sum() < 3 or not (spp > n).any():
+        return None
+    return g[spp <= n], n
 
 
 def _interp_work(g, target, cost=None):

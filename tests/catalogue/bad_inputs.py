@@ -440,23 +440,11 @@ def lines_motion_blur(d):
             config=_sim().PipelineConfig(algorithm="lines"))
 
 
-@case("Python API", "algorithm 'lines' on a textured render (texture_count 1)", "ConfigError",
-      r"texture_count: texturing is not modelled for line samples \(algorithm 'lines'\); use 0",
-      "the parameter, the algorithm and the value to use (the scene's vertex colours then shade it)")
-def lines_texture(d):
-    import models
-
-    sim = _sim()
-    uv = np.array([[[0, 0], [1, 0], [0.5, 1]]], np.float64)
-    scene = models.Scene.from_arrays(_tri(), uvs=uv, texture=np.full((4, 4, 3), 0.5, np.float32))
-    _render(scene, table=_lines_table(), config=sim.PipelineConfig(algorithm="lines", texture_count=1))
-
-
-@case("Python API", "algorithm 'lines' with a shading mode (shading: msaa)", "ConfigError",
-      r"shading: line samples shade each segment once at its midpoint.*use 'none' with algorithm 'lines'",
-      "the parameter, why and the value to use")
+@case("Python API", "algorithm 'lines' with lens-cell shading (shading: per_lens_cell)", "ConfigError",
+      r"shading: line samples have no lens-grid cells.*use 'none', 'per_sample', 'msaa' or 'cache'",
+      "the parameter, why and the values to use")
 def lines_shading(d):
-    _render(table=_lines_table(), config=_sim().PipelineConfig(algorithm="lines", shading="msaa"))
+    _render(table=_lines_table(), config=_sim().PipelineConfig(algorithm="lines", shading="per_lens_cell"))
 
 
 @case("Python API", "line samples whose segment buffers exceed the memory limit (64 lines, 4096-segment buffers)",

@@ -78,7 +78,9 @@ VARIANTS = {
     "no_lens_sets": {"halfspace": {"h": False, "H": True}},
 }
 # Variants of the line-sample cases only: the tile's h_i lens region clips the lines.
-LINE_VARIANTS = {"tile_clip": {"lines": {"tile_clip": True}}}
+LINE_VARIANTS = {"tile_clip": {"lines": {"tile_clip": True}},
+                 # textured segments: a shader lane per segment, texel fetches, the texture cache
+                 "per_sample_tex": {"shading": "per_sample", "texture_count": 1}}
 # Timing-model figures kept in the golden file (rounded to whole clocks), so a change to the timing
 # model or to the work it is fed shows up in review like an operation count.
 TIMING_FIGURES = ("timing.cycles",)
@@ -135,6 +137,11 @@ def cases() -> list[Case]:
                 for coc in cocs:
                     for variant in ("", "+tile_clip"):
                         out.append(Case(scene + variant, algorithm, coc, spp=n_lines))
+        for n_lines in (4, 16):  # textured segments (spot's texture) in the shading modes lines support
+            for coc in (10.0, 50.0):
+                out.append(Case("spot+per_sample_tex", algorithm, coc, spp=n_lines))
+        for variant in ("msaa_tex", "cache_tex"):
+            out.append(Case(f"spot+{variant}", algorithm, 10.0, spp=16))
     return out
 
 

@@ -124,10 +124,12 @@ inline std::uint64_t line_interval(const LinePoint<F>& q, F c, F s, bool near_fn
 }
 
 // Evaluate the segment's shading point p: the hit depth z = 1 - near·sum/det and the perspective
-// barycentrics' colour (as backend/sample_backend.h does for a point sample).
+// barycentrics' colour (as backend/sample_backend.h does for a point sample); with `bary`, the
+// barycentrics themselves (texture coordinates, the shading cache's grid point).
 // Cost: cost::kLineShade.
 template <class F>
-inline void line_shade(const LineFns<F>& fn, F p, F neg_near, const float col[3][3], F& z, F out[3]) {
+inline void line_shade(const LineFns<F>& fn, F p, F neg_near, const float col[3][3], F& z, F out[3],
+                       float* bary = nullptr) {
   F e[3];
   for (int i = 0; i < 3; ++i) e[i] = madd(p, fn.eg[i], fn.e0[i]);
   const F sum = e[0] + e[1] + e[2];
@@ -137,6 +139,7 @@ inline void line_shade(const LineFns<F>& fn, F p, F neg_near, const float col[3]
   const F b0 = e[0] * inv, b1 = e[1] * inv, b2 = e[2] * inv;
   for (int ch = 0; ch < 3; ++ch)
     out[ch] = madd(b2, F(col[2][ch]), madd(b1, F(col[1][ch]), b0 * F(col[0][ch])));
+  if (bary) bary[0] = raw(b0), bary[1] = raw(b1), bary[2] = raw(b2);
 }
 
 // Hit depth at p only. Cost: cost::kLineDepth.

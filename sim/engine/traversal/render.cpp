@@ -68,11 +68,9 @@ void validate_params(const RenderParams& p, const SampleTable& table) {
                           "' tests point samples, got a line-sample table (SampleTable.lines needs algorithm 'lines')");
   if (lines_algo && p.lens_shape != LensShape::kDisk)
     fail("lens_shape: line samples (algorithm 'lines') cross the disk lens through its centre; got a non-disk lens");
-  if (lines_algo && p.shading != ShadingMode::kNone)
-    fail("shading: line samples shade each segment once at its midpoint; the shading modes model point-sample "
-         "quads: use 'none' with algorithm 'lines'");
-  if (lines_algo && p.texture_count > 0)
-    fail("texture_count: texturing is not modelled for line samples (algorithm 'lines'); use 0");
+  if (lines_algo && p.shading == ShadingMode::kPerLensCell)
+    fail("shading: line samples have no lens-grid cells, so 'per_lens_cell' does not apply to algorithm 'lines'; "
+         "use 'none', 'per_sample', 'msaa' or 'cache'");
   if (p.lens_grid != table.grid())
     fail("lens_grid: the sample table was bucketed for G=" + std::to_string(table.grid()) +
          ", got " + std::to_string(p.lens_grid));

@@ -7,12 +7,23 @@
 // segment buffer (lines/segment_buffer.h). When the bin's triangles are done, end_bin() composites
 // each line (κ-weighted, 004 §3.1.2) into the bin's sample colours, which resolve() averages.
 // With pipeline.lines.tile_clip the triangle's h_i lens region of each screen tile (001 §4.2)
-// first tells which lines can meet the triangle there; the others skip the test (same image).
+// first tells which lines can meet the triangle there; the others skip the test: the same image,
+// but for float32 slivers of the line test outside the exact coverage on sub-pixel triangles, which
+// the clip may drop (each of κ < 1e-4; docs/op_costs.md, test_tile_clip_drops_only_rounding_slivers).
 //
+// Texturing: the segment's colour is textured at its midpoint, at the uv of the midpoint's hit point
+// and the triangle's texture level of detail (backend/texture.h: the analytic screen -> uv map, as
+// for a point sample), through the texture unit. With a shading mode, each shaded segment is a
+// shader lane of the shading model (backend/shading.h): per_sample, a lane per segment (quads of
+// one line index over 2x2 pixels); msaa, a lane per pixel per visit; cache, the shading cache keyed
+// by the midpoint's hit point seen through the lens centre. Its texel fetches go to the bin's
+// texture-cache stream, like a point sample's; a visit is the triangle's pass over its pixels in
+// the bin (as BRUTEFORCE's). The modes count work only; the image is the same in every mode.
 // Static triangles only (depth of field, 4D and in-focus 2D): motion blur needs point samples.
-// Not modelled for line samples: texturing, shading quads, per-sample depth export.
+// Not modelled for line samples: lens-cell shading (per_lens_cell), per-sample depth export.
 // Counters: lines.*, ops.sample_inside (setups and tests), ops.sample_region (tile clip),
-// ops.tile and ops.setup (tile clip's h_i lines), ops.interp (segment shading), ops.segments.
+// ops.tile and ops.setup (tile clip's h_i lines), ops.interp (segment shading), ops.segments;
+// with a shading mode shade.* and tex.* (backend/shading.h).
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -33,7 +44,7 @@ class Lines final : public Traversal {
   using D = typename A::f64;
 
  public:
-  Lines(const Frame& f, ThreadState& ts) : f_(f), c_(ts.counters), buf_(ts.buffers) {
+  Lines(const Frame& f, ThreadState& ts) : f_(f), c_(ts.counters), buf_(ts.buffers), sh_(ts.shade), ts_(ts) {
     const RenderParams& p = f.p;
     rules_.capacity = p.lines_buffer_size;
     rules_.min_weight = static_cast<float>(p.lines_min_weight);
@@ -56,6 +67,7 @@ class Lines final : public Traversal {
     if (!p.lines_tile_clip) {
       for (int py = y0; py < y1; ++py)
         for (int px = x0; px < x1; ++px) pixel(tri, px, py, nullptr);
+      end_visit();
       return;
     }
     std::uint64_t setup_ops = 0;
@@ -86,6 +98,7 @@ class Lines final : public Traversal {
           for (int px = std::max(tx, x0); px < std::min(tx + T, x1); ++px)
             pixel(tri, px, py, clip && !boxes.all_lines ? &boxes : nullptr);
       }
+    end_visit();
   }
 
   void end_bin(const BinRect& bin) override {
@@ -193,13 +206,14 @@ class Lines final : public Traversal {
       const std::uint64_t test_ops = line_interval(q, F(c), F(sn), near_fn, bfc, cov);
       charge<A>(c_[Counter::ops_sample_inside], test_ops);
       ++c_[Counter::lines_tests];
-      for (int k = 0; k < cov.n; ++k) offer(tri, cov, cov.lo[k], cov.hi[k], buf_.slot(px, py, s));
+      for (int k = 0; k < cov.n; ++k) offer(tri, cov, cov.lo[k], cov.hi[k], px, py, s, k);
     }
   }
 
   // A segment [a, b] of the line: the heuristics in 004 §4.1's order (occlusion, merge, length),
   // shading at the midpoint, the buffer.
-  void offer(const TriSetup& tri, const LineCoverage<F>& cov, float a, float b, std::size_t slot) {
+  void offer(const TriSetup& tri, const LineCoverage<F>& cov, float a, float b, int px, int py, int s, int k_seg) {
+    const std::size_t slot = buf_.slot(px, py, s);
     ++c_[Counter::lines_segments];
     const LineFns<F>& fn = cov.fn;
     const F neg_near = F(f_.fc.neg_near);
@@ -224,10 +238,13 @@ class Lines final : public Traversal {
     {
       const F m = (F(a) + F(b)) * F(0.5f);
       F z, col[3];
-      line_shade(fn, m, neg_near, tri.color, z, col);
+      float bary[3];
+      line_shade(fn, m, neg_near, tri.color, z, col, bary);
       sg.zmid = raw(z);
       for (int ch = 0; ch < 3; ++ch) sg.col[ch] = raw(col[ch]);
       charge<A>(c_[Counter::ops_interp], cost::kLineShade);
+      if (const ShadeFrame* sf = sh_.frame(); sf && (sh_.counting() || sf->texture_count > 0))
+        shade_segment(*sf, tri, bary, px, py, s, k_seg, sg.col);
     }
     if (rules_.merge && segment_merge<F>(buf, sg, rules_, ops)) {
       ++c_[Counter::lines_segments_merged];
@@ -244,11 +261,58 @@ class Lines final : public Traversal {
     charge<A>(c_[Counter::ops_segments], ops);
   }
 
+  // Texture the segment's midpoint colour and hand the segment to the open shading visit, as
+  // backend/sample_backend.h does for a covered point sample: uv from the midpoint's barycentrics,
+  // the triangle's level of detail per texture slot, the texture unit's filter (not counted in ops:
+  // the texture unit's work is tex.fetches, as for points). The record's sample index is 2 s + k,
+  // k the segment's index on its line (a triangle cuts a line in at most two segments), so in
+  // per_sample mode every shaded segment is its own lane.
+  void shade_segment(const ShadeFrame& sf, const TriSetup& tri, const float b[3], int px, int py, int s, int k,
+                     float col[3]) {
+    ShadeState::Rec r{px, py, 2 * s + k, 0, 0.0f, 0.0f, 0.0f, 0.0f};
+    if (sf.mode == ShadingMode::kCache) {  // the hit point seen through the lens centre
+      const float X = b[0] * tri.X[0] + b[1] * tri.X[1] + b[2] * tri.X[2];
+      const float Y = b[0] * tri.Y[0] + b[1] * tri.Y[1] + b[2] * tri.Y[2];
+      const float W = b[0] * tri.W[0] + b[1] * tri.W[1] + b[2] * tri.W[2];
+      r.gx = X / W, r.gy = Y / W;
+    }
+    if (sf.texture_count > 0) {
+      const float* uv = &sf.uvs[static_cast<std::size_t>(tri.index) * 6];
+      r.u = b[0] * uv[0] + b[1] * uv[2] + b[2] * uv[4];
+      r.v = b[0] * uv[1] + b[1] * uv[3] + b[2] * uv[5];
+      for (int t = 0; t < sf.texture_count; ++t) {
+        const int id = sf.tex_ids[static_cast<std::size_t>(tri.index) * kMaxTexSlots + t];
+        if (id < 0) continue;
+        float tc[3];
+        sf.textures.sample(id, sf.lod[static_cast<std::size_t>(tri.index) * kMaxTexSlots + t], sf.filter, r.u, r.v,
+                           tc);
+        for (int ch = 0; ch < 3; ++ch) col[ch] *= tc[ch];
+      }
+    }
+    if (sh_.counting()) sh_.record(tri.index, r);
+  }
+
+  // The end of the triangle's shading visit in this bin (SamplePipeline::end_visit's protocol):
+  // its segments' shading work is counted now; with per-visit timing records, one record.
+  void end_visit() {
+    if (!sh_.counting()) return;  // no shading model: nothing to close, one record per (triangle, bin)
+    sh_.close_visit();
+    if (ts_.visit_records) {
+      const TileWork now = work_from_counters(c_);
+      ts_.visit_records->push_back(now.since(ts_.visit_mark));
+      ts_.visit_mark = now;
+      if (ts_.visit_stream_ends)
+        ts_.visit_stream_ends->push_back(static_cast<std::uint32_t>(ts_.visit_stream ? ts_.visit_stream->size() : 0));
+    }
+  }
+
   static constexpr float kWiden = 1e-4f;
 
   const Frame& f_;
   Counters& c_;
   BinBuffers& buf_;
+  ShadeState& sh_;
+  ThreadState& ts_;
   SegmentRules rules_;
   BinRect bin_{};
   bool open_ = false;
