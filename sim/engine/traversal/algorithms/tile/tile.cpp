@@ -27,6 +27,7 @@
 #include "tiletest/halfspace_edges.h"
 #include "tiletest/halfspace_lens.h"
 #include "tiletest/lens_shape.h"
+#include "tiletest/precision_4d.h"
 #include "traversal/algorithms/tile/active_cells.h"
 #include "traversal/algorithms/tile/axis_cache.h"
 #include "traversal/algorithms/tile/hj_cells.h"
@@ -81,6 +82,11 @@ class Tile final : public Traversal {
       return;
     }
     const Footprint fp = build_footprint<A>(tri, f_, f_.p.halfspace_H, setup_ops);
+    if (f_.p.precision_tile.kind != PrecisionKind::kFloat64) {  // the 4D test in pipeline.precision.tile
+      bool active[6];
+      for (int k = 0; k < 6; ++k) active[k] = k < fp.n_edges && fp.edges[k].active;
+      p4_.setup(f_.p.precision_tile, fp.lv, fp.n, active, f_.p.halfspace_H && !tri.moving);
+    }
     if (kInterleaved && !tri.moving) shear_lens_positions(tri, setup_ops);
     if (charge_setup) {
       c_[Counter::ops_setup] += setup_ops;
@@ -178,8 +184,9 @@ class Tile final : public Traversal {
       pipe_.begin(tri);
     // Fast path: the h_i sets of every tile column and row, once (axis_cache.h).
     const bool clip_uv = clip_.active_u || clip_.active_v;
+    const bool prec4d = f_.p.precision_tile.kind != PrecisionKind::kFloat64;  // tiletest/precision_4d.h
     if constexpr (!A::counting)
-      axes_.build<D>(fp.lv, fp.n, use_h, std::max(tri.bx0, bin.x0), std::min(tri.bx1, bin.x1),
+      if (!prec4d) axes_.build<D>(fp.lv, fp.n, use_h, std::max(tri.bx0, bin.x0), std::min(tri.bx1, bin.x1),
                      std::max(tri.by0, bin.y0), std::min(tri.by1, bin.y1), T, G);
     for_tiles(tri, bin, [&](int tx, int ty, int px0, int py0, int tx1, int ty1) {
       ++c_[Counter::tile_visited];
@@ -190,7 +197,9 @@ class Tile final : public Traversal {
       const tiletest::AxisSet* psy = &csy;
       const AxisCache::Axis* col = nullptr;
       const AxisCache::Axis* row = nullptr;
-      if constexpr (!A::counting) {
+      bool cached_axes = !prec4d;
+      if constexpr (A::counting) cached_axes = false;
+      if (cached_axes) {
         col = &axes_.cols[static_cast<std::size_t>((tx - axes_.tx0) / T)];
         row = &axes_.rows[static_cast<std::size_t>((ty - axes_.ty0) / T)];
         psx = &col->set, psy = &row->set;
@@ -206,7 +215,13 @@ class Tile final : public Traversal {
         csx = tiletest::full_axis(), csy = tiletest::full_axis();
         if (use_h) {
           if (!tri.moving) ++c_[Counter::interval_lens_tests_4d];
-          if (!tile_h_sets<A>(fp, x0, x1, y0, y1, csx, csy, c_[Counter::ops_tile])) {
+          bool keep = tile_h_sets<A>(fp, x0, x1, y0, y1, csx, csy, c_[Counter::ops_tile]);
+          if (prec4d) {  // the decision in pipeline.precision.tile (counted as the float64 form)
+            bool ovf;
+            keep = p4_.h_sets(x0, x1, y0, y1, csx, csy, ovf);
+            if (ovf) ++c_[Counter::precision_tile4d_overflows];
+          }
+          if (!keep) {
             ++c_[Counter::tile_culled_h];
             return;
           }
@@ -248,8 +263,13 @@ class Tile final : public Traversal {
       // H_j lines: conservative overlap bitmask over the cells (001 §5.1).
       if (use_H) {
         bool any_line;
-        const tiletest::CellMask culled =
+        tiletest::CellMask culled =
             hj_culled_cells<A>(fp, x0, x1, y0, y1, G, active.i0, active.i1, active.j0, active.j1, c_, any_line);
+        if (prec4d) {  // the decision in pipeline.precision.tile (counted as the float64 form)
+          bool ovf;
+          culled = p4_.hj_cells(x0, x1, y0, y1, G, active.i0, active.i1, active.j0, active.j1, any_line, ovf);
+          if (ovf) ++c_[Counter::precision_tile4d_overflows];
+        }
         if (any_line) {
           active.remove(culled, low64_, c_);
           if (active.none()) {
@@ -467,7 +487,8 @@ class Tile final : public Traversal {
   std::vector<std::uint8_t> sel_ =
       std::vector<std::uint8_t>(f_.table.spp() + SamplePipeline<A>::flags_padding(), 0);
   std::vector<float> sx_, sy_;
-  AxisCache axes_;  // fast path: h_i sets per tile column and row of the current triangle and bin
+  AxisCache axes_;
+  tiletest::Tile4DPrecision p4_;  // the 4D tile test in pipeline.precision.tile (not float64)  // fast path: h_i sets per tile column and row of the current triangle and bin
   const iv::ClipBox clip_ = iv::clip_box(f_.p);
   iv::MotionSetup ms_;
   tiletest::MotionH5 h5_;
