@@ -139,20 +139,27 @@ struct Arith4D {
     return r;
   }
   PVal madd(PVal a, PVal b, PVal c) { return add(mul(a, b), c); }
-  // 1 / b: |1/b - 1/b'| <= e_b / (|b| (|b| - e_b)) for |b' - b| <= e_b < |b|.
+  // 1 / b: |1/b - 1/b'| <= e_b / (|b| (|b| - e_b)) for |b' - b| <= e_b < |b|. Fixed point holds the
+  // reciprocal as a reciprocal unit delivers it, normalised: a mantissa of the register's width
+  // (1 + int_bits + 2 frac_bits bits) and its exponent (on the register grid a large blur's 1/b of
+  // 2^-11 would keep no significant bit at 4 fraction bits).
   PVal rcp(PVal b) {
     const double m = std::fabs(b.v);
     if (!(m > b.e)) return {0.0, kInf};
-    PVal r = rounded(1.0 / b.v);
-    r.e += b.e / (m * (m - b.e));
-    return r;
+    const double q = 1.0 / b.v;
+    double v = static_cast<double>(static_cast<float>(q));
+    if (fixed()) {
+      const int shift = int_bits + 2 * frac_bits - (std::ilogb(q) + 1);
+      v = std::ldexp(std::nearbyint(std::ldexp(q, shift)), -shift);
+    }
+    return {v, std::fabs(v - q) + 0x1p-52 * std::fabs(q) + b.e / (m * (m - b.e))};
   }
 };
 
-// One footprint vertex in the format: Eq. 1's delta = 1/b and offset o = -a/b per axis, set up per
-// triangle; k = sign of the format's b (0: no h_i line on that axis).
+// One footprint vertex in the format: a, b and Eq. 1's delta = 1/b per axis, set up per triangle; k = sign of
+// the format's b (0: no h_i line on that axis).
 struct LensVertexIn {
-  PVal ax, ay, bx, by, ibx, iby, ox, oy;
+  PVal ax, ay, bx, by, ibx, iby;
   int kx = 0, ky = 0;
 };
 
@@ -161,22 +168,16 @@ inline LensVertexIn lens_vertex_in(Arith4D& ar, const LensVertex& v) {
   p.ax = ar.input(v.ax), p.ay = ar.input(v.ay), p.bx = ar.input(v.bx), p.by = ar.input(v.by);
   p.kx = (p.bx.v > 0) - (p.bx.v < 0);
   p.ky = (p.by.v > 0) - (p.by.v < 0);
-  if (p.kx != 0) {
-    p.ibx = ar.rcp(p.bx);
-    const PVal t = ar.mul(p.ax, p.ibx);
-    p.ox = PVal{-t.v, t.e};
-  }
-  if (p.ky != 0) {
-    p.iby = ar.rcp(p.by);
-    const PVal t = ar.mul(p.ay, p.iby);
-    p.oy = PVal{-t.v, t.e};
-  }
+  if (p.kx != 0) p.ibx = ar.rcp(p.bx);
+  if (p.ky != 0) p.iby = ar.rcp(p.by);
   return p;
 }
 
-// halfspace_lens.h axis_gaps in the format: per vertex and tile edge the lens coordinate c = e delta + o
-// (Eq. 1, one MADD per tile), each gap bound moved inward by its bound (an upper end down, a lower end up),
-// so a gap only shrinks. A vertex with b = 0 (in focus in the format) blocks a gap unless it lies beyond
+// halfspace_lens.h axis_gaps in the format: per vertex and tile edge the lens coordinate c = (e - a) delta
+// (Eq. 1 with delta = 1/b set up per triangle; the SUB before the MUL keeps delta's rounding multiplied by
+// the vertex-to-edge distance, not by the tile coordinate as e delta + o would: the MADD form loses most
+// h_i culls at large viewports), each gap bound moved inward by its bound (an upper end down, a lower end
+// up), so a gap only shrinks. A vertex with b = 0 (in focus in the format) blocks a gap unless it lies beyond
 // the edge by more than its bound.
 inline Gaps axis_gaps_in(Arith4D& ar, const LensVertexIn* vs, int n, bool y_axis, double lo, double hi) {
   const PVal L = ar.edge_lo(lo), H = ar.edge_hi(hi);
@@ -191,8 +192,8 @@ inline Gaps axis_gaps_in(Arith4D& ar, const LensVertexIn* vs, int n, bool y_axis
       if (!(a.v - a.e > H.v)) g.blocked[1] = true;
       continue;
     }
-    const PVal ib = y_axis ? v.iby : v.ibx, o = y_axis ? v.oy : v.ox;
-    const PVal c_lo = ar.madd(L, ib, o), c_hi = ar.madd(H, ib, o);
+    const PVal ib = y_axis ? v.iby : v.ibx, a = y_axis ? v.ay : v.ax;
+    const PVal c_lo = ar.mul(ar.sub(L, a), ib), c_hi = ar.mul(ar.sub(H, a), ib);
     if (k > 0) {  // gap 0 is u < c_lo, gap 1 is u > c_hi
       R0 = std::min(R0, c_lo.v - c_lo.e);
       L1 = std::max(L1, c_hi.v + c_hi.e);
