@@ -514,7 +514,8 @@ def markdown(data):
            "(`pipeline.precision`, docs/precision.md): the fixed-point scalar `core/fixed.h` (inputs snapped to "
            "`frac_bits` sub-pixel bits; registers of a sign, `int_bits` integer and 2 `frac_bits` fraction bits, "
            "so the edge set-up and the edge functions are exact on the snapped inputs) instantiating the 2D tile "
-           "test (`tiletest/edges_2d.h`) and the sample test (`sampletest/precision.h`). cudaraster (Laine & "
+           "test (`tiletest/edges_2d.h`) and the sample test (`sampletest/precision.h`), and the 4D tile test's "
+           "format form with running error bounds (`tiletest/precision_4d.h`). cudaraster (Laine & "
            "Karras 2011) snaps to 4 sub-pixel bits; 8 is shown beside it. Total bits = 1 + int_bits + 2 frac_bits.",
            "",
            "## The choice in a render",
@@ -529,12 +530,15 @@ def markdown(data):
            "",
            "(`sim.PipelineConfig(precision={...})` in Python.) A fixed-point sample or tile test widens every tile "
            "test's tile by 2^(1 - frac_bits) px, so tile culling stays conservative and every exact algorithm "
-           "renders the same image (tests/test_precision_render.py). One exception, by design of the pairing: a "
-           "fixed-point tile test culls a sub-pixel triangle that snapping collapses to zero area or flips, which "
-           "a float sample test would still hit (10 samples of spot at 2 fraction bits below, none at 4 or 8); "
-           "paired with a fixed-point sample test of the same snapping it is conservative. A float32 tile test "
-           "gets no extra margin and may lose samples. Values reaching 2^int_bits are counted (`precision.sample_overflows`, "
-           "`precision.tile_overflows`); the render keeps the unwrapped decision, where hardware would wrap. "
+           "renders the same image (tests/test_precision_render.py, tests/test_precision_4d.py). A triangle that "
+           "snapping collapses to zero area keeps its float64 edges in the 2D tile test (a float sample test may "
+           "still hit it: no sample of spot changes at 2 fraction bits below). The 4D tile test (h_i, H_j, box "
+           "bounds, ẑ) in float32 or fixed point is conservative by construction: its inputs are the lens "
+           "vertices (snapped in fixed point, within the widening), every value carries a bound of its error "
+           "and every decision moves inward by it. The 2D float32 tile test gets no extra margin and may lose "
+           "samples (the float32 rows below). Values reaching 2^int_bits are counted (`precision.sample_overflows`, "
+           "`precision.tile_overflows`, `precision.tile4d_overflows`); the render keeps the unwrapped decision, "
+           "where hardware would wrap. "
            "Operation counts do not depend on the precision.",
            "",
            "## 2D tile test and 2D sample test: fewest bits per viewport",
@@ -611,7 +615,22 @@ def markdown(data):
                 out.append(f"| {v} | float32 | {r['triangles']} | {r['tiles']} | {r['culled64']} | "
                            f"{_pct(r['lost'] / max(r['culled64'], 1))} | {r['checked']} / {r['hits']} | - | - | - |")
     out += ["",
-            "TEXT_4D",
+            "Conservative at every width: no culled pair of any row holds a ray-cast hit, and fewer fraction bits "
+            "only give up culls: float32 and 8 fraction bits none, 4 bits (cudaraster's) 16-27 pairs of about 9,200 "
+            "(0.2-0.3 %), 2 bits about 2.8 %, at every viewport (the blur grows with the "
+            "viewport, so the lens-space precision needed does not). In fixed point the H_j coefficients are "
+            "products of snapped inputs and exact; what is lost comes from the h_i lens coordinates (the rounded "
+            "reciprocal 1/b and the product (e - a)/b) and from the uv term D of the snapped lens vertices. The "
+            "integer bits grow by two per doubling of the viewport, as for the 2D test, and are set by the H_j "
+            "constant C = Δa_x (T_y - a_qy) - Δa_y (T_x - a_qx) (px^2): 2 log2 V + 2 on the suite in band (20 at "
+            "512 px, 28 at 8192 px), two below the 2D test's closed form; a bound for any footprint in the guard "
+            "band with |b| <= V is |C| <= 12 V^2, |A|, |B| <= 7 V^2: 4 + 2 log2 V bits. So an 8192 px datapath "
+            "with cudaraster's 4 sub-pixel bits needs 37-bit registers for the 4D tile test (1 + 28 + 2 x 4), "
+            "against 40 for the 2D tile test. The lens vertices of unclipped triangles (a vertex near the lens "
+            "plane) need 53-61 integer bits, which a clipping datapath never sees. In renders (spot at CoC 10, "
+            "below) the fixed tile stage raises the samples tested by 0.5 % / 9 % / 29 % at 8 / 4 / 2 fraction "
+            "bits: mostly the 2^(1 - frac_bits) px widening of every 2x2 tile, which these rows share with float64 "
+            "(the 'lens cells culled (float64)' column is on the widened tiles); no sample changes.",
             "",
             "## Sample test by class: vertices placed per sample",
             "",
@@ -656,13 +675,15 @@ def markdown(data):
         out += ["",
                 "Every sample the fixed-point sample test changes lies within DELTA of an edge (the tables above); on "
                 "spot they are 0.02 % of the samples at 8 fraction bits, 0.4 % at 4 and 1.5 % at 2, with image RMSE "
-                "0.0009 / 0.005 / 0.010 in focus. The tile test gives up culls, never samples: the 2^(1 - frac_bits) px "
-                "widening keeps 2.4 % / 21 % / 57 % of the in-focus tiles float64 culls at 8 / 4 / 2 fraction bits, "
-                "which raises the samples tested by 0.6 % / 6 % / 16 %. The sample-relative edge functions stay "
-                "small on small triangles: with 14 integer bits spot's sample tests never overflow at 256 px, "
-                "while its 2D tile-test set-up (C = x_j y_k - y_j x_k, screen-sized) overflows 22,859 times; the "
-                "hard-case suite's large triangles need the full viewport-sized formats of the first table. float32 "
-                "and float64 sample tests change no sample here.",
+                "0.0009 / 0.005 / 0.010 in focus. The tile test gives up culls, never samples: in focus the "
+                "2^(1 - frac_bits) px widening loses 2.4 % / 21 % / 58 % of the 2D tiles float64 culls at 8 / 4 / 2 "
+                "fraction bits, which raises the samples tested by 0.6 % / 6 % / 16 %; at CoC 10 (the 4D tile test in "
+                "the format) the samples tested rise by 0.5 % / 9 % / 29 %, and no sample changes at any width. The "
+                "sample-relative edge functions stay small on small triangles: with 14 integer bits spot's sample "
+                "tests never overflow at 256 px, while its 2D tile-test set-up (C = x_j y_k - y_j x_k, screen-sized) "
+                "overflows 22,851 times in focus and its 4D tile tests 76,824 times at CoC 10 (the 4D rows' 2 log2 V "
+                "+ 2 is 18 at 256 px); the hard-case suite's large triangles need the full viewport-sized formats of "
+                "the first tables. float32 and float64 sample tests change no sample here.",
                 "",
                 "## Depth",
                 "",
@@ -686,10 +707,12 @@ def markdown(data):
     out += ["",
             "## Not measured",
             "",
-            "The h_i / H_j tile tests (4D: 001 §4) and INTERVAL's box bounds run in float64 on widened tiles in every "
-            "render; their fixed-point form is not instantiated, so no 4D tile-test row is given. The fixed-point "
-            "sample test places the vertices at (u, v, t) in float64 before snapping; a datapath placing them in "
-            "fixed point would add that rounding. Line samples (`lines`) and the gpu_* pipeline's own tests do not "
+            "The time intervals t̂, the 5D lens sets and H5 of moving triangles, laine5d and the conservative "
+            "rasterizer run in float64 on widened tiles in every render (no format form). The 4D tile test's lens "
+            "vertices (a, b of 001 Eq. 1) and the fixed-point sample test's placed vertices come from float64 "
+            "before snapping; a datapath computing them in fixed point would add that rounding. The 4D rows "
+            "measure h_i and H_j (TILE's static path); the box bounds (INTERVAL, INTERLEAVE) and ẑ in the format "
+            "are covered by the render tests only. Line samples (`lines`) and the gpu_* pipeline's own tests do not "
             "take `pipeline.precision`.",
             ""]
     return "\n".join(out)
