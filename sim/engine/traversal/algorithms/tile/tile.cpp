@@ -177,7 +177,8 @@ class Tile final : public Traversal {
     const RenderParams& p = f_.p;
     const int T = p.tile_size, G = p.lens_grid;
     const bool use_h = p.halfspace_h && fp.h_valid;
-    const bool use_H = p.halfspace_H && !tri.moving;  // build_footprint set up H_j (sigma, or per-cell signs)
+    const bool use_H_in = p.halfspace_H && !tri.moving && p.precision_tile.kind != PrecisionKind::kFloat64;
+    const bool use_H = p.halfspace_H && !tri.moving && !use_H_in;  // build_footprint set up H_j (sigma, or per-cell signs)
     if (kInterleaved && !tri.moving)
       pipe_.begin_sheared(tri, sx_.data(), sy_.data(), 3);
     else
@@ -260,16 +261,26 @@ class Tile final : public Traversal {
         ++c_[Counter::tile_culled_lens];
         return;
       }
+      if (use_H_in) {  // H_j in pipeline.precision.tile: counted as the float64 form, decided in the format
+        bool any_line, ovf;
+        hj_culled_cells<A>(fp, x0, x1, y0, y1, G, active.i0, active.i1, active.j0, active.j1, c_, any_line);
+        const tiletest::CellMask culled =
+            p4_.hj_cells(x0, x1, y0, y1, G, active.i0, active.i1, active.j0, active.j1, any_line, ovf);
+        if (ovf) ++c_[Counter::precision_tile4d_overflows];
+        if (any_line) {
+          active.remove(culled, low64_, c_);
+          if (active.none()) {
+            ++c_[Counter::tile_culled_H];
+            return;
+          }
+        }
+      }
+
       // H_j lines: conservative overlap bitmask over the cells (001 §5.1).
       if (use_H) {
         bool any_line;
-        tiletest::CellMask culled =
+        const tiletest::CellMask culled =
             hj_culled_cells<A>(fp, x0, x1, y0, y1, G, active.i0, active.i1, active.j0, active.j1, c_, any_line);
-        if (prec4d) {  // the decision in pipeline.precision.tile (counted as the float64 form)
-          bool ovf;
-          culled = p4_.hj_cells(x0, x1, y0, y1, G, active.i0, active.i1, active.j0, active.j1, any_line, ovf);
-          if (ovf) ++c_[Counter::precision_tile4d_overflows];
-        }
         if (any_line) {
           active.remove(culled, low64_, c_);
           if (active.none()) {
