@@ -58,6 +58,15 @@ namespace rast5d::tiletest {
 struct PVal {
   double v = 0.0, e = 0.0;
 };
+// The ends of the interval a PVal guarantees; an undefined bound (NaN: inf * 0) is no bound at all.
+inline double lower(PVal x) {
+  const double r = x.v - x.e;
+  return r == r ? r : -kInf;
+}
+inline double upper(PVal x) {
+  const double r = x.v + x.e;
+  return r == r ? r : kInf;
+}
 
 // The format's arithmetic (float32 or fixed; float64 is never routed here).
 struct Arith4D {
@@ -188,18 +197,18 @@ inline Gaps axis_gaps_in(Arith4D& ar, const LensVertexIn* vs, int n, bool y_axis
     const int k = y_axis ? v.ky : v.kx;
     if (k == 0) {
       const PVal a = y_axis ? v.ay : v.ax;
-      if (!(a.v + a.e < L.v)) g.blocked[0] = true;
-      if (!(a.v - a.e > H.v)) g.blocked[1] = true;
+      if (!(upper(a) < L.v)) g.blocked[0] = true;
+      if (!(lower(a) > H.v)) g.blocked[1] = true;
       continue;
     }
     const PVal ib = y_axis ? v.iby : v.ibx, a = y_axis ? v.ay : v.ax;
     const PVal c_lo = ar.mul(ar.sub(L, a), ib), c_hi = ar.mul(ar.sub(H, a), ib);
     if (k > 0) {  // gap 0 is u < c_lo, gap 1 is u > c_hi
-      R0 = std::min(R0, c_lo.v - c_lo.e);
-      L1 = std::max(L1, c_hi.v + c_hi.e);
+      R0 = std::min(R0, lower(c_lo));
+      L1 = std::max(L1, upper(c_hi));
     } else {      // gap 0 is u > c_lo, gap 1 is u < c_hi
-      L0 = std::max(L0, c_lo.v + c_lo.e);
-      R1 = std::min(R1, c_hi.v - c_hi.e);
+      L0 = std::max(L0, upper(c_lo));
+      R1 = std::min(R1, lower(c_hi));
     }
   }
   g.L[0] = L0, g.R[0] = R0, g.L[1] = L1, g.R[1] = R1;
@@ -227,8 +236,8 @@ inline int orientation_in(Arith4D& ar, const LensVertexIn* vs, int n) {
       const int k = (j + 1) % n;
       area = ar.add(area, ar.sub(ar.mul(x[j], yv[k]), ar.mul(yv[j], x[k])));
     }
-    pos += area.v - area.e > 0.0;
-    neg += area.v + area.e < 0.0;
+    pos += lower(area) > 0.0;
+    neg += upper(area) < 0.0;
   }
   return pos == 4 ? 1 : (neg == 4 ? -1 : 0);
 }
@@ -291,8 +300,8 @@ inline void box_bounds_in(Arith4D& ar, const LensVertex* lv, int n, double u0, d
     const LensVertexIn p = lens_vertex_in(ar, lv[j]);
     for (int c = 0; c < 2; ++c) {
       const PVal x = ar.madd(U[c], p.bx, p.ax), y = ar.madd(V[c], p.by, p.ay);
-      lx = std::min(lx, x.v - x.e), hx = std::max(hx, x.v + x.e);
-      ly = std::min(ly, y.v - y.e), hy = std::max(hy, y.v + y.e);
+      lx = std::min(lx, lower(x)), hx = std::max(hx, upper(x));
+      ly = std::min(ly, lower(y)), hy = std::max(hy, upper(y));
     }
   }
 }
