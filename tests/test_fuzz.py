@@ -276,6 +276,25 @@ def test_fuzz_probe(data):
     _probe_case(data)
 
 
+def _probe_4d_case(data):
+    TRIED["precision_probe_4d"] += 1
+    p, cam = data.draw(camera_params())
+    v0, _ = data.draw(triangles(cam, n_max=1))
+    v0 = v0[0] if v0.ndim == 3 and len(v0) else np.zeros((3, 3), np.float32)
+    p.precision_tile = data.draw(st.sampled_from(["float64", "float32", {"fixed": {"int_bits": 8, "frac_bits": 0}},
+                                                  {"fixed": {"int_bits": 40, "frac_bits": 4}},
+                                                  {"fixed": {"int_bits": 62, "frac_bits": 18}}]))
+    k = data.draw(st.integers(0, 6))
+    tiles = np.array(data.draw(st.lists(wild_float, min_size=4 * k, max_size=4 * k)), np.float64).reshape(k, 4)
+    _call(sim._core.precision_probe_4d, p, v0, tiles)
+
+
+@FAST
+@given(st.data())
+def test_fuzz_precision_probe_4d(data):
+    _probe_4d_case(data)
+
+
 def _gpu_bound_case(data):
     TRIED["gpu_bound"] += 1
     p, cam = data.draw(camera_params())
@@ -409,6 +428,7 @@ def test_fuzz_timing_and_cache_models(data):
 
 CASES = {"render": lambda d: _render_case(d, False), "occlusion_query": lambda d: _render_case(d, True),
          "conservative_raster": _conservative_case, "probe": _probe_case, "gpu_bound": _gpu_bound_case,
+         "precision_probe_4d": _probe_4d_case,
          "lens_grid_buckets": _buckets_case,
          "sample_table": _table_case, "texture_setup": _texture_case, "timing_and_cache": _timing_case}
 

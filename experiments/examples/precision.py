@@ -292,6 +292,100 @@ def rows_nd(V, seed=3):
     return rows
 
 
+# ----------------------------------------------------------------------------- the 4D tile test
+
+FRAC_4D = (2, 4, 8)
+TILE_4D, N_TILES_4D, GRID_4D = 2, 48, 4
+CHECK_PAIRS, CHECK_POINTS = 150, 8
+
+
+def _tiles_near(lv, V, rng):
+    """Up to N_TILES_4D tiles of TILE_4D px on the screen over the footprint's extent seen from the lens."""
+    ends = np.concatenate([lv[:, :2] - np.abs(lv[:, 2:]), lv[:, :2] + np.abs(lv[:, 2:])])
+    lo = np.clip(ends.min(0) - TILE_4D, 0, V - TILE_4D)
+    hi = np.clip(ends.max(0) + TILE_4D, lo + TILE_4D, V)
+    x = np.floor(rng.uniform(lo[0], hi[0] - TILE_4D + 1, N_TILES_4D) / TILE_4D) * TILE_4D
+    y = np.floor(rng.uniform(lo[1], hi[1] - TILE_4D + 1, N_TILES_4D) / TILE_4D) * TILE_4D
+    return np.stack([x, x + TILE_4D, y, y + TILE_4D], axis=1)
+
+
+def _ray_cast_hits(ref, cam, p0, tiles, culled, rng):
+    """Culled (tile, lens cell) pairs checked with the float64 ray caster: random samples of the tile's
+    pixels and the cell's lens points; returns (hits in front of the near plane, samples)."""
+    pairs = np.argwhere(culled)
+    if len(pairs) == 0:
+        return 0, 0
+    if len(pairs) > CHECK_PAIRS:
+        pairs = pairs[rng.choice(len(pairs), CHECK_PAIRS, replace=False)]
+    t = np.repeat(pairs[:, 0], CHECK_POINTS)
+    c = np.repeat(pairs[:, 1], CHECK_POINTS)
+    r = rng.random((len(t), 4))
+    T = tiles[t]
+    pts = np.stack([T[:, 0] + r[:, 0] * TILE_4D, T[:, 2] + r[:, 1] * TILE_4D,
+                    -1.0 + (c % GRID_4D + r[:, 2]) * 2.0 / GRID_4D, -1.0 + (c // GRID_4D + r[:, 3]) * 2.0 / GRID_4D,
+                    np.zeros(len(t))], axis=1)
+    return int(ref.ray_cast(cam, p0, p0, pts).hit.sum()), len(t)
+
+
+def rows_4d(V, seed=5):
+    """The render's 4D tile test (h_i sets and H_j cells; sim._core.precision_probe_4d, tiletest/precision_4d.h)
+    on the static defocused triangles of the hard-case suite at viewport V (blur scaled with V), over 2x2 tiles
+    near each footprint and a 4x4 lens grid, in float32 and fixed point at 2, 4 and 8 fraction bits: the fewest
+    int_bits (largest register), overflows at int_bits - 1, lens cells culled in float64 and lost in the format,
+    and culled (tile, cell) pairs in which the float64 ray caster hits the triangle (must be none)."""
+    from tests import reference as ref
+
+    rng = np.random.default_rng(seed)
+    precisions = [("float32", None)] + [("fixed", F) for F in FRAC_4D]
+    acc = {}
+    cases = []
+    for name, cam, p0, _p1 in _hard_cameras(V):
+        if cam.coc_px == 0.0:
+            continue
+        for i in range(p0.shape[0]):
+            v0, _ = cam.engine_vertices(p0[i][None], p0[i][None])
+            params = ref.engine_params(cam)
+            params.lens_grid = GRID_4D
+            probe = _core.precision_probe_4d(params, v0[0], np.zeros((0, 4)))
+            if probe["dim_class"] != 2:  # static defocused (4D) only
+                continue
+            lv = np.asarray(probe["lens_vertices"])
+            band = bool((np.abs(lv[:, :2] - V / 2) <= 1.5 * V).all() and (np.abs(lv[:, 2:]) <= V).all())
+            cases.append((cam, p0[i], v0[0], _tiles_near(lv, V, rng), band))
+    for kind, F in precisions:
+        a = acc.setdefault((kind, F), dict(tiles=0, culled64=0, culled=0, lost=0, hits=0, checked=0, max_all=0.0,
+                                           max_band=0.0, sigma_lost=0))
+        for cam, p0, v0, tiles, band in cases:
+            params = ref.engine_params(cam)
+            params.lens_grid = GRID_4D
+            params.precision_tile = kind if F is None else {"fixed": {"int_bits": PROBE_BITS, "frac_bits": F}}
+            r = _core.precision_probe_4d(params, v0, tiles)
+            c, c64 = np.asarray(r["culled"]), np.asarray(r["culled64"])
+            a["tiles"] += len(tiles)
+            a["culled64"] += int(c64.sum())
+            a["culled"] += int(c.sum())
+            a["lost"] += int((c64 & ~c).sum())
+            a["sigma_lost"] += int(r["sigma64"] != 0 and r["sigma"] == 0)
+            h, n = _ray_cast_hits(ref, cam, p0, tiles, c, rng)
+            a["hits"] += h
+            a["checked"] += n
+            if F is not None:
+                a["max_all"] = max(a["max_all"], float(r["max_abs"]))
+                if band:
+                    a["max_band"] = max(a["max_band"], float(r["max_abs"]))
+        if F is not None:  # the overflows one integer bit below the fewest
+            ib = int_bits_for(a["max_all"])
+            a["int_bits_all"], a["int_bits_band"], a["below"] = ib, int_bits_for(a["max_band"]), 0
+            for cam, p0, v0, tiles, band in cases:
+                params = ref.engine_params(cam)
+                params.lens_grid = GRID_4D
+                params.precision_tile = {"fixed": {"int_bits": max(ib - 1, 1), "frac_bits": F}}
+                a["below"] += int(np.asarray(_core.precision_probe_4d(params, v0, tiles)["overflow"]).sum())
+    rows = [dict(viewport=V, kind=kind, frac_bits=F, triangles=len(cases), **a) for (kind, F), a in acc.items()]
+    print(rows, flush=True)
+    return rows
+
+
 ROWS = REPO / "results" / "precision_rows.json"  # finished viewports: a rerun resumes
 
 
@@ -307,6 +401,12 @@ def study():
                             cpu_s=time.process_time() - t0)
         ROWS.parent.mkdir(exist_ok=True)
         ROWS.write_text(json.dumps(data))
+    for V in VIEWPORTS:
+        if "rows_4d" not in data[str(V)]:
+            t0 = time.process_time()
+            data[str(V)]["rows_4d"] = rows_4d(V)
+            data[str(V)]["cpu_s"] += time.process_time() - t0
+            ROWS.write_text(json.dumps(data))
     if "renders" not in data:
         t0 = time.process_time()
         data["renders"] = dict(image=render_rows(), depth=depth_rows(), cpu_s=0.0)
@@ -367,7 +467,8 @@ def render_rows():
                             culled_2d=int(s["tile.culled_2d"]), culled_2d_base=int(base.flat_stats["tile.culled_2d"]),
                             tested=int(s["raster.samples_tested"]), tested_base=int(base.flat_stats["raster.samples_tested"]),
                             sample_overflows=int(s["precision.sample_overflows"]),
-                            tile_overflows=int(s["precision.tile_overflows"])))
+                            tile_overflows=int(s["precision.tile_overflows"]),
+                            tile4d_overflows=int(s["precision.tile4d_overflows"])))
             print(out[-1], flush=True)
     return out
 
@@ -413,7 +514,8 @@ def markdown(data):
            "(`pipeline.precision`, docs/precision.md): the fixed-point scalar `core/fixed.h` (inputs snapped to "
            "`frac_bits` sub-pixel bits; registers of a sign, `int_bits` integer and 2 `frac_bits` fraction bits, "
            "so the edge set-up and the edge functions are exact on the snapped inputs) instantiating the 2D tile "
-           "test (`tiletest/edges_2d.h`) and the sample test (`sampletest/precision.h`). cudaraster (Laine & "
+           "test (`tiletest/edges_2d.h`) and the sample test (`sampletest/precision.h`), and the 4D tile test's "
+           "format form with running error bounds (`tiletest/precision_4d.h`). cudaraster (Laine & "
            "Karras 2011) snaps to 4 sub-pixel bits; 8 is shown beside it. Total bits = 1 + int_bits + 2 frac_bits.",
            "",
            "## The choice in a render",
@@ -428,12 +530,15 @@ def markdown(data):
            "",
            "(`sim.PipelineConfig(precision={...})` in Python.) A fixed-point sample or tile test widens every tile "
            "test's tile by 2^(1 - frac_bits) px, so tile culling stays conservative and every exact algorithm "
-           "renders the same image (tests/test_precision_render.py). One exception, by design of the pairing: a "
-           "fixed-point tile test culls a sub-pixel triangle that snapping collapses to zero area or flips, which "
-           "a float sample test would still hit (10 samples of spot at 2 fraction bits below, none at 4 or 8); "
-           "paired with a fixed-point sample test of the same snapping it is conservative. A float32 tile test "
-           "gets no extra margin and may lose samples. Values reaching 2^int_bits are counted (`precision.sample_overflows`, "
-           "`precision.tile_overflows`); the render keeps the unwrapped decision, where hardware would wrap. "
+           "renders the same image (tests/test_precision_render.py, tests/test_precision_4d.py). A triangle that "
+           "snapping collapses to zero area keeps its float64 edges in the 2D tile test (a float sample test may "
+           "still hit it: no sample of spot changes at 2 fraction bits below). The 4D tile test (h_i, H_j, box "
+           "bounds, ẑ) in float32 or fixed point is conservative by construction: its inputs are the lens "
+           "vertices (snapped in fixed point, within the widening), every value carries a bound of its error "
+           "and every decision moves inward by it. The 2D float32 tile test gets no extra margin and may lose "
+           "samples (the float32 rows below). Values reaching 2^int_bits are counted (`precision.sample_overflows`, "
+           "`precision.tile_overflows`, `precision.tile4d_overflows`); the render keeps the unwrapped decision, "
+           "where hardware would wrap. "
            "Operation counts do not depend on the precision.",
            "",
            "## 2D tile test and 2D sample test: fewest bits per viewport",
@@ -479,6 +584,54 @@ def markdown(data):
             "a float32 tile test's misses without a margin (the render's float32 option has only the 2^-10 px one), "
             "and sample disagreements beyond 10^-3 px are what float32 costs at large viewports.",
             "",
+            "## 4D tile test: fewest bits per viewport",
+            "",
+            "The render's 4D tile test in the format (`tiletest/precision_4d.h`, `sim._core.precision_probe_4d`): the "
+            "h_i sets (001 Eq. 1-3) and H_j cells (Eq. 4-5) of TILE's static path, on the static defocused "
+            "triangles of the hard-case suite at each viewport, blur scaled with the viewport (the suite's CoC of "
+            "8 px at 32 px becomes 128 px at 512 and 2048 px at 8192), 48 random 2x2 tiles near each footprint, a "
+            "4x4 lens grid; tiles widened as a render widens them. Each form is conservative by construction "
+            "(lens vertices snapped, running error bounds, every decision moved inward: docs/tile_tests.md "
+            "'Precision'); the check: up to 150 culled (tile, lens cell) pairs per triangle, 8 random samples in "
+            "each, against the float64 thin-lens ray caster (hits in front of the near plane must be none). Cull "
+            "lost = (tile, cell) pairs float64 culls and the format does not, of all float64 culls. Fewest "
+            "int_bits = the smallest n with every register below 2^n, over the triangles whose lens vertices lie "
+            "in a guard band of one viewport ('in band') and over all (vertices near the lens plane project "
+            "arbitrarily far).",
+            "",
+            "| viewport [px] | arithmetic | triangles | tiles | lens cells culled (float64) | cull lost | culled "
+            "pairs checked: samples / ray-cast hits | fewest int_bits in band (total bits) | fewest int_bits all | "
+            "overflowing tests at all - 1 |",
+            "|---|---|---|---|---|---|---|---|---|---|"]
+    for v in vs:
+        for r in data[str(v)].get("rows_4d", []):
+            if r["kind"] == "fixed":
+                F = r["frac_bits"]
+                ib = f"{r['int_bits_band']} ({1 + r['int_bits_band'] + 2 * F})"
+                out.append(f"| {v} | fixed, frac_bits {F} | {r['triangles']} | {r['tiles']} | {r['culled64']} | "
+                           f"{_pct(r['lost'] / max(r['culled64'], 1))} | {r['checked']} / {r['hits']} | {ib} | "
+                           f"{r['int_bits_all']} | {r['below']} |")
+            else:
+                out.append(f"| {v} | float32 | {r['triangles']} | {r['tiles']} | {r['culled64']} | "
+                           f"{_pct(r['lost'] / max(r['culled64'], 1))} | {r['checked']} / {r['hits']} | - | - | - |")
+    out += ["",
+            "Conservative at every width: no culled pair of any row holds a ray-cast hit, and fewer fraction bits "
+            "only give up culls: float32 and 8 fraction bits none, 4 bits (cudaraster's) 16-27 pairs of about 9,200 "
+            "(0.2-0.3 %), 2 bits about 2.8 %, at every viewport (the blur grows with the "
+            "viewport, so the lens-space precision needed does not). In fixed point the H_j coefficients are "
+            "products of snapped inputs and exact; what is lost comes from the h_i lens coordinates (the rounded "
+            "reciprocal 1/b and the product (e - a)/b) and from the uv term D of the snapped lens vertices. The "
+            "integer bits grow by two per doubling of the viewport, as for the 2D test, and are set by the H_j "
+            "constant C = Δa_x (T_y - a_qy) - Δa_y (T_x - a_qx) (px^2): 2 log2 V + 2 on the suite in band (20 at "
+            "512 px, 28 at 8192 px), two below the 2D test's closed form; a bound for any footprint in the guard "
+            "band with |b| <= V is |C| <= 12 V^2, |A|, |B| <= 7 V^2: 4 + 2 log2 V bits. So an 8192 px datapath "
+            "with cudaraster's 4 sub-pixel bits needs 37-bit registers for the 4D tile test (1 + 28 + 2 x 4), "
+            "against 40 for the 2D tile test. The lens vertices of unclipped triangles (a vertex near the lens "
+            "plane) need 53-61 integer bits, which a clipping datapath never sees. In renders (spot at CoC 10, "
+            "below) the fixed tile stage raises the samples tested by 0.5 % / 9 % / 29 % at 8 / 4 / 2 fraction "
+            "bits: mostly the 2^(1 - frac_bits) px widening of every 2x2 tile, which these rows share with float64 "
+            "(the 'lens cells culled (float64)' column is on the widened tiles); no sample changes.",
+            "",
             "## Sample test by class: vertices placed per sample",
             "",
             "The render's sample test (`sim._core.precision_probe`: vertices placed at each sample's (u, v, t) in "
@@ -512,23 +665,25 @@ def markdown(data):
                 "default's.",
                 "",
                 "| CoC [px] | precision | image RMSE | samples differing | 2D tiles culled (default) | tile culls lost | "
-                "samples tested / default | sample overflows | tile overflows |",
-                "|---|---|---|---|---|---|---|---|---|"]
+                "samples tested / default | sample overflows | 2D tile overflows | 4D tile-test overflows |",
+                "|---|---|---|---|---|---|---|---|---|---|"]
         for r in data["renders"]["image"]:
             lost = 1 - r["culled_2d"] / r["culled_2d_base"] if r["culled_2d_base"] else 0.0
             out.append(f"| {r['coc']:g} | {r['label']} | {r['rmse']:.3g} | {r['samples_differ']} of {r['samples']} | "
                        f"{r['culled_2d']} ({r['culled_2d_base']}) | {_pct(lost)} | {r['tested'] / r['tested_base']:.4f} | "
-                       f"{r['sample_overflows']} | {r['tile_overflows']} |")
+                       f"{r['sample_overflows']} | {r['tile_overflows']} | {r.get('tile4d_overflows', 0)} |")
         out += ["",
                 "Every sample the fixed-point sample test changes lies within DELTA of an edge (the tables above); on "
                 "spot they are 0.02 % of the samples at 8 fraction bits, 0.4 % at 4 and 1.5 % at 2, with image RMSE "
-                "0.0009 / 0.005 / 0.010 in focus. The tile test gives up culls, never samples: the 2^(1 - frac_bits) px "
-                "widening keeps 2.4 % / 21 % / 57 % of the in-focus tiles float64 culls at 8 / 4 / 2 fraction bits, "
-                "which raises the samples tested by 0.6 % / 6 % / 16 %. The sample-relative edge functions stay "
-                "small on small triangles: with 14 integer bits spot's sample tests never overflow at 256 px, "
-                "while its 2D tile-test set-up (C = x_j y_k - y_j x_k, screen-sized) overflows 22,859 times; the "
-                "hard-case suite's large triangles need the full viewport-sized formats of the first table. float32 "
-                "and float64 sample tests change no sample here.",
+                "0.0009 / 0.005 / 0.010 in focus. The tile test gives up culls, never samples: in focus the "
+                "2^(1 - frac_bits) px widening loses 2.4 % / 21 % / 58 % of the 2D tiles float64 culls at 8 / 4 / 2 "
+                "fraction bits, which raises the samples tested by 0.6 % / 6 % / 16 %; at CoC 10 (the 4D tile test in "
+                "the format) the samples tested rise by 0.5 % / 9 % / 29 %, and no sample changes at any width. The "
+                "sample-relative edge functions stay small on small triangles: with 14 integer bits spot's sample "
+                "tests never overflow at 256 px, while its 2D tile-test set-up (C = x_j y_k - y_j x_k, screen-sized) "
+                "overflows 22,851 times in focus and its 4D tile tests 76,824 times at CoC 10 (the 4D rows' 2 log2 V "
+                "+ 2 is 18 at 256 px); the hard-case suite's large triangles need the full viewport-sized formats of "
+                "the first tables. float32 and float64 sample tests change no sample here.",
                 "",
                 "## Depth",
                 "",
@@ -552,10 +707,12 @@ def markdown(data):
     out += ["",
             "## Not measured",
             "",
-            "The h_i / H_j tile tests (4D: 001 §4) and INTERVAL's box bounds run in float64 on widened tiles in every "
-            "render; their fixed-point form is not instantiated, so no 4D tile-test row is given. The fixed-point "
-            "sample test places the vertices at (u, v, t) in float64 before snapping; a datapath placing them in "
-            "fixed point would add that rounding. Line samples (`lines`) and the gpu_* pipeline's own tests do not "
+            "The time intervals t̂, the 5D lens sets and H5 of moving triangles, laine5d and the conservative "
+            "rasterizer run in float64 on widened tiles in every render (no format form). The 4D tile test's lens "
+            "vertices (a, b of 001 Eq. 1) and the fixed-point sample test's placed vertices come from float64 "
+            "before snapping; a datapath computing them in fixed point would add that rounding. The 4D rows "
+            "measure h_i and H_j (TILE's static path); the box bounds (INTERVAL, INTERLEAVE) and ẑ in the format "
+            "are covered by the render tests only. Line samples (`lines`) and the gpu_* pipeline's own tests do not "
             "take `pipeline.precision`.",
             ""]
     return "\n".join(out)

@@ -14,7 +14,9 @@
 #include "core/fixed.h"
 #include "sampletest/hardware.h"
 #include "sampletest/precision.h"
+#include "setup/footprint.h"
 #include "tiletest/edges_2d.h"
+#include "tiletest/precision_4d.h"
 #include "selftest/kernel_costs.h"
 #include "selftest/probe.h"
 
@@ -277,6 +279,104 @@ void register_selftest(py::module_& m) {
       "(M, 2), tile_outside (K,) for tiles (K, 4) = (x0, x1, y0, y1), per-query overflow flags, and the "
       "largest register magnitudes max_abs_sample / max_abs_tile (fixed: the fewest int_bits n satisfy "
       "max_abs < 2^n).");
+
+  m.def(
+      "precision_probe_4d",
+      [](const RenderParams& p, const FArr& v0, const DArr& tiles) {
+        require_shape(v0, {3, 3}, "v0");
+        require_shape(tiles, {-1, 4}, "tiles");
+        for (py::ssize_t i = 0; i < tiles.size(); ++i)
+          if (!(std::fabs(tiles.data()[i]) <= 0x1p24))  // lens-cell indices are ints: finite, screen-sized tiles
+            throw std::invalid_argument("tiles: expected finite pixel coordinates within +-2^24, got " +
+                                        std::to_string(tiles.data()[i]));
+        const FrameConst fc = make_frame_const(p);
+        const float col[9] = {1, 1, 1, 1, 1, 1, 1, 1, 1};
+        TriSetup tri;
+        Counters c;
+        setup_triangle<FastArith>(v0.data(), v0.data(), col, 0, p, fc, tri, c);
+        py::dict out;
+        out["dim_class"] = c[Counter::setup_culled_near] ? -1 : static_cast<int>(tri.cls);
+        if (c[Counter::setup_culled_near] || tri.poly_n < 3) return out;
+        // the render's footprint of a static triangle (setup/footprint.h): lens vertices of the clipped
+        // polygon, H_j edges (all active: no oracle), the orientation over the lens
+        const int n = tri.poly_n, G = p.lens_grid, k_tiles = static_cast<int>(tiles.shape(0));
+        tiletest::LensVertex lv[6];
+        tiletest::EdgeH edges[6];
+        bool active[6] = {false, false, false, false, false, false};
+        for (int j = 0; j < n; ++j)
+          lv[j] = tiletest::lens_vertex(tri.poly[j][0], tri.poly[j][1], tri.poly[j][2], -fc.focus_d, fc.kx_d, fc.ky_d);
+        for (int j = 0; j < n; ++j) {
+          edges[j] = tiletest::edge_setup(tri.poly[j], tri.poly[(j + 1) % n], fc.focus_d, fc.kx_d, fc.ky_d);
+          active[j] = edges[j].active;
+        }
+        const int sigma = lens_orientation<double>(tri, fc);
+        const Precision prec = p.precision_tile;
+        const double saved = tiletest::t_snap_margin_px;
+        tiletest::t_snap_margin_px = snap_margin_px(p.precision_sample, prec);
+        tiletest::Tile4DPrecision p4;
+        if (prec.kind != PrecisionKind::kFloat64) p4.setup(prec, lv, n, active, true);
+        py::array_t<bool> culled64({k_tiles, G * G}), culled({k_tiles, G * G}), overflow(k_tiles);
+        auto cells = [G](const tiletest::AxisSet& sx, const tiletest::AxisSet& sy, bool keep, const tiletest::CellMask& H,
+                         bool* dst) {
+          const std::uint32_t bx = keep ? tiletest::axis_cells<double>(sx, G) : 0u;
+          const std::uint32_t by = keep ? tiletest::axis_cells<double>(sy, G) : 0u;
+          for (int j = 0; j < G; ++j)
+            for (int i = 0; i < G; ++i) dst[j * G + i] = !(((bx >> i) & 1u) && ((by >> j) & 1u)) || H.test(j * G + i);
+        };
+        for (int t = 0; t < k_tiles; ++t) {
+          const double* q = tiles.data() + 4 * static_cast<std::size_t>(t);
+          const double x0 = tiletest::expand_lo(q[0]), x1 = tiletest::expand_hi(q[1]);
+          const double y0 = tiletest::expand_lo(q[2]), y1 = tiletest::expand_hi(q[3]);
+          tiletest::AxisSet sx, sy;
+          std::uint64_t ops = 0;
+          const bool keep64 = tiletest::tile_h_sets<FastArith>(lv, n, x0, x1, y0, y1, sx, sy, ops);
+          tiletest::CellMask H64;  // hj_culled_cells with one orientation over the lens (sigma != 0)
+          for (int k = 0; k < n && sigma != 0; ++k) {
+            if (!edges[k].active) continue;
+            int m1, m2;
+            if (!tiletest::tangent_corners<double>(edges[k], x0, x1, y0, y1, m1, m2)) continue;
+            tiletest::CellMask e;
+            e.set();
+            for (const int corner : {m1, m2})
+              e &= tiletest::line_cells<double>(
+                  tiletest::line_at_corner<double>(edges[k], (corner & 1) ? x1 : x0, (corner & 2) ? y1 : y0, sigma), G,
+                  0, G - 1, 0, G - 1);
+            H64 |= e;
+          }
+          cells(sx, sy, keep64, H64, culled64.mutable_data() + static_cast<std::size_t>(t) * G * G);
+          if (prec.kind == PrecisionKind::kFloat64) {
+            cells(sx, sy, keep64, H64, culled.mutable_data() + static_cast<std::size_t>(t) * G * G);
+            overflow.mutable_data()[t] = false;
+            continue;
+          }
+          bool o1, o2, any;
+          const bool keep = p4.h_sets(x0, x1, y0, y1, sx, sy, o1);
+          const tiletest::CellMask H = p4.hj_cells(x0, x1, y0, y1, G, 0, G - 1, 0, G - 1, any, o2);
+          cells(sx, sy, keep, H, culled.mutable_data() + static_cast<std::size_t>(t) * G * G);
+          overflow.mutable_data()[t] = o1 || o2;
+        }
+        tiletest::t_snap_margin_px = saved;
+        py::array_t<double> lens_vertices({n, 4});
+        for (int j = 0; j < n; ++j) {
+          double* d = lens_vertices.mutable_data() + 4 * j;
+          d[0] = lv[j].ax, d[1] = lv[j].ay, d[2] = lv[j].bx, d[3] = lv[j].by;
+        }
+        out["culled64"] = culled64;
+        out["culled"] = culled;
+        out["overflow"] = overflow;
+        out["max_abs"] = prec.kind == PrecisionKind::kFixed ? p4.ar.max_abs : 0.0;
+        out["sigma64"] = sigma;
+        out["sigma"] = prec.kind == PrecisionKind::kFloat64 ? sigma : p4.sigma;
+        out["lens_vertices"] = lens_vertices;
+        return out;
+      },
+      py::arg("params"), py::arg("v0"), py::arg("tiles"),
+      "The render's 4D tile test (h_i sets and H_j cells of tile's static path; tiletest/precision_4d.h in "
+      "params.precision_tile, tiles widened as a render widens them) of one static triangle v0 (3, 3) "
+      "(pixel-homogeneous) against tiles (K, 4) = (x0, x1, y0, y1): culled64 / culled (K, G*G), the lens cells "
+      "culled in float64 and in the precision; overflow (K,); max_abs (fixed: the largest register, the "
+      "fewest int_bits n satisfy max_abs < 2^n); sigma64 / sigma (orientation over the lens; 0: no H_j); "
+      "lens_vertices (n, 4) = (a_x, a_y, b_x, b_y) of the footprint polygon.");
 }
 
 }  // namespace rast5d::bindings

@@ -21,6 +21,7 @@
 #include "core/costs.h"
 #include "core/counters.h"
 #include "intervals/depth_interval.h"
+#include "tiletest/precision_4d.h"
 #include "setup/setup.h"
 
 namespace rast5d {
@@ -87,6 +88,7 @@ class DepthCull {
     if (!(p.hiz_enabled || query_iv)) return true;
     double zlo, zhi;
     iv::zhat_widen(z, nr, zlo, zhi);
+    tiletest::zhat_round_out(p.precision_tile, zlo, zhi);  // pipeline.precision.tile: outward to the format
     const double zmax = buf_.hiz().max(tx, ty), zmin = buf_.hiz().min(tx, ty);
     c_[Counter::hiz_bytes_read] += 8;
     const bool behind = D(zlo) >= D(zmax);

@@ -87,7 +87,11 @@ inline Edges2D edges_2d_in(const Precision& p, const float* X, const float* Y, c
       x[j] = X[j] * s, y[j] = Y[j] * s, w[j] = W[j] * s;
     }
     FixedFormat::set(p.int_bits, p.frac_bits);
-    e = edges_2d<Fixed>(x, y, w);
+    const Edges2D ef = edges_2d<Fixed>(x, y, w);
+    // A triangle that snaps to zero area has no edge functions; the exact triangle still lies within the
+    // snap margin of the snapped segment, and a float sample test may hit it: keep its float64 edges.
+    if (!ef.valid && e.valid) return e;
+    e = ef;
     e.overflow = FixedFormat::overflow;
   }
   e.precision = p;

@@ -8,6 +8,7 @@
 //   box_bounds.h       screen bounds of the footprint over a lens box (INTERVAL, INTERLEAVE)
 //   candidates.h       fast-path selection of a pixel's candidate samples
 //   exact_region.h     the exact region, evaluated point-wise (instrumentation only)
+//   precision_4d.h     h_i, H_j, box bounds and ẑ in float32 / fixed point (pipeline.precision.tile)
 //
 // Contract: every test is *conservative*: it never removes a (u, v) from which the float sample
 // test could hit a sample of the tile. They run in double on the tile expanded by a margin

@@ -22,6 +22,7 @@
 
 #include "setup/footprint.h"
 #include "tiletest/box_bounds.h"
+#include "tiletest/precision_4d.h"
 #include "tiletest/edges_2d.h"
 #include "traversal/traversal.h"
 
@@ -70,6 +71,9 @@ class Interleave final : public Traversal {
       if (fp.h_valid) {
         double lx, hx, ly, hy;
         tiletest::box_bounds<D>(fp.lv, fp.n, ui, ui, vi, vi, lx, hx, ly, hy);
+        if (f_.p.precision_tile.kind != PrecisionKind::kFloat64)  // the bounds in pipeline.precision.tile
+          c_[Counter::precision_tile4d_overflows] +=
+              tiletest::box_bounds_in(f_.p.precision_tile, fp.lv, fp.n, ui, ui, vi, vi, lx, hx, ly, hy);
         charge<A>(setup_ops, tiletest::box_bounds_cost(fp.lv, fp.n, true));
         tiletest::pixel_range(lx, hx, bx0, bx1, x0, x1);
         tiletest::pixel_range(ly, hy, by0, by1, y0, y1);

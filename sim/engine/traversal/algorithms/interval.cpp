@@ -7,6 +7,7 @@
 #include "setup/footprint.h"
 #include "tiletest/box_bounds.h"
 #include "tiletest/candidates.h"
+#include "tiletest/precision_4d.h"
 #include "tiletest/lens_shape.h"
 #include "traversal/traversal.h"
 
@@ -49,6 +50,10 @@ class Interval final : public Traversal {
         double lx, hx, ly, hy;
         tiletest::box_bounds<D>(fp.lv, fp.n, SampleTable::cell_lo(ci, G), SampleTable::cell_hi(ci, G),
                                 SampleTable::cell_lo(cj, G), SampleTable::cell_hi(cj, G), lx, hx, ly, hy);
+        if (f_.p.precision_tile.kind != PrecisionKind::kFloat64)  // the bounds in pipeline.precision.tile
+          c_[Counter::precision_tile4d_overflows] += tiletest::box_bounds_in(
+              f_.p.precision_tile, fp.lv, fp.n, SampleTable::cell_lo(ci, G), SampleTable::cell_hi(ci, G),
+              SampleTable::cell_lo(cj, G), SampleTable::cell_hi(cj, G), lx, hx, ly, hy);
         charge<A>(setup_ops, tiletest::box_bounds_cost(fp.lv, fp.n, false));
         tiletest::pixel_range(lx, hx, bx0, bx1, x0, x1);
         tiletest::pixel_range(ly, hy, by0, by1, y0, y1);

@@ -9,6 +9,7 @@
 #include "tiletest/candidates.h"
 #include "tiletest/exact_region.h"
 #include "tiletest/halfspace_lens.h"
+#include "tiletest/precision_4d.h"
 #include "traversal/traversal.h"
 
 namespace rast5d {
@@ -32,6 +33,8 @@ class Laine final : public Traversal {
     const RenderParams& p = f_.p;
     const int T = p.tile_size, spp = f_.table.spp();
     const bool use_h = p.halfspace_h && fp.h_valid;
+    const bool prec4d = p.precision_tile.kind != PrecisionKind::kFloat64;  // tiletest/precision_4d.h
+    if (prec4d && use_h) p4_.setup(p.precision_tile, fp.lv, fp.n, nullptr, false);
     pipe_.begin(tri);
     const int x0 = std::max(tri.bx0, bin.x0), x1 = std::min(tri.bx1, bin.x1);
     const int y0 = std::max(tri.by0, bin.y0), y1 = std::min(tri.by1, bin.y1);
@@ -44,6 +47,12 @@ class Laine final : public Traversal {
         if (use_h)
           empty = !tile_h_sets<A>(fp, tiletest::expand_lo(tx), tiletest::expand_hi(tx + T), tiletest::expand_lo(ty),
                                   tiletest::expand_hi(ty + T), sx, sy, c_[Counter::ops_tile]);
+        if (use_h && prec4d) {  // the decision in pipeline.precision.tile (counted as the float64 form)
+          bool ovf;
+          empty = !p4_.h_sets(tiletest::expand_lo(tx), tiletest::expand_hi(tx + T), tiletest::expand_lo(ty),
+                              tiletest::expand_hi(ty + T), sx, sy, ovf);
+          if (ovf) ++c_[Counter::precision_tile4d_overflows];
+        }
         ++c_[Counter::tile_accepted];
         const std::uint64_t region_cost =
             empty ? cost::kSampleRegionEmpty : static_cast<std::uint64_t>(sx.n_cmp + sy.n_cmp);
@@ -87,6 +96,7 @@ class Laine final : public Traversal {
   const Frame& f_;
   Counters& c_;
   SamplePipeline<A> pipe_;
+  tiletest::Tile4DPrecision p4_;  // the h_i sets in pipeline.precision.tile (not float64)
   std::vector<int> cand_ = std::vector<int>(f_.table.spp());  // one pixel's candidates
   std::vector<std::uint8_t> sel_ = std::vector<std::uint8_t>(f_.table.spp() + 8, 0);
 };

@@ -27,6 +27,7 @@
 #include "tiletest/halfspace_edges.h"
 #include "tiletest/halfspace_lens.h"
 #include "tiletest/lens_shape.h"
+#include "tiletest/precision_4d.h"
 #include "traversal/algorithms/tile/active_cells.h"
 #include "traversal/algorithms/tile/axis_cache.h"
 #include "traversal/algorithms/tile/hj_cells.h"
@@ -81,6 +82,11 @@ class Tile final : public Traversal {
       return;
     }
     const Footprint fp = build_footprint<A>(tri, f_, f_.p.halfspace_H, setup_ops);
+    if (f_.p.precision_tile.kind != PrecisionKind::kFloat64) {  // the 4D test in pipeline.precision.tile
+      bool active[6];
+      for (int k = 0; k < 6; ++k) active[k] = k < fp.n_edges && fp.edges[k].active;
+      p4_.setup(f_.p.precision_tile, fp.lv, fp.n, active, f_.p.halfspace_H && !tri.moving);
+    }
     if (kInterleaved && !tri.moving) shear_lens_positions(tri, setup_ops);
     if (charge_setup) {
       c_[Counter::ops_setup] += setup_ops;
@@ -171,15 +177,17 @@ class Tile final : public Traversal {
     const RenderParams& p = f_.p;
     const int T = p.tile_size, G = p.lens_grid;
     const bool use_h = p.halfspace_h && fp.h_valid;
-    const bool use_H = p.halfspace_H && !tri.moving;  // build_footprint set up H_j (sigma, or per-cell signs)
+    const bool use_H_in = p.halfspace_H && !tri.moving && p.precision_tile.kind != PrecisionKind::kFloat64;
+    const bool use_H = p.halfspace_H && !tri.moving && !use_H_in;  // build_footprint set up H_j (sigma, or per-cell signs)
     if (kInterleaved && !tri.moving)
       pipe_.begin_sheared(tri, sx_.data(), sy_.data(), 3);
     else
       pipe_.begin(tri);
     // Fast path: the h_i sets of every tile column and row, once (axis_cache.h).
     const bool clip_uv = clip_.active_u || clip_.active_v;
+    const bool prec4d = f_.p.precision_tile.kind != PrecisionKind::kFloat64;  // tiletest/precision_4d.h
     if constexpr (!A::counting)
-      axes_.build<D>(fp.lv, fp.n, use_h, std::max(tri.bx0, bin.x0), std::min(tri.bx1, bin.x1),
+      if (!prec4d) axes_.build<D>(fp.lv, fp.n, use_h, std::max(tri.bx0, bin.x0), std::min(tri.bx1, bin.x1),
                      std::max(tri.by0, bin.y0), std::min(tri.by1, bin.y1), T, G);
     for_tiles(tri, bin, [&](int tx, int ty, int px0, int py0, int tx1, int ty1) {
       ++c_[Counter::tile_visited];
@@ -190,7 +198,9 @@ class Tile final : public Traversal {
       const tiletest::AxisSet* psy = &csy;
       const AxisCache::Axis* col = nullptr;
       const AxisCache::Axis* row = nullptr;
-      if constexpr (!A::counting) {
+      bool cached_axes = !prec4d;
+      if constexpr (A::counting) cached_axes = false;
+      if (cached_axes) {
         col = &axes_.cols[static_cast<std::size_t>((tx - axes_.tx0) / T)];
         row = &axes_.rows[static_cast<std::size_t>((ty - axes_.ty0) / T)];
         psx = &col->set, psy = &row->set;
@@ -206,7 +216,13 @@ class Tile final : public Traversal {
         csx = tiletest::full_axis(), csy = tiletest::full_axis();
         if (use_h) {
           if (!tri.moving) ++c_[Counter::interval_lens_tests_4d];
-          if (!tile_h_sets<A>(fp, x0, x1, y0, y1, csx, csy, c_[Counter::ops_tile])) {
+          bool keep = tile_h_sets<A>(fp, x0, x1, y0, y1, csx, csy, c_[Counter::ops_tile]);
+          if (prec4d) {  // the decision in pipeline.precision.tile (counted as the float64 form)
+            bool ovf;
+            keep = p4_.h_sets(x0, x1, y0, y1, csx, csy, ovf);
+            if (ovf) ++c_[Counter::precision_tile4d_overflows];
+          }
+          if (!keep) {
             ++c_[Counter::tile_culled_h];
             return;
           }
@@ -245,6 +261,21 @@ class Tile final : public Traversal {
         ++c_[Counter::tile_culled_lens];
         return;
       }
+      if (use_H_in) {  // H_j in pipeline.precision.tile: counted as the float64 form, decided in the format
+        bool any_line, ovf;
+        hj_culled_cells<A>(fp, x0, x1, y0, y1, G, active.i0, active.i1, active.j0, active.j1, c_, any_line);
+        const tiletest::CellMask culled =
+            p4_.hj_cells(x0, x1, y0, y1, G, active.i0, active.i1, active.j0, active.j1, any_line, ovf);
+        if (ovf) ++c_[Counter::precision_tile4d_overflows];
+        if (any_line) {
+          active.remove(culled, low64_, c_);
+          if (active.none()) {
+            ++c_[Counter::tile_culled_H];
+            return;
+          }
+        }
+      }
+
       // H_j lines: conservative overlap bitmask over the cells (001 §5.1).
       if (use_H) {
         bool any_line;
@@ -489,6 +520,7 @@ class Tile final : public Traversal {
   // Fast path: SamplePipeline::push_selected in place of select_candidates + push_flagged.
   const bool fused_select_ = SamplePipeline<A>::kFusedSelect && f_.p.simd && f_.table.spp() <= 64;
   AxisCache axes_;  // fast path: h_i sets per tile column and row of the current triangle and bin
+  tiletest::Tile4DPrecision p4_;  // the 4D tile test in pipeline.precision.tile (not float64)
   const iv::ClipBox clip_ = iv::clip_box(f_.p);
   iv::MotionSetup ms_;
   tiletest::MotionH5 h5_;
