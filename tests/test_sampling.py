@@ -123,13 +123,14 @@ def test_intervals_cover_the_frame_value_at_the_stated_rate(setup, full):
     names = list(allb["counters"])
     rows = allb["bin_counters"]
     work = allb["bin_work"]
+    aux = allb["bin_aux"]
     from sim.stats import DERIVED
 
     for fraction in (0.2, 0.3):
         hits = {k: 0 for k in ("raster.samples_tested", "raster.samples_hit", "ops.total")}
         errs = {k: [] for k in hits}
         for seed in range(400):
-            s = sampling.choose_bins(work, fraction, seed)
+            s = sampling.choose_bins(work, fraction, seed, aux)
             flat, ci = sampling.estimate(s, _counters_with_setup(allb["counters"], rows, s, names), rows[s.bins],
                                          DERIVED, names)
             for figure in hits:
