@@ -390,6 +390,35 @@ def test_retime_point_is_timing_estimate_on_one_stored_render(tmp_path, store):
         xc.load_config(write(tmp_path, "bad.yaml", BASE + "point: {hardware: {cores: 2}}\n"))
 
 
+def test_retime_reads_the_records_its_render_point_kept(tmp_path, store, monkeypatch):
+    """A render point named in keep_records (rast5d report: the renders its retime sections re-time)
+    stores its timing records; the retime point then re-times them without rendering again, and its
+    row equals the one it computes from a render of its own."""
+    from experiments.config import config_hash, expand_sweep
+    from experiments.report.pages import _retimed_renders
+    from experiments.run import points
+
+    moving = BASE.replace("quad}", "quad, params: {translation_t1: [0.2, 0, 0]}}")
+    render_cfg = xc.load_config(write(tmp_path, "r.yaml", moving))
+    retime_cfg = xc.load_config(write(tmp_path, "t.yaml", moving + "point: {kind: retime, hardware: {cores: 2}}\n"))
+    keep = _retimed_renders([(tmp_path / "t.yaml", retime_cfg, [], None)])
+    assert keep == {config_hash(cfg) for _, cfg in expand_sweep(render_cfg)}
+    assert (runner.run_sweep(render_cfg, workers=0, progress=False, keep_records=keep)["status"] == "ok").all()
+    assert len(list((store / "records").glob("*.npz"))) == 1
+
+    def no_render(*a, **k):
+        raise AssertionError("the retime point rendered again")
+
+    monkeypatch.setattr(points, "_rendered", no_render)
+    kept = runner.run_sweep(retime_cfg, workers=0, progress=False)
+    assert (kept["status"] == "ok").all(), kept["error"].tolist()
+    monkeypatch.undo()
+    monkeypatch.setenv("RAST5D_RESULTS", str(tmp_path / "fresh"))
+    own = runner.run_sweep(retime_cfg, workers=0, progress=False)
+    for k in ("timing.cycles", "timing.records", "raster.samples_tested", "resolved.lens_grid"):
+        assert kept[k].iloc[0] == own[k].iloc[0], k
+
+
 def test_textured_square_workload_covers_its_edge_squared(tmp_path, store):
     text = ("scene: {name: textured_square, params: {edge_px: 20, width: 64, height: 64}}\n"
             "camera: {coc_px: 0}\nsamples: {spp: 4, seed: 1}\npipeline: {algorithm: tile}\n")

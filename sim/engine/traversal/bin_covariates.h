@@ -67,70 +67,90 @@ inline double clipped_area(const Pt* p, int n, double x0, double y0, double x1, 
 
 }  // namespace bin_covariates_detail
 
+// Per triangle: what the bins need of it (computed once, not per bin).
+struct TriangleCovariates {
+  double bounds = 0;          // pixels of its bounds
+  double area = 0, foot = 0;  // lens-centre area and Steiner footprint (small triangles)
+  bool clip = false;          // larger than a bin: clipped to each bin exactly
+  bin_covariates_detail::Pt p[3], o[3];  // lens-centre and pushed-out triangles (clip only)
+  bool o_ok = false;
+};
+
+inline TriangleCovariates triangle_covariates(const TriSetup& t, double B) {
+  using bin_covariates_detail::Pt;
+  TriangleCovariates c;
+  c.bounds = static_cast<double>(t.bx1 - t.bx0) * (t.by1 - t.by0);
+  if (t.moving || t.near_clipped || t.full_bounds || c.bounds <= 0) {
+    c.area = c.foot = c.bounds;
+    return c;
+  }
+  double r[3];
+  for (int j = 0; j < 3; ++j) {
+    const double w = t.W[j];
+    c.p[j] = Pt{t.X[j] / w, t.Y[j] / w};
+    r[j] = std::max(std::abs(static_cast<double>(t.cx[j])), std::abs(static_cast<double>(t.cy[j]))) / std::abs(w);
+  }
+  const Pt* p = c.p;
+  const double cross = (p[1].x - p[0].x) * (p[2].y - p[0].y) - (p[2].x - p[0].x) * (p[1].y - p[0].y);
+  c.area = std::abs(cross) * 0.5;
+  const double ext_x = std::max({p[0].x, p[1].x, p[2].x}) - std::min({p[0].x, p[1].x, p[2].x});
+  const double ext_y = std::max({p[0].y, p[1].y, p[2].y}) - std::min({p[0].y, p[1].y, p[2].y});
+  double len[3];
+  for (int j = 0; j < 3; ++j) {
+    const double dx = p[(j + 1) % 3].x - p[j].x, dy = p[(j + 1) % 3].y - p[j].y;
+    len[j] = std::sqrt(dx * dx + dy * dy);
+  }
+  const double rm = (r[0] + r[1] + r[2]) / 3.0;
+  c.foot = c.area + (len[0] + len[1] + len[2]) * rm + 3.141592653589793 * rm * rm;
+  if ((ext_x > B || ext_y > B) && cross != 0) {
+    // Clipped exactly: the lens-centre triangle, and the triangle with its edges pushed out by R.
+    c.clip = true;
+    const double R = std::max({r[0], r[1], r[2]});
+    const double sg = cross > 0 ? 1.0 : -1.0;
+    double nx[3], ny[3], off[3];
+    c.o_ok = len[0] > 0 && len[1] > 0 && len[2] > 0;
+    for (int j = 0; j < 3 && c.o_ok; ++j) {
+      const Pt& a = p[j];
+      const Pt& e = p[(j + 1) % 3];
+      nx[j] = (e.y - a.y) * sg / len[j], ny[j] = -(e.x - a.x) * sg / len[j];
+      off[j] = nx[j] * a.x + ny[j] * a.y + R;
+    }
+    for (int j = 0; j < 3 && c.o_ok; ++j) {  // vertex j: the pushed edges (j-1, j) and (j, j+1) meet
+      const int k = (j + 2) % 3;
+      const double det = nx[k] * ny[j] - nx[j] * ny[k];
+      c.o[j] = det != 0 ? Pt{(off[k] * ny[j] - off[j] * ny[k]) / det, (nx[k] * off[j] - nx[j] * off[k]) / det} : p[j];
+    }
+  }
+  return c;
+}
+
 // out: 2 values per bin (coverage, footprint), row-major bins.
 inline void bin_covariates(const std::vector<TriSetup>& setups, const std::vector<std::vector<std::uint32_t>>& bin_lists,
                            int bins_x, int bin_size, int width, int height, int spp, std::vector<double>& out) {
-  using bin_covariates_detail::Pt;
   using bin_covariates_detail::clipped_area;
   const int n_bins = static_cast<int>(bin_lists.size());
   out.assign(static_cast<std::size_t>(n_bins) * 2, 0.0);
   const double B = bin_size;
+  std::vector<TriangleCovariates> tri(setups.size());
+  std::vector<char> done(setups.size(), 0);
+  for (const auto& list : bin_lists)
+    for (std::uint32_t i : list)
+      if (!done[i]) tri[i] = triangle_covariates(setups[i], B), done[i] = 1;
   for (int b = 0; b < n_bins; ++b) {
     const int bx = b % bins_x, by = b / bins_x;
     const double x0 = bx * B, y0 = by * B, x1 = std::min<double>(width, x0 + B), y1 = std::min<double>(height, y0 + B);
     double cover = 0, foot = 0;
     for (std::uint32_t i : bin_lists[b]) {
       const TriSetup& t = setups[i];
-      const double bounds = static_cast<double>(t.bx1 - t.bx0) * (t.by1 - t.by0);
+      const TriangleCovariates& c = tri[i];
       const double share = (std::min<double>(t.bx1, x1) - std::max<double>(t.bx0, x0)) *
-                           (std::min<double>(t.by1, y1) - std::max<double>(t.by0, y0)) / bounds;
-      if (t.moving || t.near_clipped || t.full_bounds || bounds <= 0) {
-        cover += share * bounds, foot += share * bounds;
+                           (std::min<double>(t.by1, y1) - std::max<double>(t.by0, y0)) / c.bounds;
+      if (!c.clip) {
+        cover += share * c.area, foot += share * c.foot;
         continue;
       }
-      Pt p[3];
-      double r[3];
-      for (int j = 0; j < 3; ++j) {
-        const double w = t.W[j];
-        p[j] = Pt{t.X[j] / w, t.Y[j] / w};
-        r[j] = std::max(std::abs(static_cast<double>(t.cx[j])), std::abs(static_cast<double>(t.cy[j]))) / std::abs(w);
-      }
-      const double cross = (p[1].x - p[0].x) * (p[2].y - p[0].y) - (p[2].x - p[0].x) * (p[1].y - p[0].y);
-      const double area = std::abs(cross) * 0.5;
-      const double ext_x = std::max({p[0].x, p[1].x, p[2].x}) - std::min({p[0].x, p[1].x, p[2].x});
-      const double ext_y = std::max({p[0].y, p[1].y, p[2].y}) - std::min({p[0].y, p[1].y, p[2].y});
-      if ((ext_x > B || ext_y > B) && cross != 0) {
-        // Clipped exactly: the lens-centre triangle, and the triangle with its edges pushed out by R.
-        const double R = std::max({r[0], r[1], r[2]});
-        const double sg = cross > 0 ? 1.0 : -1.0;
-        double nx[3], ny[3], c[3];
-        bool ok = true;
-        for (int j = 0; j < 3; ++j) {
-          const Pt& a = p[j];
-          const Pt& e = p[(j + 1) % 3];
-          const double ux = (e.y - a.y) * sg, uy = -(e.x - a.x) * sg, len = std::hypot(ux, uy);
-          if (!(len > 0)) ok = false;
-          nx[j] = ux / len, ny[j] = uy / len, c[j] = nx[j] * a.x + ny[j] * a.y + R;
-        }
-        cover += clipped_area(p, 3, x0, y0, x1, y1);
-        if (ok) {
-          Pt o[3];
-          for (int j = 0; j < 3; ++j) {  // vertex j: the pushed edges (j-1, j) and (j, j+1) meet
-            const int k = (j + 2) % 3;
-            const double det = nx[k] * ny[j] - nx[j] * ny[k];
-            o[j] = det != 0 ? Pt{(c[k] * ny[j] - c[j] * ny[k]) / det, (nx[k] * c[j] - nx[j] * c[k]) / det} : p[j];
-          }
-          foot += clipped_area(o, 3, x0, y0, x1, y1);
-        } else {
-          foot += share * bounds;
-        }
-        continue;
-      }
-      double perimeter = 0;
-      for (int j = 0; j < 3; ++j) perimeter += std::hypot(p[(j + 1) % 3].x - p[j].x, p[(j + 1) % 3].y - p[j].y);
-      const double rm = (r[0] + r[1] + r[2]) / 3.0;
-      cover += share * area;
-      foot += share * (area + perimeter * rm + 3.141592653589793 * rm * rm);
+      cover += clipped_area(c.p, 3, x0, y0, x1, y1);
+      foot += c.o_ok ? clipped_area(c.o, 3, x0, y0, x1, y1) : share * c.bounds;
     }
     out[2 * b] = cover * spp;
     out[2 * b + 1] = foot * spp;
