@@ -17,7 +17,8 @@ brute-force work x1, the triangles' lens-centre coverage x2 and their lens-swept
 T_y, T_x the stratified expansion estimates (T = sum_h N_h * mean_h), X the frame's known totals of
 the auxiliaries, b the design-weighted least-squares fit of y on x over the drawn bins, and s_h^2(e)
 the within-stratum variance of the residuals e = y - x b (N_h bins in stratum h, n_h = 2 drawn). The
-95% half-width is t_{0.975, H} * sqrt(Var) (H sampled strata as degrees of freedom). A counter that
+95% half-width is t_{0.975, H - 2} * sqrt(Var) (H sampled strata less the two coefficients the fit
+adds to a ratio estimator's one as degrees of freedom). A counter that
 follows the auxiliaries (tile tests with the footprint, hits with the coverage) is estimated far more
 tightly than by expansion alone; one that does not is no worse than the stratified estimator, and
 the interval comes from the residuals either way. Derived figures (ratios, sums) are evaluated on the
@@ -212,7 +213,9 @@ def estimate(sample: BinSample, counters: dict, bin_counters: np.ndarray, derive
         est, var, tq = bc.sum(axis=0), np.zeros(len(names)), 0.0
     else:
         est, var = regression_total(sample, bc)
-        tq = t_quantile_975(max(1, sampled_strata(sample)))
+        # degrees of freedom: the sampled strata less the regression's coefficients beyond the first
+        extra = 0 if sample.aux is None or sample.work is None else np.asarray(sample.aux).shape[1]
+        tq = t_quantile_975(max(1, sampled_strata(sample) - extra))
     raw = exact_part + est
     half = tq * np.sqrt(var)
     flat, ci = {}, {}

@@ -23,7 +23,7 @@ import time
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
-FRACTIONS = (1.0, 0.5, 0.2, 0.1, 0.05, 0.02, 0.01)
+FRACTIONS = (1.0, 0.5, 0.2, 0.1, 0.05, 0.03, 0.02, 0.01)
 FIGURES = ("ops.total", "raster.samples_tested", "raster.samples_hit")
 UNITS = ("setup", "tile_test", "sample_test", "depth", "shader", "texture", "memory")
 
