@@ -146,7 +146,7 @@ def memory_parts(camera: Camera, spp: int, n_triangles: int, config: PipelineCon
         # tiles of the triangles' bounds (visit_record_estimate); without the scene, 16 tiles per
         # (triangle, bin).
         "timing records per visit (triangles x tiles of their bounds)":
-            (visit_records if visit_records is not None else n_triangles * 4 * 16) * 96 * 3
+            (visit_records if visit_records is not None else n_triangles * 4 * 16) * 104 * 3  # a record is 104 bytes
             if timing and timing_per_visit else 0,
         "sample index (period^2 x lens cells x time strata)":
             period * period * (grid * grid * config.time_strata + 1 + spp) * 4,
@@ -187,28 +187,58 @@ def memory_estimate(camera: Camera, spp: int, n_triangles: int, config: Pipeline
 
 
 def visit_record_estimate(camera: Camera, v0: np.ndarray, v1: np.ndarray, config: PipelineConfig) -> int:
-    """Timing records of hardware.timing.granularity 'visit' for engine vertices v0, v1 (N, 3, 3): the
-    tiles of each triangle's bounds over the lens and the shutter (a triangle crossing the near plane:
-    the frame), at least 4 per triangle (its bins); bruteforce has one visit per (triangle, bin)."""
+    """Timing records of hardware.timing.granularity 'visit' for engine vertices v0, v1 (N, 3, 3): per
+    triangle, the tiles its lens-swept footprint touches (area A and perimeter P of the triangle dilated
+    by its largest circle of confusion r: A / s^2 + P / s + 1 tiles of s px, Steiner's formula; a moving
+    triangle: the tiles of its bounds over the lens and the shutter), at most the tiles of those bounds (a triangle crossing the near plane: of the
+    part in front of it), at least 4 (its bins); bruteforce has one visit per (triangle, bin)."""
     n = len(v0)
     if config.algorithm == "bruteforce" or n == 0:
         return 4 * n
-    ts = config.tile_size
+    ts = float(config.tile_size)
     p = camera.engine_params()
     coc, focus, near = abs(p["coc_x_px"]), p["focus_w"], p["near_w"]
     v = np.concatenate([np.asarray(v0, np.float64), np.asarray(v1, np.float64)], axis=1)  # (N, 6, 3)
     w = v[..., 2]
     ok = np.all(w > near, axis=1)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         r = np.abs(coc * (1 - focus / w))
         x, y = v[..., 0] / w, v[..., 1] / w
         x0 = np.clip(np.nanmin(x - r, axis=1), 0, camera.width)
         x1 = np.clip(np.nanmax(x + r, axis=1), 0, camera.width)
         y0 = np.clip(np.nanmin(y - r, axis=1), 0, camera.height)
         y1 = np.clip(np.nanmax(y + r, axis=1), 0, camera.height)
-    tiles = (np.ceil(x1 / ts) - np.floor(x0 / ts)) * (np.ceil(y1 / ts) - np.floor(y0 / ts))
-    frame = -(-camera.width // ts) * -(-camera.height // ts)
-    tiles = np.where(ok & np.isfinite(tiles), tiles, frame)
+        bounds = (np.ceil(x1 / ts) - np.floor(x0 / ts)) * (np.ceil(y1 / ts) - np.floor(y0 / ts))
+        # the footprint at shutter open and close
+        foot = np.zeros(n)
+        for k in (0, 3):
+            px, py, rr = x[:, k:k + 3], y[:, k:k + 3], r[:, k:k + 3].max(axis=1)
+            area = 0.5 * np.abs((px[:, 1] - px[:, 0]) * (py[:, 2] - py[:, 0]) - (px[:, 2] - px[:, 0]) * (py[:, 1] - py[:, 0]))
+            per = sum(np.hypot(px[:, (j + 1) % 3] - px[:, j], py[:, (j + 1) % 3] - py[:, j]) for j in range(3))
+            a = area + per * rr + np.pi * rr * rr
+            pp = per + 2 * np.pi * rr
+            foot = np.maximum(foot, a / ts ** 2 + pp / ts + 1)
+        moving = np.any(v[:, :3] != v[:, 3:], axis=(1, 2))  # swept over the shutter: its bounds' tiles
+        tiles = np.where(moving, bounds, np.minimum(foot, bounds))
+    # Crossing the near plane: the tiles of the bounds of the part in front (its vertices in front and
+    # the points where its edges cross the plane); wholly behind it: culled, no record.
+    tiles = np.where(ok & np.isfinite(tiles), tiles, 0.0)
+    for i in np.flatnonzero(~ok & np.any(w > near, axis=1)):
+        pts = []
+        for k in (0, 3):
+            tri = v[i, k:k + 3]
+            for j in range(3):
+                a, b = tri[j], tri[(j + 1) % 3]
+                if a[2] > near:
+                    pts.append(a)
+                if (a[2] > near) != (b[2] > near):
+                    pts.append(a + (a[2] - near) / (a[2] - b[2]) * (b - a))
+        q = np.array(pts)
+        qw = np.maximum(q[:, 2], near)
+        rr = np.abs(coc * (1 - focus / qw))
+        qx0, qx1 = np.clip([np.min(q[:, 0] / qw - rr), np.max(q[:, 0] / qw + rr)], 0, camera.width)
+        qy0, qy1 = np.clip([np.min(q[:, 1] / qw - rr), np.max(q[:, 1] / qw + rr)], 0, camera.height)
+        tiles[i] = (np.ceil(qx1 / ts) - np.floor(qx0 / ts)) * (np.ceil(qy1 / ts) - np.floor(qy0 / ts))
     return int(np.maximum(tiles, 4).sum())
 
 
