@@ -419,6 +419,22 @@ def test_retime_reads_the_records_its_render_point_kept(tmp_path, store, monkeyp
         assert kept[k].iloc[0] == own[k].iloc[0], k
 
 
+def test_page_points_skip_the_timing_model_only_when_no_output_reads_it(tmp_path, store):
+    """A report page whose outputs never mention timing renders without the timing model, under a
+    hash of its own; the same page with a timing plot runs it (and so does a config without a page)."""
+    from experiments.config import config_hash, timing_needed
+
+    page = BASE + "outputs:\n  page: p\n  plots:\n    - {kind: table, y: [raster.samples_tested]}\n"
+    timed = BASE + "outputs:\n  page: p\n  plots:\n    - {kind: table, y: [timing.cycles]}\n"
+    a, b = (xc.load_config(write(tmp_path, n, t)) for n, t in (("a.yaml", page), ("b.yaml", timed)))
+    assert not timing_needed(a) and timing_needed(b) and timing_needed(xc.load_config(write(tmp_path, "c.yaml", BASE)))
+    assert config_hash(a) != config_hash(b)
+    da = runner.run_sweep(a, workers=0, progress=False)
+    db = runner.run_sweep(b, workers=0, progress=False)
+    assert "timing.cycles" not in da.columns and db["timing.cycles"].iloc[0] > 0
+    assert da["raster.samples_tested"].iloc[0] == db["raster.samples_tested"].iloc[0]
+
+
 def test_textured_square_workload_covers_its_edge_squared(tmp_path, store):
     text = ("scene: {name: textured_square, params: {edge_px: 20, width: 64, height: 64}}\n"
             "camera: {coc_px: 0}\nsamples: {spp: 4, seed: 1}\npipeline: {algorithm: tile}\n")

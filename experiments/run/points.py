@@ -21,7 +21,7 @@ import time
 import traceback
 from pathlib import Path
 
-from ..config import RESULT_EXCLUDE, RenderConfig, build, build_scene, config_hash, flatten, point_columns
+from ..config import RESULT_EXCLUDE, RenderConfig, build, build_scene, config_hash, flatten, point_columns, timing_needed
 from ..config.inputs import input_digests, tracking_reads
 from .store import cached_records, engine_id, git_rev, store_records
 from .uses import USE_KINDS
@@ -65,7 +65,8 @@ def _rendered(config, row: dict, threads, options: dict | None = None):
     import sim
 
     scene, camera, table, pipeline = _build(config, row, threads)
-    result = sim.render(scene, camera, table, pipeline, hardware=config.hardware_config(), **(options or {}))
+    result = sim.render(scene, camera, table, pipeline, hardware=config.hardware_config(),
+                        timing=timing_needed(config), **(options or {}))
     row["resolved.lens_grid"] = result.config.get("lens_grid")
     row.update(result.flat_stats)
     if result.ci95 is not None:  # sampled simulation: 95% half-widths beside the estimates
