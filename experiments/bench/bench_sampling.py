@@ -176,24 +176,37 @@ def granularity_table(spp: int, quick: bool, threads: int = 1, repeats: int = 2)
             out[gran] = (min(cpu, prev[0]) if prev else cpu, r.flat_stats, len(r.timing_records))
         (tb, fb, nb), (tv, fv, nv) = out["bin"], out["visit"]
 
-        def shares(f):
-            busy = {u: f[f"timing.{u}.busy_cycles"] for u in UNITS}
-            total = sum(busy.values()) or 1.0
-            return {u: busy[u] / total for u in UNITS}
-
-        sb, sv = shares(fb), shares(fv)
-        worst = max(UNITS, key=lambda u: abs(sb[u] - sv[u]))
+        bot_b, bot_v = fb["timing.bottleneck"], fv["timing.bottleneck"]
         util = {u: fb[f"timing.{u}.utilization"] - fv[f"timing.{u}.utilization"] for u in UNITS}
         uworst = max(util, key=lambda u: abs(util[u]))
         row = dict(scene=name, size=f"{w}x{h}", cycles_bin=fb["timing.cycles"], cycles_visit=fv["timing.cycles"],
                    err=fb["timing.cycles"] / fv["timing.cycles"] - 1, bottleneck_bin=fb["timing.bottleneck"],
-                   bottleneck_visit=fv["timing.bottleneck"], share_unit=worst, share_bin=sb[worst], share_visit=sv[worst],
-                   util_unit=uworst, util_diff=util[uworst], records_bin=nb, records_visit=nv, time_bin=tb, time_visit=tv)
+                   bottleneck_visit=fv["timing.bottleneck"], bot_util_bin=fb[f"timing.{bot_b}.utilization"],
+                   bot_util_visit=fv[f"timing.{bot_v}.utilization"], util_unit=uworst, util_diff=util[uworst], records_bin=nb, records_visit=nv, time_bin=tb, time_visit=tv)
         rows.append(row)
         print(f"{name:12} cycles bin {row['cycles_bin']:,.0f} visit {row['cycles_visit']:,.0f} ({row['err']:+.2%}); "
               f"bottleneck {row['bottleneck_bin']} / {row['bottleneck_visit']}; records {nb:,} / {nv:,}; "
               f"CPU time x{tv / tb:.2f}", flush=True)
     return rows
+
+
+def granularity_lines(grows, spp: int) -> list[str]:
+    lines = ["", f"## Timing-model granularity ({spp} spp, tile, msaa, 1 texture, CoC 10 px, 1 thread)", "",
+             "`hardware.timing.granularity`: `bin` = one work record per (triangle, screen bin; 64 px); `visit` "
+             "(the default) = one per shading visit (per triangle and tile for tile). Error: bin cycles / visit "
+             "cycles - 1 (visit is the detailed reference). Both carry the same work, so each unit's busy cycles are "
+             "equal; what moves is how much the units overlap: the bottleneck unit's share of the frame's cycles "
+             "(its utilisation, busy / cycles) and the unit whose utilisation moves most. Time: CPU time of render "
+             "plus timing model, minimum of interleaved repeats.", "",
+             "| scene | size | cycles (bin) | cycles (visit) | error | bottleneck bin / visit | bottleneck share bin / visit | "
+             "largest utilisation change | records bin / visit | sim time visit / bin |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in grows:
+        lines.append(f"| {r['scene']} | {r['size']} | {r['cycles_bin']:,.0f} | {r['cycles_visit']:,.0f} | {r['err']:+.2%} | "
+                     f"{r['bottleneck_bin']} / {r['bottleneck_visit']} | {r['bot_util_bin']:.3f} / {r['bot_util_visit']:.3f} | "
+                     f"{r['util_unit']} {r['util_diff']:+.3f} | {r['records_bin']:,} / {r['records_visit']:,} | "
+                     f"{r['time_visit'] / r['time_bin']:.2f} |")
+    return lines
 
 
 def run(threads: int = 2, seeds: int = 5, draws: int = 200, spp: int = 64, bin_size: int = 8, quick: bool = False,
@@ -232,20 +245,7 @@ def run(threads: int = 2, seeds: int = 5, draws: int = 200, spp: int = 64, bin_s
     for r in crows:
         lines.append(f"| {r['scene']} | {r['fraction']:g} | {r['strata']} | "
                      + " | ".join(f"{r['cov ' + k]:.3f} | {r['err ' + k]:.2%}" for k in FIGURES) + " |")
-    lines += ["", f"## Timing-model granularity ({spp} spp, tile, msaa, 1 texture, CoC 10 px, 1 thread)", "",
-              "`hardware.timing.granularity`: `bin` = one work record per (triangle, screen bin; 64 px); `visit` "
-              "(the default) = one per shading visit (per triangle and tile for tile). Error: bin cycles / visit "
-              "cycles - 1 (visit is the detailed reference). Share: a unit's busy cycles over the sum of the units' "
-              "busy cycles; the unit whose share moves most is shown, and the largest change of utilisation (busy / "
-              "cycles). Time: CPU time of render plus timing model, minimum of interleaved repeats.", "",
-              "| scene | size | cycles (bin) | cycles (visit) | error | bottleneck bin / visit | share bin / visit | "
-              "largest utilisation change | records bin / visit | sim time visit / bin |",
-              "|---|---|---|---|---|---|---|---|---|---|"]
-    for r in grows:
-        lines.append(f"| {r['scene']} | {r['size']} | {r['cycles_bin']:,.0f} | {r['cycles_visit']:,.0f} | {r['err']:+.2%} | "
-                     f"{r['bottleneck_bin']} / {r['bottleneck_visit']} | {r['share_unit']} {r['share_bin']:.3f} / "
-                     f"{r['share_visit']:.3f} | {r['util_unit']} {r['util_diff']:+.3f} | {r['records_bin']:,} / "
-                     f"{r['records_visit']:,} | {r['time_visit'] / r['time_bin']:.2f} |")
+    lines += granularity_lines(grows, spp)
     page = Path(out) / "bench_sampling.md"
     page.parent.mkdir(parents=True, exist_ok=True)
     page.write_text("\n".join(lines) + "\n")
