@@ -7,9 +7,16 @@ import math
 from dataclasses import dataclass
 from typing import Callable, Iterable
 
+import numpy as np
 
-def ratio(a: float, b: float) -> float:
-    """a / b, nan when b is zero (a rate over no events is undefined, not zero)."""
+
+def ratio(a, b):
+    """a / b, nan when b is zero (a rate over no events is undefined, not zero). Elementwise on numpy
+    arrays (sim.sampling evaluates the formulas for every sampled bin at once)."""
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        a, b = np.broadcast_arrays(np.asarray(a, np.float64), np.asarray(b, np.float64))
+        out = np.full(a.shape, math.nan)
+        return np.divide(a, b, out=out, where=b != 0)
     return a / b if b else math.nan
 
 

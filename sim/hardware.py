@@ -74,7 +74,7 @@ TIMING_GRANULARITIES = ("bin", "visit")
 class TimingRecordsConfig:
     """What one work record of the timing model covers (docs/timing.md)."""
 
-    granularity: str = field(default="bin", metadata={
+    granularity: str = field(default="visit", metadata={
         "doc": "Timing records: 'bin' (one per triangle and 64-px screen bin) or 'visit' (one per shading "
                "visit: per triangle and tile for tile and laine, per pass for interval and interleave, per "
                "triangle and bin for bruteforce); finer records cost simulator time"})

@@ -10,7 +10,7 @@ import numpy as np
 from . import _core
 from .camera import Camera
 from .errors import ConfigError, EmptyFrameWarning, SceneInputError
-from .hardware import HardwareConfig
+from .hardware import HardwareConfig, TimingRecordsConfig
 from . import params as _params
 from . import pixel_stats as _pixel_stats
 from .pipeline import PipelineConfig
@@ -121,9 +121,14 @@ def _scene_alpha(scene, n: int) -> np.ndarray | None:
 
 def memory_parts(camera: Camera, spp: int, n_triangles: int, config: PipelineConfig, threads: int,
                  export_samples: bool = False, timing: bool = True, period: int = 0,
-                 timing_per_visit: bool = False, pixel_maps: int = 0) -> dict[str, int]:
+                 timing_per_visit: bool | None = None, pixel_maps: int = 0,
+                 visit_records: int | None = None) -> dict[str, int]:
     """Bytes the engine will allocate, by part: {part: bytes}; ``memory_estimate`` is their sum.
-    Each part's name says what it grows with (docs/errors.md, tests/test_memory.py)."""
+    Each part's name says what it grows with (docs/errors.md, tests/test_memory.py).
+    ``timing_per_visit`` None: the default ``hardware.timing.granularity``; ``visit_records``: the
+    records that granularity makes (``visit_record_estimate``; None: 16 per (triangle, bin))."""
+    if timing_per_visit is None:
+        timing_per_visit = TimingRecordsConfig().granularity == "visit"
     b = config.bin_size
     bins_x = -(-camera.width // b)
     bins_y = -(-camera.height // b)
@@ -137,9 +142,12 @@ def memory_parts(camera: Camera, spp: int, n_triangles: int, config: PipelineCon
         # One 96-byte record per (triangle, bin) visit (about 4 bins per triangle, as for the bin
         # lists), held per bin, concatenated and copied to numpy: three copies.
         "timing records (triangles)": n_triangles * 4 * 96 * 3 if timing else 0,
-        # hardware.timing.granularity 'visit': about one record per (triangle, tile), 4x overdraw.
-        "timing records per visit (width x height / tile_size^2)":
-            camera.width * camera.height // config.tile_size ** 2 * 4 * 96 * 3 if timing and timing_per_visit else 0,
+        # hardware.timing.granularity 'visit': one record per (triangle, tile) visit, at most the
+        # tiles of the triangles' bounds (visit_record_estimate); without the scene, 16 tiles per
+        # (triangle, bin).
+        "timing records per visit (triangles x tiles of their bounds)":
+            (visit_records if visit_records is not None else n_triangles * 4 * 16) * 104 * 3  # a record is 104 bytes
+            if timing and timing_per_visit else 0,
         "sample index (period^2 x lens cells x time strata)":
             period * period * (grid * grid * config.time_strata + 1 + spp) * 4,
         "per-pixel statistics (width x height x maps)": camera.width * camera.height * pixel_maps * 8 * 2,
@@ -171,11 +179,67 @@ def _segment_buffer_bytes(camera: Camera, n_lines: int, config: PipelineConfig, 
 
 def memory_estimate(camera: Camera, spp: int, n_triangles: int, config: PipelineConfig, threads: int,
                     export_samples: bool = False, timing: bool = True, period: int = 0,
-                    timing_per_visit: bool = False, pixel_maps: int = 0) -> int:
+                    timing_per_visit: bool | None = None, pixel_maps: int = 0, visit_records: int | None = None) -> int:
     """Bytes the engine will allocate (image, per-thread bin buffers, setup, bin lists, exports,
     timing records, and with the table's period the (lens cell, time stratum) sample index)."""
     return int(sum(memory_parts(camera, spp, n_triangles, config, threads, export_samples, timing,
-                                period, timing_per_visit, pixel_maps).values()))
+                                period, timing_per_visit, pixel_maps, visit_records).values()))
+
+
+def visit_record_estimate(camera: Camera, v0: np.ndarray, v1: np.ndarray, config: PipelineConfig) -> int:
+    """Timing records of hardware.timing.granularity 'visit' for engine vertices v0, v1 (N, 3, 3): per
+    triangle, the tiles its lens-swept footprint touches (area A and perimeter P of the triangle dilated
+    by its largest circle of confusion r: A / s^2 + P / s + 1 tiles of s px, Steiner's formula; a moving
+    triangle: the tiles of its bounds over the lens and the shutter), at most the tiles of those bounds (a triangle crossing the near plane: of the
+    part in front of it), at least 4 (its bins); bruteforce has one visit per (triangle, bin)."""
+    n = len(v0)
+    if config.algorithm == "bruteforce" or n == 0:
+        return 4 * n
+    ts = float(config.tile_size)
+    p = camera.engine_params()
+    coc, focus, near = abs(p["coc_x_px"]), p["focus_w"], p["near_w"]
+    v = np.concatenate([np.asarray(v0, np.float64), np.asarray(v1, np.float64)], axis=1)  # (N, 6, 3)
+    w = v[..., 2]
+    ok = np.all(w > near, axis=1)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        r = np.abs(coc * (1 - focus / w))
+        x, y = v[..., 0] / w, v[..., 1] / w
+        x0 = np.clip(np.nanmin(x - r, axis=1), 0, camera.width)
+        x1 = np.clip(np.nanmax(x + r, axis=1), 0, camera.width)
+        y0 = np.clip(np.nanmin(y - r, axis=1), 0, camera.height)
+        y1 = np.clip(np.nanmax(y + r, axis=1), 0, camera.height)
+        bounds = (np.ceil(x1 / ts) - np.floor(x0 / ts)) * (np.ceil(y1 / ts) - np.floor(y0 / ts))
+        # the footprint at shutter open and close
+        foot = np.zeros(n)
+        for k in (0, 3):
+            px, py, rr = x[:, k:k + 3], y[:, k:k + 3], r[:, k:k + 3].max(axis=1)
+            area = 0.5 * np.abs((px[:, 1] - px[:, 0]) * (py[:, 2] - py[:, 0]) - (px[:, 2] - px[:, 0]) * (py[:, 1] - py[:, 0]))
+            per = sum(np.hypot(px[:, (j + 1) % 3] - px[:, j], py[:, (j + 1) % 3] - py[:, j]) for j in range(3))
+            a = area + per * rr + np.pi * rr * rr
+            pp = per + 2 * np.pi * rr
+            foot = np.maximum(foot, a / ts ** 2 + pp / ts + 1)
+        moving = np.any(v[:, :3] != v[:, 3:], axis=(1, 2))  # swept over the shutter: its bounds' tiles
+        tiles = np.where(moving, bounds, np.minimum(foot, bounds))
+    # Crossing the near plane: the tiles of the bounds of the part in front (its vertices in front and
+    # the points where its edges cross the plane); wholly behind it: culled, no record.
+    tiles = np.where(ok & np.isfinite(tiles), tiles, 0.0)
+    for i in np.flatnonzero(~ok & np.any(w > near, axis=1)):
+        pts = []
+        for k in (0, 3):
+            tri = v[i, k:k + 3]
+            for j in range(3):
+                a, b = tri[j], tri[(j + 1) % 3]
+                if a[2] > near:
+                    pts.append(a)
+                if (a[2] > near) != (b[2] > near):
+                    pts.append(a + (a[2] - near) / (a[2] - b[2]) * (b - a))
+        q = np.array(pts)
+        qw = np.maximum(q[:, 2], near)
+        rr = np.abs(coc * (1 - focus / qw))
+        qx0, qx1 = np.clip([np.min(q[:, 0] / qw - rr), np.max(q[:, 0] / qw + rr)], 0, camera.width)
+        qy0, qy1 = np.clip([np.min(q[:, 1] / qw - rr), np.max(q[:, 1] / qw + rr)], 0, camera.height)
+        tiles[i] = (np.ceil(qx1 / ts) - np.floor(qx0 / ts)) * (np.ceil(qy1 / ts) - np.floor(qy0 / ts))
+    return int(np.maximum(tiles, 4).sum())
 
 
 def _memory_message(need: int, parts: dict, camera: Camera, spp: int, n: int, config: PipelineConfig,
@@ -261,14 +325,16 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     spp = int(samples.shape[2])
     grid = config.resolved_lens_grid(spp)
     threads = config.threads or (os.cpu_count() or 1)
+    with np.errstate(over="ignore", invalid="ignore"):  # overflow is reported just below, by triangle
+        v0, v1 = camera.engine_vertices(p0, p1)
+    per_visit = hardware.timing.granularity == "visit" and timing and config.sample_fraction == 1
     parts = memory_parts(camera, spp, p0.shape[0], config, threads, export_samples, timing,
-                         period=samples.shape[0], timing_per_visit=hardware.timing.granularity == "visit",
-                         pixel_maps=len(map_names) + len(derived_maps))
+                         period=samples.shape[0], timing_per_visit=per_visit,
+                         pixel_maps=len(map_names) + len(derived_maps),
+                         visit_records=visit_record_estimate(camera, v0, v1, config) if per_visit else None)
     need = int(sum(parts.values()))
     if need > config.memory_limit_bytes:
         raise ConfigError(_memory_message(need, parts, camera, spp, p0.shape[0], config, threads))
-    with np.errstate(over="ignore", invalid="ignore"):  # overflow is reported just below, by triangle
-        v0, v1 = camera.engine_vertices(p0, p1)
     if not (np.all(np.isfinite(v0)) and np.all(np.isfinite(v1))):
         t = int(np.argwhere(~np.isfinite(v0) | ~np.isfinite(v1))[0][0])
         raise SceneInputError(f"scene.positions: triangle {t} overflows float32 after projection: {p0[t].tolist()}")

@@ -5,15 +5,23 @@ hold triangles by their brute-force work (the pixels of their triangles' bounds 
 cuts them into H = round(f * K) // 2 strata of similar work and draws 2 bins per stratum
 (traversal/bin_sample.h, seeded with s). Only those bins are traversed; bins without triangles do no
 traversal work (their counters are exactly 0), and triangle setup still runs for every triangle, so
-its counts are exact. Every counter a bin owns is estimated by the stratified expansion estimator
+its counts are exact. Bins heavier than a stratum's share of the work form a take-all stratum (all
+traversed, no variance).
 
-    T = sum_h N_h * mean_h(y),   Var(T) = sum_h N_h^2 (1 - n_h / N_h) s_h^2 / n_h
+Every counter a bin owns is estimated by the stratified regression (GREG) estimator on three
+auxiliary variables the engine knows for every bin before traversing any (traversal/bin_covariates.h):
+brute-force work x1, the triangles' lens-centre coverage x2 and their lens-swept footprint x3:
 
-(N_h bins in stratum h, n_h = 2 of them rendered, y a bin's counter value), and the 95% half-width is
-t_{0.975, H} * sqrt(Var) (H degrees of freedom). Bins heavier than a stratum's share of the work form
-a take-all stratum (all traversed, no variance). The frame's brute-force work X is known for every
-bin, so the totals use the combined ratio estimator T = X * T_y / T_x, whose variance is that of the
-residuals y - (T_y / T_x) x: counters that follow brute-force work are estimated far more tightly. Derived figures (ratios, sums) are evaluated on the
+    T = T_y + (X - T_x) b,    Var(T) = sum_h N_h^2 (1 - n_h / N_h) s_h^2(e) / n_h
+
+T_y, T_x the stratified expansion estimates (T = sum_h N_h * mean_h), X the frame's known totals of
+the auxiliaries, b the design-weighted least-squares fit of y on x over the drawn bins, and s_h^2(e)
+the within-stratum variance of the residuals e = y - x b (N_h bins in stratum h, n_h = 2 drawn). The
+95% half-width is t_{0.975, H - 2} * sqrt(Var) (H sampled strata less the two coefficients the fit
+adds to a ratio estimator's one as degrees of freedom). A counter that
+follows the auxiliaries (tile tests with the footprint, hits with the coverage) is estimated far more
+tightly than by expansion alone; one that does not is no worse than the stratified estimator, and
+the interval comes from the residuals either way. Derived figures (ratios, sums) are evaluated on the
 estimated totals; their half-widths come from the same formula applied to each bin's linearised
 contribution (the derivative of the figure along that bin's counter vector).
 
@@ -78,7 +86,8 @@ class BinSample:
     stratum: np.ndarray
     sizes: np.ndarray
     candidates: int
-    work: np.ndarray | None = None  # brute-force work of every bin of the frame (the auxiliary variable)
+    work: np.ndarray | None = None  # brute-force work of every bin of the frame (the first auxiliary)
+    aux: np.ndarray | None = None   # (bins of the frame, k) further auxiliaries (the engine's bin_aux)
 
     @property
     def fraction(self) -> float:
@@ -95,7 +104,7 @@ def check_fraction(fraction, owner: str = "PipelineConfig") -> None:
         raise ConfigError(f"{owner}.sample_fraction: expected a number in (0, 1], got {fraction!r}")
 
 
-def choose_bins(work, fraction: float, seed: int) -> BinSample:
+def choose_bins(work, fraction: float, seed: int, aux=None) -> BinSample:
     """The engine's draw (traversal/bin_sample.h) for per-bin brute-force work ``work``: the bins
     with work sorted by it, cut into round(fraction * K) // 2 strata, 2 bins drawn per stratum.
     ConfigError when fewer than 2 strata remain (no interval can be given)."""
@@ -108,14 +117,16 @@ def choose_bins(work, fraction: float, seed: int) -> BinSample:
     except ValueError as e:
         raise ConfigError(f"PipelineConfig.{e}") from None
     return BinSample(np.asarray(bins, np.int64), np.asarray(stratum, np.int64), np.asarray(sizes, np.int64),
-                     int((work > 0).sum()), work)
+                     int((work > 0).sum()), work, None if aux is None else np.asarray(aux, np.float64))
 
 
 def from_engine(out: dict) -> BinSample:
     """The BinSample of a sampled engine render (sim._core.render's output)."""
     work = np.asarray(out["bin_work"])
+    aux = out.get("bin_aux")
     return BinSample(np.asarray(out["bins"], np.int64), np.asarray(out["bin_stratum"], np.int64),
-                     np.asarray(out["strata_sizes"], np.int64), int((work > 0).sum()), work)
+                     np.asarray(out["strata_sizes"], np.int64), int((work > 0).sum()), work,
+                     None if aux is None else np.asarray(aux, np.float64))
 
 
 def stratified_total(sample: BinSample, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -157,6 +168,30 @@ def ratio_total(sample: BinSample, y: np.ndarray) -> tuple[np.ndarray, np.ndarra
     return X * r, var
 
 
+def regression_total(sample: BinSample, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(estimated totals, variances) by the stratified regression (GREG) estimator on the auxiliaries
+    known for every bin (brute-force work and ``aux``): T = T_y + (X - T_x) b, b the least-squares
+    fit of y on x weighted by the design weights N_h / n_h, and the variance of the stratified
+    estimator applied to the residuals y - x b. Without auxiliaries: ratio_total."""
+    if sample.work is None or sample.aux is None:
+        return ratio_total(sample, y)
+    y = np.asarray(y, dtype=np.float64)
+    y = y[:, None] if y.ndim == 1 else y
+    frame = np.column_stack([np.asarray(sample.work, np.float64), np.nan_to_num(sample.aux)])
+    scale = np.abs(frame).sum(axis=0)
+    keep = scale > 0
+    frame = frame[:, keep] / scale[keep]  # columns summing to 1: a well-conditioned fit
+    x = frame[sample.bins]
+    H = len(sample.sizes)
+    nh = np.bincount(sample.stratum, minlength=H).astype(np.float64)
+    w = (sample.sizes / nh)[sample.stratum]
+    b = np.linalg.lstsq(x.T @ (x * w[:, None]), (x * w[:, None]).T @ y, rcond=1e-10)[0]
+    ty, _ = stratified_total(sample, y)
+    tx, _ = stratified_total(sample, x)
+    _, var = stratified_total(sample, y - x @ b)
+    return ty + (frame.sum(axis=0) - tx) @ b, var
+
+
 def sampled_strata(sample: BinSample) -> int:
     """Strata whose bins were drawn (not the take-all stratum): the degrees of freedom."""
     nh = np.bincount(sample.stratum, minlength=len(sample.sizes))
@@ -177,8 +212,10 @@ def estimate(sample: BinSample, counters: dict, bin_counters: np.ndarray, derive
     if sample.exact:  # every bin with triangles traversed: the totals are the frame's
         est, var, tq = bc.sum(axis=0), np.zeros(len(names)), 0.0
     else:
-        est, var = ratio_total(sample, bc)
-        tq = t_quantile_975(max(1, sampled_strata(sample)))
+        est, var = regression_total(sample, bc)
+        # degrees of freedom: the sampled strata less the regression's coefficients beyond the first
+        extra = 0 if sample.aux is None or sample.work is None else np.asarray(sample.aux).shape[1]
+        tq = t_quantile_975(max(1, sampled_strata(sample) - extra))
     raw = exact_part + est
     half = tq * np.sqrt(var)
     flat, ci = {}, {}
@@ -187,16 +224,18 @@ def estimate(sample: BinSample, counters: dict, bin_counters: np.ndarray, derive
             flat[n], ci[n] = math.nan, math.nan
         else:
             flat[n], ci[n] = float(raw[i]), float(half[i])
-    # Derived figures: evaluated on the estimates; half-widths by linearisation per bin.
+    # Derived figures: evaluated on the estimates; half-widths by linearisation per bin (central
+    # differences, every bin at once: the formulas are arithmetic and sim.derived.ratio, which
+    # take arrays).
     base = evaluate(derived, dict(flat))
     dnames = [d.name for d in derived]
-    z = np.empty((len(bc), len(dnames)))
     step = 1e-6  # a bin's counters are at most the frame's: a relative perturbation <= 1e-6
-    for r in range(len(bc)):
-        plus = evaluate(derived, {n: flat[n] + step * bc[r, i] for i, n in enumerate(names)})
-        minus = evaluate(derived, {n: flat[n] - step * bc[r, i] for i, n in enumerate(names)})
-        z[r] = [(plus[d] - minus[d]) / (2 * step) for d in dnames]
-    dvar = np.zeros(len(dnames)) if sample.exact else ratio_total(sample, np.nan_to_num(z, nan=0.0))[1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        plus = evaluate(derived, {n: flat[n] + step * bc[:, i] for i, n in enumerate(names)})
+        minus = evaluate(derived, {n: flat[n] - step * bc[:, i] for i, n in enumerate(names)})
+        z = np.column_stack([np.broadcast_to((np.asarray(plus[d], np.float64) - np.asarray(minus[d], np.float64))
+                                             / (2 * step), (len(bc),)) for d in dnames]) if dnames else np.zeros((len(bc), 0))
+    dvar = np.zeros(len(dnames)) if sample.exact else regression_total(sample, np.nan_to_num(z, nan=0.0))[1]
     for j, d in enumerate(dnames):
         flat[d] = base[d]
         bad = not np.isfinite(base[d]) or not np.all(np.isfinite(z[:, j]))

@@ -390,6 +390,51 @@ def test_retime_point_is_timing_estimate_on_one_stored_render(tmp_path, store):
         xc.load_config(write(tmp_path, "bad.yaml", BASE + "point: {hardware: {cores: 2}}\n"))
 
 
+def test_retime_reads_the_records_its_render_point_kept(tmp_path, store, monkeypatch):
+    """A render point named in keep_records (rast5d report: the renders its retime sections re-time)
+    stores its timing records; the retime point then re-times them without rendering again, and its
+    row equals the one it computes from a render of its own."""
+    from experiments.config import config_hash, expand_sweep
+    from experiments.report.pages import _retimed_renders
+    from experiments.run import points
+
+    moving = BASE.replace("quad}", "quad, params: {translation_t1: [0.2, 0, 0]}}")
+    render_cfg = xc.load_config(write(tmp_path, "r.yaml", moving))
+    retime_cfg = xc.load_config(write(tmp_path, "t.yaml", moving + "point: {kind: retime, hardware: {cores: 2}}\n"))
+    keep = _retimed_renders([(tmp_path / "t.yaml", retime_cfg, [], None)])
+    assert keep == {config_hash(cfg) for _, cfg in expand_sweep(render_cfg)}
+    assert (runner.run_sweep(render_cfg, workers=0, progress=False, keep_records=keep)["status"] == "ok").all()
+    assert len(list((store / "records").glob("*.npz"))) == 1
+
+    def no_render(*a, **k):
+        raise AssertionError("the retime point rendered again")
+
+    monkeypatch.setattr(points, "_rendered", no_render)
+    kept = runner.run_sweep(retime_cfg, workers=0, progress=False)
+    assert (kept["status"] == "ok").all(), kept["error"].tolist()
+    monkeypatch.undo()
+    monkeypatch.setenv("RAST5D_RESULTS", str(tmp_path / "fresh"))
+    own = runner.run_sweep(retime_cfg, workers=0, progress=False)
+    for k in ("timing.cycles", "timing.records", "raster.samples_tested", "resolved.lens_grid"):
+        assert kept[k].iloc[0] == own[k].iloc[0], k
+
+
+def test_page_points_skip_the_timing_model_only_when_no_output_reads_it(tmp_path, store):
+    """A report page whose outputs never mention timing renders without the timing model, under a
+    hash of its own; the same page with a timing plot runs it (and so does a config without a page)."""
+    from experiments.config import config_hash, timing_needed
+
+    page = BASE + "outputs:\n  page: p\n  plots:\n    - {kind: table, y: [raster.samples_tested]}\n"
+    timed = BASE + "outputs:\n  page: p\n  plots:\n    - {kind: table, y: [timing.cycles]}\n"
+    a, b = (xc.load_config(write(tmp_path, n, t)) for n, t in (("a.yaml", page), ("b.yaml", timed)))
+    assert not timing_needed(a) and timing_needed(b) and timing_needed(xc.load_config(write(tmp_path, "c.yaml", BASE)))
+    assert config_hash(a) != config_hash(b)
+    da = runner.run_sweep(a, workers=0, progress=False)
+    db = runner.run_sweep(b, workers=0, progress=False)
+    assert "timing.cycles" not in da.columns and db["timing.cycles"].iloc[0] > 0
+    assert da["raster.samples_tested"].iloc[0] == db["raster.samples_tested"].iloc[0]
+
+
 def test_textured_square_workload_covers_its_edge_squared(tmp_path, store):
     text = ("scene: {name: textured_square, params: {edge_px: 20, width: 64, height: 64}}\n"
             "camera: {coc_px: 0}\nsamples: {spp: 4, seed: 1}\npipeline: {algorithm: tile}\n")

@@ -44,7 +44,10 @@ camera = sim.Camera(width=w, height=h, coc_px=4, focus_distance=4)
 table = sim.SampleTable.create("stratified", spp=spp, seed=1)
 config = sim.PipelineConfig(algorithm="tile", threads=threads)
 samples = table.samples(camera.lens)
-est = sim.memory_estimate(camera, spp, n, config, threads, bool(export), True, period=samples.shape[0])
+from sim.render import visit_record_estimate  # the default hardware.timing.granularity is 'visit'
+visits = visit_record_estimate(camera, *camera.engine_vertices(S.positions, S.positions_t1), config)
+est = sim.memory_estimate(camera, spp, n, config, threads, bool(export), True, period=samples.shape[0],
+                          visit_records=visits)
 
 def status(key):
     for line in open("/proc/self/status"):

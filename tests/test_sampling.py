@@ -123,13 +123,14 @@ def test_intervals_cover_the_frame_value_at_the_stated_rate(setup, full):
     names = list(allb["counters"])
     rows = allb["bin_counters"]
     work = allb["bin_work"]
+    aux = allb["bin_aux"]
     from sim.stats import DERIVED
 
     for fraction in (0.2, 0.3):
         hits = {k: 0 for k in ("raster.samples_tested", "raster.samples_hit", "ops.total")}
         errs = {k: [] for k in hits}
         for seed in range(400):
-            s = sampling.choose_bins(work, fraction, seed)
+            s = sampling.choose_bins(work, fraction, seed, aux)
             flat, ci = sampling.estimate(s, _counters_with_setup(allb["counters"], rows, s, names), rows[s.bins],
                                          DERIVED, names)
             for figure in hits:
@@ -185,3 +186,24 @@ def test_whole_frame_fraction_is_exact(setup, full):
     assert r.ci95 is None and r.flat_stats["raster.samples_tested"] == res.flat_stats["raster.samples_tested"]
     s = sampling.choose_bins([0, 5, 1, 0, 2, 9], 0.99, 1)  # 4 bins with work: all of them, exact
     assert s.exact and s.bins.tolist() == [1, 2, 4, 5]
+
+
+@pytest.mark.bench
+def test_bench_sampling(tmp_path):
+    """experiments/bench/bench_sampling.py (make bench): speed against error of sampled simulation,
+    the coverage of its intervals over many draws, and the timing granularity's error against its cost
+    (reports/bench/bench_sampling.md). Checks what does not depend on timing: the sections, that every
+    fraction's estimate has an interval, and the granularity rows' record counts."""
+    import os
+
+    from experiments.bench import bench_sampling
+
+    quick = os.environ.get("RAST5D_BENCH_QUICK", "") not in ("", "0")
+    out = tmp_path if quick else bench_sampling.REPO / "reports" / "bench"
+    got = bench_sampling.run(quick=quick, out=out)
+    page = got["page"].read_text()
+    for section in ("## Sampled simulation", "## Coverage of the 95% intervals", "## Timing-model granularity"):
+        assert section in page
+    assert all(r["ci ops.total"] > 0 for r in got["sampling"] if r["fraction"] < 1)
+    assert all(0.0 <= r["cov ops.total"] <= 1.0 for r in got["coverage"])
+    assert all(r["records_visit"] >= r["records_bin"] for r in got["granularity"])

@@ -6,10 +6,11 @@ from .build import build, build_scene
 from .load import load_config, load_dict, parse_override
 from .schema import (REPO, CameraSpec, ConfigError, ExecutorSpec, HardwareSpec, MetricsSpec, OutputsSpec,
                      PipelineSpec, PlotSpec, PointSpec, RenderConfig, SamplesSpec, SceneSpec, deep_merge, validate)
-from .sweep import RESULT_EXCLUDE, config_hash, expand_sweep, flatten, point_columns, set_dotted, sweep_points
+from .sweep import (RESULT_EXCLUDE, config_hash, expand_sweep, flatten, point_columns, set_dotted, sweep_points,
+                    timing_needed)
 
 __all__ = ["REPO", "ConfigError", "RenderConfig", "SceneSpec", "CameraSpec", "SamplesSpec", "PipelineSpec",
            "HardwareSpec", "PlotSpec", "MetricsSpec", "OutputsSpec", "ExecutorSpec", "PointSpec", "build",
            "build_scene",
            "load_config", "load_dict", "parse_override", "validate", "deep_merge", "expand_sweep", "sweep_points",
-           "set_dotted", "config_hash", "flatten", "point_columns", "RESULT_EXCLUDE"]
+           "set_dotted", "config_hash", "flatten", "point_columns", "RESULT_EXCLUDE", "timing_needed"]

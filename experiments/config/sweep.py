@@ -107,6 +107,17 @@ def point_columns(config: RenderConfig) -> dict:
     return flatten({"point": d})
 
 
+def timing_needed(config: RenderConfig) -> bool:
+    """Whether a render point runs the timing model: always, except for the points of a report page
+    (``outputs.page``) whose outputs never mention ``timing`` (plots, derived figures, tables, text):
+    with records per shading visit the model can cost as much as the render, and those pages do not
+    read it. Such points hash apart (config_hash), so a row without timing figures never serves a
+    config that reads them."""
+    if config.point.kind != "render" or not config.outputs.page:
+        return True
+    return "timing" in config.outputs.model_dump_json()
+
+
 def config_hash(config: RenderConfig) -> str:
     """Stable hash of everything that determines a point's result row: scene, camera, samples,
     pipeline (not the thread count: results are identical for any), hardware, the metrics spec, and
@@ -116,6 +127,8 @@ def config_hash(config: RenderConfig) -> str:
     d["metrics"] = config.outputs.metrics.model_dump() if config.outputs.metrics else None
     if config.point.kind != "render":
         d["point"] = config.point.model_dump()
+    if not timing_needed(config):
+        d["timing"] = False
     d["inputs"] = config_inputs(config)  # the contents of every file the point's scenes read
     blob = json.dumps(d, sort_keys=True, default=str).encode()
     return hashlib.sha256(blob).hexdigest()[:16]

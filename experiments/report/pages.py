@@ -192,6 +192,19 @@ def report_configs(configs_dir: Path | None = None) -> list[Path]:
     return run((CONFIGS / "paper").glob("*.yaml")) + top
 
 
+def _retimed_renders(loaded) -> set[str]:
+    """Hashes of the renders that the report's retime points re-time: those render points keep their
+    timing records in the store, so a page's retime sections re-time them instead of rendering again."""
+    from ..config import config_hash, expand_sweep
+    from ..run.points import render_config
+
+    keep = set()
+    for p, config, _, lines in loaded:
+        if config.point.kind == "retime":
+            keep.update(config_hash(render_config(cfg)) for _, cfg in expand_sweep(config, str(p), lines))
+    return keep
+
+
 def main(only=None, workers=None, scheduler=None, force=False, quick=False, configs_dir: Path | None = None,
          reports_dir: Path | None = None, retry_failed: bool = False) -> int:
     out_root = (reports_dir or REPORTS) / ("quick" if quick else "")
@@ -219,6 +232,7 @@ def main(only=None, workers=None, scheduler=None, force=False, quick=False, conf
         loaded = [x for x in loaded if (x[1].outputs.page or x[1].name) in pages]
     else:
         chosen = {c.name for _, c, _, _ in loaded}
+    keep_records = _retimed_renders(loaded)
     sections: dict[tuple[str, str], list] = defaultdict(list)
     failures = 0
     counts = {"rendered": 0, "cached": 0}
@@ -227,7 +241,7 @@ def main(only=None, workers=None, scheduler=None, force=False, quick=False, conf
         t0 = time.perf_counter()
         df = run_sweep(config, source=str(p.relative_to(REPO) if p.is_relative_to(REPO) else p), workers=workers,
                        scheduler=scheduler, force=force and config.name in chosen, lines=lines,
-                       retry_failed=retry_failed)
+                       retry_failed=retry_failed, keep_records=keep_records)
         failures += int((df["status"] != "ok").sum()) if "status" in df.columns else 0
         for k in counts:
             counts[k] += df.attrs.get("summary", {}).get(k, 0)

@@ -21,7 +21,7 @@ import time
 import traceback
 from pathlib import Path
 
-from ..config import RESULT_EXCLUDE, RenderConfig, build, build_scene, config_hash, flatten, point_columns
+from ..config import RESULT_EXCLUDE, RenderConfig, build, build_scene, config_hash, flatten, point_columns, timing_needed
 from ..config.inputs import input_digests, tracking_reads
 from .store import cached_records, engine_id, git_rev, store_records
 from .uses import USE_KINDS
@@ -65,7 +65,10 @@ def _rendered(config, row: dict, threads, options: dict | None = None):
     import sim
 
     scene, camera, table, pipeline = _build(config, row, threads)
-    result = sim.render(scene, camera, table, pipeline, hardware=config.hardware_config(), **(options or {}))
+    # Sweep points of pages that never read timing skip the model; a render observed from the command
+    # line (progress, pixel statistics: `rast5d render`) keeps every figure.
+    result = sim.render(scene, camera, table, pipeline, hardware=config.hardware_config(),
+                        timing=timing_needed(config) or bool(options), **(options or {}))
     row["resolved.lens_grid"] = result.config.get("lens_grid")
     row.update(result.flat_stats)
     if result.ci95 is not None:  # sampled simulation: 95% half-widths beside the estimates
@@ -171,21 +174,29 @@ def render_point(config: RenderConfig, image_path: str | Path | None = None, thr
     return row, result
 
 
-def run_point(config_json: str, image_path: str | None = None, threads: int | None = None) -> dict:
+def run_point(config_json: str, image_path: str | None = None, threads: int | None = None,
+              records_hash: str | None = None) -> dict:
     """One point, isolated: any exception becomes a row with status 'error', its message and its
     traceback (never raised). ``inputs.files`` lists the files read meanwhile ({path: sha256}, JSON):
-    the store serves the row only while they are unchanged."""
+    the store serves the row only while they are unchanged. ``records_hash``: a render point stores its
+    timing records and counters under it, as stored_render would, for the retime points that re-time it."""
     config = RenderConfig.model_validate_json(config_json)
     t0 = time.perf_counter()
+    result = None
     with tracking_reads() as reads:
         try:
-            row, _ = render_point(config, image_path, threads)
+            row, result = render_point(config, image_path, threads)
         except Exception as e:  # noqa: BLE001 - a failing point must not stop the sweep
             row = config_columns(config)
             row.update(status="error", error=f"{type(e).__name__}: {e}", traceback=traceback.format_exc(),
                        **{"engine.version": engine_id(), "engine.git_rev": git_rev(),
                           "time.wall_s": time.perf_counter() - t0})
     row["inputs.files"] = json.dumps(input_digests(reads))
+    records = getattr(result, "timing_records", None)
+    if records_hash is not None and row.get("status") == "ok" and records is not None and result.ci95 is None:
+        stats = {"resolved.lens_grid": row.get("resolved.lens_grid"), **result.flat_stats,
+                 "inputs.files": row["inputs.files"]}
+        store_records(records_hash, records, stats)
     return row
 
 

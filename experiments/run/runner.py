@@ -17,13 +17,16 @@ from .store import (cached_row, claim, images_dir as store_images_dir, lock_is_s
 
 def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "config", workers: int | None = None,
               scheduler=None, force: bool = False, images_dir: str | Path | None = None, progress: bool = True,
-              lines: dict | None = None, retry_failed: bool = False, wait_poll_s: float = 0.5):
+              lines: dict | None = None, retry_failed: bool = False, wait_poll_s: float = 0.5,
+              keep_records: set[str] | frozenset[str] = frozenset()):
     """Run every point of config's sweep; returns the sweep's table (pandas DataFrame, one row per point,
     in sweep order) and writes it to results/<name>.parquet. ``workers`` (default: executor.workers or the
     core count; 0 = in-process) is the local pool; ``scheduler`` (an address or a distributed.Client, or
     executor: {kind: dask}) runs the points on Dask instead. Stored failed points are served as failed
     unless ``retry_failed``. Points another run is computing (locked in the store) are waited for.
-    Ctrl-C raises KeyboardInterrupt after the finished points are saved."""
+    Ctrl-C raises KeyboardInterrupt after the finished points are saved. ``keep_records``: hashes of
+    render points whose timing records a retime point will re-time (``rast5d report`` collects them):
+    those points store their records, so the retime does not render them again."""
     name = name or config.name or "experiment"
     ex = config.executor
     if scheduler is None and ex.kind == "dask":
@@ -56,7 +59,7 @@ def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "c
             waiting.append(i)
             continue
         claimed.add(h)
-        todo.append(_job(i, h, cfg, images_dir, scheduler, workers))
+        todo.append(_job(i, h, cfg, images_dir, scheduler, workers, h in keep_records))
     if config.outputs.metrics is not None and todo:
         from .references import prepare_references
 
@@ -151,9 +154,9 @@ def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "c
     return df
 
 
-def _job(i: int, h: str, cfg: RenderConfig, images_dir, scheduler, workers: int):
+def _job(i: int, h: str, cfg: RenderConfig, images_dir, scheduler, workers: int, keep_records: bool = False):
     """(key, run_point arguments) of point i."""
     image = str(Path(images_dir) / f"{h}.png") if images_dir is not None else None
     # Several processes on 2 cores: one engine thread per point (results do not depend on it).
     threads = 1 if (scheduler is not None or workers > 1) else None
-    return i, (cfg.model_dump_json(), image, threads)
+    return i, (cfg.model_dump_json(), image, threads) + ((h,) if keep_records else ())

@@ -12,6 +12,7 @@
 #include "sampletest/precision.h"
 #include "setup/setup.h"
 #include "tiletest/tile_test.h"
+#include "traversal/bin_covariates.h"
 #include "traversal/bin_sample.h"
 #include "traversal/traversal.h"
 
@@ -220,6 +221,7 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
       }
       result.bin_work[b] = w * table.spp();
     }
+    bin_covariates(setups, bin_lists, bins_x, B, p.width, p.height, table.spp(), result.bin_aux);
   }
   if (!bins && p.sample_fraction < 1.0) {
     BinSample s = stratify_bins(result.bin_work, p.sample_fraction, static_cast<std::uint64_t>(p.sample_seed));

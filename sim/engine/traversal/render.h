@@ -55,6 +55,9 @@ struct RenderResult {
   // every bin with triangles was traversed).
   std::vector<std::int64_t> bin_work;
   std::vector<int> sampled_bins, sampled_stratum, strata_sizes;
+  // With bin_work: 2 per bin, the regression estimator's auxiliary variables (coverage and
+  // footprint, samples; traversal/bin_covariates.h).
+  std::vector<double> bin_aux;
   // Pixel trace (PixelStats::tracing()): the events and samples of the traced pixel, in order.
   std::vector<TraceEvent> trace_events;
   std::vector<TraceSample> trace_samples;

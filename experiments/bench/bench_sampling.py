@@ -1,0 +1,271 @@
+"""Sampled simulation and the timing model's granularity: what each costs against what it gets wrong.
+
+1. Sampled simulation (PipelineConfig.sample_fraction, sim/sampling.py): for fractions 1 ... 0.01 on
+   three scenes, the speed-up over the whole frame (wall and process CPU time, the minimum over the
+   seeds against the minimum of the whole-frame repeats) and the error of the estimated frame totals
+   of ops.total, raster.samples_tested and raster.samples_hit (median over the seeds), with the median
+   95% half-width.
+2. The coverage of the 95% intervals over many draws: one render lists every bin (the engine returns
+   each bin's own counters), then the engine's own draw (sim._core.stratify_bins) and the estimator
+   are applied for each seed; covered = share of the draws whose interval contains the whole-frame
+   value, per figure.
+3. The timing model's granularity (hardware.timing.granularity): cycles and the units' shares of the
+   busy cycles with records per (triangle, bin) against records per shading visit, against the
+   simulator time (render + timing model) and the records each costs.
+
+Writes reports/bench/bench_sampling.md. `python -m experiments.bench.bench_sampling --help`."""
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[2]
+FRACTIONS = (1.0, 0.5, 0.2, 0.1, 0.05, 0.03, 0.02, 0.01)
+FIGURES = ("ops.total", "raster.samples_tested", "raster.samples_hit")
+UNITS = ("setup", "tile_test", "sample_test", "depth", "shader", "texture", "memory")
+
+
+def _camera(scene, w, h, coc):
+    import sim
+
+    hint = scene.camera_hint
+    return sim.Camera(width=w, height=h, fov_y_deg=hint.get("fov_y_deg", 45.0),
+                      focus_distance=hint["focus_distance"], coc_px=coc)
+
+
+def _cases(quick: bool):
+    import models
+
+    size = 256 if quick else 512
+    return [("bunny", models.named("bunny"), size, size), ("spot", models.named("spot"), size, size),
+            ("modern_hall", models.named("modern_hall"), 2 * size, size * 9 // 8)]
+
+
+def _timed(fn):
+    t0, c0 = time.perf_counter(), time.process_time()
+    out = fn()
+    return out, time.perf_counter() - t0, time.process_time() - c0
+
+
+def sampling_table(threads: int, seeds: int, spp: int, quick: bool, bin_size: int, fractions=FRACTIONS):
+    """Rows (scene, fraction, speed-up wall/CPU, median |error| and half-width per figure)."""
+    import numpy as np
+
+    import sim
+
+    table = sim.SampleTable.stratified(spp=spp, seed=1)
+    rows = []
+    for name, scene, w, h in _cases(quick):
+        cam = _camera(scene, w, h, 10.0)
+        base = sim.PipelineConfig(algorithm="tile", threads=threads, bin_size=bin_size)
+        runs = [_timed(lambda: sim.render(scene, cam, table, base, timing=False)) for _ in range(2)]
+        full = runs[-1][0].flat_stats
+        t_full, c_full = min(r[1] for r in runs), min(r[2] for r in runs)
+        n_bins = (-(-w // bin_size)) * (-(-h // bin_size))
+        for frac in fractions:
+            if frac == 1.0:
+                rows.append(dict(scene=name, size=f"{w}x{h}", bins=f"{n_bins}", fraction=1.0, drawn=0, speedup=1.0,
+                                 cpu_speedup=1.0, wall=t_full, cpu=c_full, **{f"err {k}": 0.0 for k in FIGURES},
+                                 **{f"ci {k}": 0.0 for k in FIGURES}))
+                continue
+            walls, cpus, errs, cis = [], [], {k: [] for k in FIGURES}, {k: [] for k in FIGURES}
+            r = None
+            for seed in range(seeds):
+                cfg = base.replace(sample_fraction=frac, sample_seed=seed)
+                try:
+                    r, wall, cpu = _timed(lambda: sim.render(scene, cam, table, cfg, timing=False))
+                except sim.ConfigError as e:  # too few bins with triangles for an interval
+                    print(f"{name:12} f={frac:<5g} not estimable: {str(e)[:90]}", flush=True)
+                    break
+                walls.append(wall), cpus.append(cpu)
+                for k in FIGURES:
+                    errs[k].append(abs(r.flat_stats[k] - full[k]) / full[k])
+                    cis[k].append(r.ci95[k] / full[k])
+            if not walls:
+                continue
+            row = dict(scene=name, size=f"{w}x{h}", bins=f"{n_bins} / {int(r.flat_stats['sample.candidates'])}",
+                       fraction=frac, drawn=int(r.flat_stats["sample.bins"]), speedup=t_full / min(walls),
+                       cpu_speedup=c_full / min(cpus), wall=min(walls), cpu=min(cpus),
+                       **{f"err {k}": float(np.median(errs[k])) for k in FIGURES},
+                       **{f"ci {k}": float(np.median(cis[k])) for k in FIGURES})
+            rows.append(row)
+            print(f"{name:12} f={frac:<5g} bins {row['drawn']:5d} speed-up wall x{row['speedup']:.1f} CPU "
+                  f"x{row['cpu_speedup']:.1f}  median |err| " + ", ".join(f"{k} {row['err ' + k]:.2%}" for k in FIGURES),
+                  flush=True)
+    return rows
+
+
+def coverage_table(spp: int, quick: bool, bin_size: int, draws: int, fractions=FRACTIONS[1:]):
+    """Rows (scene, fraction, per figure: share of draws covered, median |error|) from one render that
+    lists every bin, through the engine's draw and sim.sampling.estimate."""
+    import numpy as np
+
+    import sim
+    from sim import _core, sampling
+    from sim.stats import DERIVED
+
+    table = sim.SampleTable.stratified(spp=spp, seed=1)
+    rows = []
+    for name, scene, w, h in _cases(quick):
+        cam = _camera(scene, w, h, 10.0)
+        n_bins = (-(-w // bin_size)) * (-(-h // bin_size))
+        captured = {}
+        render = _core.render
+
+        def listing(params, *a, **kw):  # the same call sim.render makes, with every bin listed
+            kw["bins"] = np.arange(n_bins, dtype=np.int32)
+            captured["out"] = render(params, *a, **kw)
+            return captured["out"]
+
+        _core.render = listing
+        try:
+            full = sim.render(scene, cam, table, sim.PipelineConfig(algorithm="tile", bin_size=bin_size), timing=False)
+        finally:
+            _core.render = render
+        out = captured["out"]
+        names = list(out["counters"])
+        rows_all = np.asarray(out["bin_counters"])
+        work, aux = np.asarray(out["bin_work"]), np.asarray(out["bin_aux"])
+        setup = {n: int(out["counters"][n]) - int(rows_all[:, i].sum()) for i, n in enumerate(names)}
+        for frac in fractions:
+            hit = {k: 0 for k in FIGURES}
+            errs = {k: [] for k in FIGURES}
+            n = 0
+            for seed in range(draws):
+                try:
+                    s = sampling.choose_bins(work, frac, seed, aux)
+                except sim.ConfigError:
+                    break
+                sub = rows_all[s.bins]
+                counters = {nm: setup[nm] + int(sub[:, i].sum()) for i, nm in enumerate(names)}
+                flat, ci = sampling.estimate(s, counters, sub, DERIVED, names)
+                for k in FIGURES:
+                    truth = full.flat_stats[k]
+                    hit[k] += abs(flat[k] - truth) <= ci[k]
+                    errs[k].append(abs(flat[k] - truth) / truth)
+                n += 1
+            if not n:
+                continue
+            rows.append(dict(scene=name, fraction=frac, draws=n, strata=len(s.sizes),
+                             **{f"cov {k}": hit[k] / n for k in FIGURES},
+                             **{f"err {k}": float(np.median(errs[k])) for k in FIGURES}))
+            print(f"{name:12} f={frac:<5g} {n} draws: covered " + ", ".join(f"{k} {hit[k] / n:.3f}" for k in FIGURES),
+                  flush=True)
+    return rows
+
+
+def granularity_table(spp: int, quick: bool, threads: int = 1, repeats: int = 2):
+    """Rows: the timing model with records per (triangle, bin) against records per shading visit
+    (hardware.timing.granularity) on three scenes: cycles, the units' shares of the busy cycles,
+    records, and the simulator time (render + timing model) each costs."""
+    import sim
+
+    table = sim.SampleTable.stratified(spp=spp, seed=1)
+    cfg = sim.PipelineConfig(algorithm="tile", shading="msaa", texture_count=1, threads=threads)
+    rows = []
+    for name, scene, w, h in _cases(quick):
+        cam = _camera(scene, w, h, 10.0)
+        out = {}
+        for gran in ("bin", "visit") * repeats:  # interleaved; minimum time kept
+            hw = sim.HardwareConfig(timing={"granularity": gran})
+            r, wall, cpu = _timed(lambda: sim.render(scene, cam, table, cfg, hardware=hw))
+            prev = out.get(gran)
+            out[gran] = (min(cpu, prev[0]) if prev else cpu, r.flat_stats, len(r.timing_records))
+        (tb, fb, nb), (tv, fv, nv) = out["bin"], out["visit"]
+
+        bot_b, bot_v = fb["timing.bottleneck"], fv["timing.bottleneck"]
+        util = {u: fb[f"timing.{u}.utilization"] - fv[f"timing.{u}.utilization"] for u in UNITS}
+        uworst = max(util, key=lambda u: abs(util[u]))
+        row = dict(scene=name, size=f"{w}x{h}", cycles_bin=fb["timing.cycles"], cycles_visit=fv["timing.cycles"],
+                   err=fb["timing.cycles"] / fv["timing.cycles"] - 1, bottleneck_bin=fb["timing.bottleneck"],
+                   bottleneck_visit=fv["timing.bottleneck"], bot_util_bin=fb[f"timing.{bot_b}.utilization"],
+                   bot_util_visit=fv[f"timing.{bot_v}.utilization"], util_unit=uworst, util_diff=util[uworst], records_bin=nb, records_visit=nv, time_bin=tb, time_visit=tv)
+        rows.append(row)
+        print(f"{name:12} cycles bin {row['cycles_bin']:,.0f} visit {row['cycles_visit']:,.0f} ({row['err']:+.2%}); "
+              f"bottleneck {row['bottleneck_bin']} / {row['bottleneck_visit']}; records {nb:,} / {nv:,}; "
+              f"CPU time x{tv / tb:.2f}", flush=True)
+    return rows
+
+
+def granularity_lines(grows, spp: int) -> list[str]:
+    lines = ["", f"## Timing-model granularity ({spp} spp, tile, msaa, 1 texture, CoC 10 px, 1 thread)", "",
+             "`hardware.timing.granularity`: `bin` = one work record per (triangle, screen bin; 64 px); `visit` "
+             "(the default) = one per shading visit (per triangle and tile for tile). Error: bin cycles / visit "
+             "cycles - 1 (visit is the detailed reference). Both carry the same work, so each unit's busy cycles are "
+             "equal; what moves is how much the units overlap: the bottleneck unit's share of the frame's cycles "
+             "(its utilisation, busy / cycles) and the unit whose utilisation moves most. Time: CPU time of render "
+             "plus timing model, minimum of interleaved repeats.", "",
+             "| scene | size | cycles (bin) | cycles (visit) | error | bottleneck bin / visit | bottleneck share bin / visit | "
+             "largest utilisation change | records bin / visit | sim time visit / bin |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in grows:
+        lines.append(f"| {r['scene']} | {r['size']} | {r['cycles_bin']:,.0f} | {r['cycles_visit']:,.0f} | {r['err']:+.2%} | "
+                     f"{r['bottleneck_bin']} / {r['bottleneck_visit']} | {r['bot_util_bin']:.3f} / {r['bot_util_visit']:.3f} | "
+                     f"{r['util_unit']} {r['util_diff']:+.3f} | {r['records_bin']:,} / {r['records_visit']:,} | "
+                     f"{r['time_visit'] / r['time_bin']:.2f} |")
+    return lines
+
+
+def run(threads: int = 2, seeds: int = 5, draws: int = 200, spp: int = 64, bin_size: int = 8, quick: bool = False,
+        out=REPO / "reports" / "bench") -> dict:
+    if quick:
+        seeds, draws, spp = 3, 50, 16
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    srows = sampling_table(threads, seeds, spp, quick, bin_size)
+    crows = coverage_table(spp, quick, bin_size, draws)
+    grows = granularity_table(spp, quick)
+    lines = ["# bench_sampling: sampled simulation and timing granularity, cost against error", "",
+             f"`python -m experiments.bench.bench_sampling` (part of `make bench`), {platform.processor() or platform.machine()}, "
+             f"{os.cpu_count()} hardware threads, load average {load:.1f} at the start. Compare the ratios (measured in "
+             "one run), not the seconds; CPU is the process CPU time (all threads, Python included), which other "
+             "processes' load disturbs less than wall time.", "",
+             f"## Sampled simulation: speed against estimate error ({spp} spp, tile, CoC 10 px, bin_size {bin_size}, "
+             f"{threads} threads, {seeds} seeds per fraction)", "",
+             "Speed-up: whole-frame time / sampled time (minima over the repeats and the seeds). |err|: median "
+             "relative error of the estimated frame total against the whole-frame value; ±95%: median relative "
+             "half-width. The fraction is of the bins that hold triangles (bins: all / with triangles; drawn: "
+             "traversed, including the take-all stratum). Triangle setup, binning and the per-bin auxiliaries "
+             "run for the whole frame at every fraction, which bounds the speed-up.", "",
+             "| scene | size | bins | fraction | drawn | speed-up wall | speed-up CPU | |err| ops.total | ±95% ops.total | "
+             "|err| samples_tested | ±95% samples_tested | |err| samples_hit | ±95% samples_hit |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in srows:
+        lines.append(f"| {r['scene']} | {r['size']} | {r['bins']} | {r['fraction']:g} | {r['drawn']} | {r['speedup']:.1f} | "
+                     f"{r['cpu_speedup']:.1f} | " + " | ".join(f"{r['err ' + k]:.2%} | {r['ci ' + k]:.2%}" for k in FIGURES)
+                     + " |")
+    lines += ["", f"## Coverage of the 95% intervals ({draws} draws per fraction, same frames)", "",
+              "One render lists every bin; each draw is the engine's (sim._core.stratify_bins, seeds 0, 1, ...) and "
+              "its estimate is sim.sampling.estimate on those bins' counters, so the draws cost no rendering. "
+              "covered: share of the draws whose interval contains the whole-frame value (nominal 0.95).", "",
+              "| scene | fraction | strata | " + " | ".join(f"covered {k} | median |err| {k}" for k in FIGURES) + " |",
+              "|---|---|---|" + "---|---|" * len(FIGURES)]
+    for r in crows:
+        lines.append(f"| {r['scene']} | {r['fraction']:g} | {r['strata']} | "
+                     + " | ".join(f"{r['cov ' + k]:.3f} | {r['err ' + k]:.2%}" for k in FIGURES) + " |")
+    lines += granularity_lines(grows, spp)
+    page = Path(out) / "bench_sampling.md"
+    page.parent.mkdir(parents=True, exist_ok=True)
+    page.write_text("\n".join(lines) + "\n")
+    print(f"\nwrote {page}")
+    return {"page": page, "sampling": srows, "coverage": crows, "granularity": grows}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--seeds", type=int, default=5, help="sampled renders per fraction")
+    ap.add_argument("--draws", type=int, default=200, help="draws per fraction for the coverage table")
+    ap.add_argument("--spp", type=int, default=64)
+    ap.add_argument("--bin-size", type=int, default=8)
+    ap.add_argument("--quick", action="store_true", help="small frames, 16 spp, few seeds (a smoke run)")
+    ap.add_argument("--out", type=Path, default=REPO / "reports" / "bench")
+    a = ap.parse_args(argv)
+    run(a.threads, a.seeds, a.draws, a.spp, a.bin_size, a.quick, a.out)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
