@@ -1,4 +1,4 @@
-"""`make bench`: simulator speed against the work it simulates, and sampled simulation.
+"""`make bench`: simulator speed against the work it simulates, and the explicit-SIMD sample tests.
 
 1. Wall time per algorithm, scene and thread count beside the operations each counts, as ratios
    to brute force measured in one run: bunny 512^2 at CoC 10 and 50 px and modern_hall (a
@@ -6,11 +6,10 @@
    threads) cell are interleaved (A, B, C, A, B, C, ...) over several repeats and the minimum is
    kept, so load from other processes shifts all of them alike; no figure is compared against a
    fixed time. ``tile+optimal`` is tile with ``count_optimal: true`` (the Table 1 instrumentation).
-2. Sampled simulation (PipelineConfig.sample_fraction): for fractions 1 ... 0.01 on three scenes,
-   the speed-up over the whole frame and the error of the estimated frame totals against the
-   whole-frame values (median over seeds), with the 95% half-width and how often it covered.
-3. The timing model's granularity (hardware.timing.granularity): cycles and utilisation with records
-   per (triangle, bin) against records per shading visit, and the simulator time of each.
+2. The brute-force sample test per class (4D, 5D) with `pipeline.simd` off and on, in samples tested
+   per second of CPU time, and the kernels alone.
+
+Sampled simulation and the timing model's granularity are measured by bench_sampling.py.
 
 Writes reports/bench/bench_speed.md. `python -m experiments.bench.bench_speed --help`."""
 from __future__ import annotations
@@ -18,15 +17,12 @@ from __future__ import annotations
 import argparse
 import os
 import platform
-import statistics
 import sys
 import time
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
 ALGORITHMS = (("bruteforce", {}), ("tile", {}), ("tile+optimal", {"count_optimal": True}), ("interval", {}))
-FRACTIONS = (1.0, 0.5, 0.2, 0.1, 0.05, 0.02, 0.01)
-FIGURES = ("ops.total", "raster.samples_tested", "raster.samples_hit")
 
 
 def _scenes(hall_scale: float, quick: bool):
@@ -86,64 +82,6 @@ def wall_table(hall_scale: float, threads, repeats: int, spp: int, quick: bool):
     return rows
 
 
-def sampling_table(threads: int, seeds: int, spp: int, quick: bool, bin_size: int = 16):
-    """Rows (scene, fraction, speedup, median |error| per figure, median relative half-width, coverage)."""
-    import numpy as np
-
-    import models
-    import sim
-
-    table = sim.SampleTable.stratified(spp=spp, seed=1)
-    size = 256 if quick else 512
-    cases = [("bunny", models.named("bunny"), size, size, 10.0, "tile"),
-             ("spot", models.named("spot"), size, size, 10.0, "tile"),
-             ("modern_hall", models.named("modern_hall"), 2 * size, size * 9 // 8, 10.0, "tile")]
-    rows = []
-    for name, scene, w, h, coc, algo in cases:
-        cam = _camera(scene, w, h, coc)
-        base = sim.PipelineConfig(algorithm=algo, threads=threads, bin_size=bin_size)
-        full_walls, full = [], None
-        for _ in range(2):
-            r = sim.render(scene, cam, table, base, timing=False)
-            full_walls.append(r.flat_stats["time.wall_s"])
-            full = r.flat_stats
-        t_full = min(full_walls)
-        n_bins = (-(-w // bin_size)) * (-(-h // bin_size))
-        for frac in FRACTIONS:
-            if frac == 1.0:
-                rows.append(dict(scene=name, size=f"{w}x{h}", bins=n_bins, fraction=1.0, speedup=1.0,
-                                 **{f"err {k}": 0.0 for k in FIGURES}, **{f"ci {k}": 0.0 for k in FIGURES},
-                                 coverage=1.0, wall=t_full))
-                continue
-            walls, errs, cis, cover = [], {k: [] for k in FIGURES}, {k: [] for k in FIGURES}, 0
-            for seed in range(seeds):
-                try:
-                    r = sim.render(scene, cam, table, base.replace(sample_fraction=frac, sample_seed=seed), timing=False)
-                except sim.ConfigError as e:  # too few bins with triangles for an interval
-                    print(f"{name:12} f={frac:<5g} skipped: {e}")
-                    break
-                walls.append(r.flat_stats["time.wall_s"])
-                ok = True
-                for k in FIGURES:
-                    truth = full[k]
-                    errs[k].append(abs(r.flat_stats[k] - truth) / truth)
-                    cis[k].append(r.ci95[k] / truth)
-                    ok &= abs(r.flat_stats[k] - truth) <= r.ci95[k]
-                cover += ok
-            if not walls:
-                continue
-            wall = min(walls)
-            row = dict(scene=name, size=f"{w}x{h}", bins=f"{n_bins} / {int(r.flat_stats['sample.candidates'])}", fraction=frac, speedup=t_full / wall,
-                       **{f"err {k}": float(np.median(errs[k])) for k in FIGURES},
-                       **{f"ci {k}": float(np.median(cis[k])) for k in FIGURES},
-                       coverage=cover / seeds, wall=wall)
-            rows.append(row)
-            print(f"{name:12} f={frac:<5g} speed-up x{row['speedup']:.1f}  median |err| "
-                  + ", ".join(f"{k} {row['err ' + k]:.2%}" for k in FIGURES)
-                  + f"  all three covered {row['coverage']:.0%}")
-    return rows
-
-
 def simd_table(spp: int, quick: bool, repeats: int):
     """Rows: brute-force sample tests per second per class, explicit SIMD on and off (pipeline.simd),
     one thread, interleaved; rates from the process CPU time (other processes' load inflates wall
@@ -182,54 +120,12 @@ def sim_isa() -> str:
     return sim._core.simd_isa()
 
 
-UNITS = ("setup", "tile_test", "sample_test", "depth", "shader", "texture", "memory")
-
-
-def granularity_table(spp: int, quick: bool, threads: int = 1):
-    """Rows: the timing model with records per (triangle, bin) against records per shading visit
-    (hardware.timing.granularity), on three scenes: cycles, per-unit utilisation, records, and the
-    simulator time (render + timing model) each costs."""
-    import time
-
-    import models
-    import sim
-
-    table = sim.SampleTable.stratified(spp=spp, seed=1)
-    size = 256 if quick else 512
-    cases = [("bunny", models.named("bunny"), size, size), ("spot", models.named("spot"), size, size),
-             ("modern_hall", models.named("modern_hall"), 2 * size, size * 9 // 8)]
-    cfg = sim.PipelineConfig(algorithm="tile", shading="msaa", texture_count=1, threads=threads)
-    rows = []
-    for name, scene, w, h in cases:
-        cam = _camera(scene, w, h, 10.0)
-        out = {}
-        for gran in ("bin", "visit", "bin", "visit"):  # interleaved twice; minimum time kept
-            hw = sim.HardwareConfig(timing={"granularity": gran})
-            t0 = time.perf_counter()
-            r = sim.render(scene, cam, table, cfg, hardware=hw)
-            wall = time.perf_counter() - t0
-            prev = out.get(gran)
-            out[gran] = (min(wall, prev[0]) if prev else wall, r.flat_stats, len(r.timing_records))
-        (tb, fb, nb), (tv, fv, nv) = out["bin"], out["visit"]
-        util = {u: fb[f"timing.{u}.utilization"] - fv[f"timing.{u}.utilization"] for u in UNITS}
-        worst = max(util, key=lambda u: abs(util[u]))
-        row = dict(scene=name, size=f"{w}x{h}", cycles_bin=fb["timing.cycles"], cycles_visit=fv["timing.cycles"],
-                   err=fb["timing.cycles"] / fv["timing.cycles"] - 1, util_unit=worst, util_diff=util[worst],
-                   bottleneck_bin=fb["timing.bottleneck"], bottleneck_visit=fv["timing.bottleneck"],
-                   records_bin=nb, records_visit=nv, time_bin=tb, time_visit=tv)
-        rows.append(row)
-        print(f"{name:12} cycles bin {row['cycles_bin']:,.0f} visit {row['cycles_visit']:,.0f} ({row['err']:+.2%}); "
-              f"largest utilisation change {worst} {util[worst]:+.3f}; records {nb:,} / {nv:,}; "
-              f"time x{tv / tb:.2f}")
-    return rows
-
-
-def run(hall_scale: float = 0.5, threads=(1, 2), repeats: int = 3, seeds: int = 5, spp: int = 64,
+def run(hall_scale: float = 0.5, threads=(1, 2), repeats: int = 3, spp: int = 64,
         quick: bool = False, out=REPO / "reports" / "bench") -> dict:
     if quick:
-        repeats, seeds, spp = 1, 3, 16
+        repeats, spp = 1, 16
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
-    lines = ["# bench_speed: simulator speed against simulated work; sampled simulation", "",
+    lines = ["# bench_speed: simulator speed against simulated work", "",
              f"`make bench` (`python -m experiments.bench.bench_speed`), {platform.processor() or platform.machine()}, "
              f"{os.cpu_count()} hardware threads, load average {load:.1f} at the start. Wall times are minima over "
              f"{repeats} interleaved repeats; compare the ratios (measured in one run), not the seconds.", "",
@@ -252,21 +148,6 @@ def run(hall_scale: float = 0.5, threads=(1, 2), repeats: int = 3, seeds: int = 
     for (s, size, coc, t, a), w in by.items():
         if a == "tile":
             lines.append(f"| {s} | {size} | {coc:g} | {t} | {by[(s, size, coc, t, 'tile+optimal')] / w:.2f} |")
-    srows = sampling_table(max(threads), seeds, spp, quick)
-    lines += ["", f"## Sampled simulation: speed against estimate error ({spp} spp, tile, bin_size 16, "
-              f"{max(threads)} threads, {seeds} seeds per fraction)", "",
-              "Speed-up: whole-frame wall time / sampled wall time (minimum over the seeds). |err|: median "
-              "relative error of the estimated frame total against the whole-frame value; ±95%: median relative "
-              "half-width; covered: share of seeds whose three intervals all contain the frame value. The "
-              "fraction is of the bins that hold triangles (bins: all / with triangles). Triangle setup runs for "
-              "every triangle at every fraction, which bounds the speed-up.", "",
-              "| scene | size | bins | fraction | speed-up | |err| ops.total | ±95% ops.total | |err| samples_tested | "
-              "±95% samples_tested | |err| samples_hit | ±95% samples_hit | covered |",
-              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
-    for r in srows:
-        lines.append(f"| {r['scene']} | {r['size']} | {r['bins']} | {r['fraction']:g} | {r['speedup']:.1f} | "
-                     + " | ".join(f"{r['err ' + k]:.2%} | {r['ci ' + k]:.2%}" for k in FIGURES)
-                     + f" | {r['coverage']:.0%} |")
     vrows, kernels = simd_table(16, quick, max(2, repeats))
     lines += ["", f"## Explicit-SIMD sample tests (sampletest/simd_batch.h, {sim_isa()})", "",
               "Brute force, bunny, 16 spp, one thread; `pipeline.simd` off (the auto-vectorised scalar kernels) "
@@ -279,23 +160,11 @@ def run(hall_scale: float = 0.5, threads=(1, 2), repeats: int = 3, seeds: int = 
               "| class | scalar [M tests/s] | SIMD [M tests/s] | ratio |", "|---|---|---|---|"]
     for c, (a, b) in kernels.items():
         lines.append(f"| {c} | {a / 1e6:.0f} | {b / 1e6:.0f} | {b / a:.2f} |")
-    grows = granularity_table(spp, quick)
-    lines += ["", f"## Timing-model granularity ({spp} spp, tile, msaa, 1 texture, CoC 10 px, 1 core)", "",
-              "`hardware.timing.granularity`: `bin` = one work record per (triangle, 64-px bin); `visit` = one per "
-              "shading visit (per triangle and tile for tile). Error: bin cycles / visit cycles - 1 (visit is the "
-              "detailed reference). Utilisation: busy / cycles per unit; the largest change between the two is shown. "
-              "Time: render plus timing model, minimum of 2 interleaved runs.", "",
-              "| scene | size | cycles (bin) | cycles (visit) | error | bottleneck bin / visit | largest utilisation change | "
-              "records bin / visit | sim time visit / bin |", "|---|---|---|---|---|---|---|---|---|"]
-    for r in grows:
-        lines.append(f"| {r['scene']} | {r['size']} | {r['cycles_bin']:,.0f} | {r['cycles_visit']:,.0f} | {r['err']:+.2%} | "
-                     f"{r['bottleneck_bin']} / {r['bottleneck_visit']} | {r['util_unit']} {r['util_diff']:+.3f} | "
-                     f"{r['records_bin']:,} / {r['records_visit']:,} | {r['time_visit'] / r['time_bin']:.2f} |")
     page = Path(out) / "bench_speed.md"
     page.parent.mkdir(parents=True, exist_ok=True)
     page.write_text("\n".join(lines) + "\n")
     print(f"\nwrote {page}")
-    return {"page": page, "rows": rows, "sampling": srows, "granularity": grows}
+    return {"page": page, "rows": rows, "simd": vrows, "kernels": kernels}
 
 
 def main(argv=None) -> int:
@@ -303,12 +172,11 @@ def main(argv=None) -> int:
     parser.add_argument("--hall-scale", type=float, default=0.5, help="modern_hall at 1920x1080 times this")
     parser.add_argument("--threads", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--seeds", type=int, default=5)
     parser.add_argument("--spp", type=int, default=64)
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--out", default=str(REPO / "reports" / "bench"))
     args = parser.parse_args(argv)
-    run(args.hall_scale, args.threads, args.repeats, args.seeds, args.spp, args.quick, args.out)
+    run(args.hall_scale, args.threads, args.repeats, args.spp, args.quick, args.out)
     return 0
 
 
