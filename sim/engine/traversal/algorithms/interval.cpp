@@ -155,9 +155,11 @@ class Interval final : public Traversal {
   Counters& c_;
   SamplePipeline<A> pipe_;
   tiletest::CellMask lens_mask_;
-  // Fast path: fused_passes() (grids up to 8 x 8, spp up to 64, SIMD on, float32 sample test).
+  // Fast path: fused_passes() (grids up to 8 x 8, spp up to 64, SIMD on, float32 sample test, float64
+  // tile stage: the box bounds in pipeline.precision.tile are the ordered passes').
   const bool fused_ = SamplePipeline<A>::kFusedSelect && f_.p.simd && f_.table.spp() <= 64 &&
-                      f_.p.lens_grid * f_.p.lens_grid <= 64 && f_.p.precision_sample.kind == PrecisionKind::kFloat32;
+                      f_.p.lens_grid * f_.p.lens_grid <= 64 && f_.p.precision_sample.kind == PrecisionKind::kFloat32 &&
+                      f_.p.precision_tile.kind == PrecisionKind::kFloat64;
   std::vector<std::uint64_t> col_, row_, end_;  // fused_passes(): per pixel column / row, the cells spanning it
 };
 
