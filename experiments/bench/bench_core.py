@@ -14,6 +14,8 @@ import platform
 import sys
 from pathlib import Path
 
+from experiments.bench import write_page
+
 REPO = Path(__file__).resolve().parents[2]
 
 
@@ -119,10 +121,7 @@ def run(size: int = 512, spp: int = 16, threads=(1, 2), repeats: int = 1, quick:
               f"slowdown {slow:.1f}x, counts equal: {same}")
         lines.append(f"| bunny | {algo} | {rd.flat_stats['time.wall_s']:.3f} | {re.flat_stats['time.wall_s']:.3f} | "
                      f"{slow:.1f}x | {same} |")
-    page = Path(out) / "bench_core.md"
-    page.parent.mkdir(parents=True, exist_ok=True)
-    page.write_text("\n".join(lines) + "\n")
-    print(f"\nwrote {page}")
+    page = write_page(out, "bench_core.md", lines)
     return {"page": page, "counts_equal": counts_equal}
 
 

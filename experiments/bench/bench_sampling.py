@@ -22,6 +22,8 @@ import platform
 import time
 from pathlib import Path
 
+from experiments.bench import write_page
+
 REPO = Path(__file__).resolve().parents[2]
 FRACTIONS = (1.0, 0.5, 0.2, 0.1, 0.05, 0.03, 0.02, 0.01)
 FIGURES = ("ops.total", "raster.samples_tested", "raster.samples_hit")
@@ -246,10 +248,7 @@ def run(threads: int = 2, seeds: int = 5, draws: int = 200, spp: int = 64, bin_s
         lines.append(f"| {r['scene']} | {r['fraction']:g} | {r['strata']} | "
                      + " | ".join(f"{r['cov ' + k]:.3f} | {r['err ' + k]:.2%}" for k in FIGURES) + " |")
     lines += granularity_lines(grows, spp)
-    page = Path(out) / "bench_sampling.md"
-    page.parent.mkdir(parents=True, exist_ok=True)
-    page.write_text("\n".join(lines) + "\n")
-    print(f"\nwrote {page}")
+    page = write_page(out, "bench_sampling.md", lines)
     return {"page": page, "sampling": srows, "coverage": crows, "granularity": grows}
 
 

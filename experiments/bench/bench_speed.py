@@ -21,6 +21,8 @@ import sys
 import time
 from pathlib import Path
 
+from experiments.bench import write_page
+
 REPO = Path(__file__).resolve().parents[2]
 ALGORITHMS = (("bruteforce", {}), ("tile", {}), ("tile+optimal", {"count_optimal": True}), ("interval", {}))
 
@@ -160,10 +162,7 @@ def run(hall_scale: float = 0.5, threads=(1, 2), repeats: int = 3, spp: int = 64
               "| class | scalar [M tests/s] | SIMD [M tests/s] | ratio |", "|---|---|---|---|"]
     for c, (a, b) in kernels.items():
         lines.append(f"| {c} | {a / 1e6:.0f} | {b / 1e6:.0f} | {b / a:.2f} |")
-    page = Path(out) / "bench_speed.md"
-    page.parent.mkdir(parents=True, exist_ok=True)
-    page.write_text("\n".join(lines) + "\n")
-    print(f"\nwrote {page}")
+    page = write_page(out, "bench_speed.md", lines)
     return {"page": page, "rows": rows, "simd": vrows, "kernels": kernels}
 
 
