@@ -285,6 +285,7 @@ void register_selftest(py::module_& m) {
       [](const RenderParams& p, const FArr& v0, const DArr& tiles) {
         require_shape(v0, {3, 3}, "v0");
         require_shape(tiles, {-1, 4}, "tiles");
+        validate_domains(p);  // lens_grid sizes the (tiles, G * G) outputs
         for (py::ssize_t i = 0; i < tiles.size(); ++i)
           if (!(std::fabs(tiles.data()[i]) <= 0x1p24))  // lens-cell indices are ints: finite, screen-sized tiles
             throw std::invalid_argument("tiles: expected finite pixel coordinates within +-2^24, got " +
