@@ -80,6 +80,7 @@ class GpuBounding final : public Traversal {
   using F = typename A::f32;
 
  public:
+  static constexpr bool kDepthCull = true;
   GpuBounding(const Frame& f, ThreadState& ts)
       : f_(f), c_(ts.counters), pipe_(f, ts), zcull_(f, ts.counters, ts.buffers, pipe_), gs_(make_gs_frame(f)) {}
 

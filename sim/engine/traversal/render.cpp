@@ -56,12 +56,15 @@ void validate_params(const RenderParams& p, const SampleTable& table) {
     fail("algorithm: '" + p.algorithm +
          "' needs an interleaved sample table (SampleTable.interleaved), got a table without "
          "discrete lens coordinates");
-  // Occlusion queries are answered by the depth-cull stage (backend/zcull.h) that the tile algorithms
-  // and the gpu_* pixel shader run; the others would draw the query triangles as occluders.
-  const bool has_zcull = p.algorithm.rfind("tile", 0) == 0 || p.algorithm.rfind("gpu_", 0) == 0;
-  if (p.query_first >= 0 && p.query_mode != QueryMode::kNone && !has_zcull)
-    fail("algorithm: occlusion queries are answered by 'tile', 'tile_interleaved' and the gpu_* methods; got '" +
+  // Occlusion queries are answered by the depth-cull stage (backend/zcull.h); algorithms without it
+  // would draw the query triangles as occluders.
+  if (p.query_first >= 0 && p.query_mode != QueryMode::kNone && !it->second.depth_cull) {
+    std::string names;
+    for (const auto& kv : reg)
+      if (kv.second.depth_cull) names += (names.empty() ? "'" : ", '") + kv.first + "'";
+    fail("algorithm: occlusion queries are answered by the algorithms with a depth-cull stage (" + names + "); got '" +
          p.algorithm + "'");
+  }
   const bool lines_algo = p.algorithm == "lines";
   if (lines_algo != p.table_lines)
     fail(lines_algo ? "algorithm: 'lines' needs a line-sample table (SampleTable.lines), got a point-sample table"

@@ -41,9 +41,20 @@ class Traversal {
   virtual void end_bin(const BinRect& /*bin*/) {}
 };
 
+// A traversal that runs the depth-cull stage (backend/zcull.h), which answers occlusion queries,
+// declares `static constexpr bool kDepthCull = true;`.
+template <class T>
+constexpr bool runs_depth_cull() {
+  if constexpr (requires { T::kDepthCull; })
+    return T::kDepthCull;
+  else
+    return false;
+}
+
 struct TraversalInfo {
   std::string description;
   bool needs_interleaved_table = false;
+  bool depth_cull = false;  // answers occlusion queries (runs_depth_cull)
   std::function<std::unique_ptr<Traversal>(const Frame&, ThreadState&, bool exact)> create;
 };
 
@@ -63,6 +74,7 @@ class TraversalRegistry {
   static const bool kRegistered_##CLASS = ::rast5d::TraversalRegistry::add(                       \
       NAME, ::rast5d::TraversalInfo{                                                              \
                 DESCRIPTION, NEEDS_INTERLEAVED,                                                   \
+                ::rast5d::runs_depth_cull<CLASS<::rast5d::FastArith>>(),                          \
                 [](const ::rast5d::Frame& f, ::rast5d::ThreadState& ts,                           \
                    bool exact) -> std::unique_ptr<::rast5d::Traversal> {                          \
                   if (exact) return std::make_unique<CLASS<::rast5d::ExactArith>>(f, ts);         \

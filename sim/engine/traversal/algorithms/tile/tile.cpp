@@ -42,6 +42,7 @@ class Tile final : public Traversal {
   using F = typename A::f32;
 
  public:
+  static constexpr bool kDepthCull = true;
   Tile(const Frame& f, ThreadState& ts)
       : f_(f), c_(ts.counters), pipe_(f, ts), zcull_(f, ts.counters, ts.buffers, pipe_),
         lens_mask_(tiletest::lens_cells(f.p.lens_shape, f.p.lens_grid)) {
