@@ -87,7 +87,9 @@ class BinSample:
     sizes: np.ndarray
     candidates: int
     work: np.ndarray | None = None  # brute-force work of every bin of the frame (the first auxiliary)
-    aux: np.ndarray | None = None   # (bins of the frame, k) further auxiliaries (the engine's bin_aux)
+    aux: np.ndarray | None = None   # (bins of the frame, k) further auxiliaries (the engine's bin_aux;
+                                    # only the drawn bins' rows are read)
+    aux_total: np.ndarray | None = None  # (k,) their frame totals (None: the sums of ``aux``)
 
     @property
     def fraction(self) -> float:
@@ -123,10 +125,11 @@ def choose_bins(work, fraction: float, seed: int, aux=None) -> BinSample:
 def from_engine(out: dict) -> BinSample:
     """The BinSample of a sampled engine render (sim._core.render's output)."""
     work = np.asarray(out["bin_work"])
-    aux = out.get("bin_aux")
+    aux, total = out.get("bin_aux"), out.get("bin_aux_total")
     return BinSample(np.asarray(out["bins"], np.int64), np.asarray(out["bin_stratum"], np.int64),
                      np.asarray(out["strata_sizes"], np.int64), int((work > 0).sum()), work,
-                     None if aux is None else np.asarray(aux, np.float64))
+                     None if aux is None else np.asarray(aux, np.float64),
+                     None if total is None else np.asarray(total, np.float64))
 
 
 def stratified_total(sample: BinSample, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -177,11 +180,13 @@ def regression_total(sample: BinSample, y: np.ndarray) -> tuple[np.ndarray, np.n
         return ratio_total(sample, y)
     y = np.asarray(y, dtype=np.float64)
     y = y[:, None] if y.ndim == 1 else y
-    frame = np.column_stack([np.asarray(sample.work, np.float64), np.nan_to_num(sample.aux)])
-    scale = np.abs(frame).sum(axis=0)
-    keep = scale > 0
-    frame = frame[:, keep] / scale[keep]  # columns summing to 1: a well-conditioned fit
-    x = frame[sample.bins]
+    work = np.asarray(sample.work, np.float64)
+    aux = np.asarray(sample.aux, np.float64)
+    total = np.nansum(aux, axis=0) if sample.aux_total is None else np.asarray(sample.aux_total, np.float64)
+    X = np.concatenate([[work.sum()], total])  # the frame's totals
+    x = np.column_stack([work[sample.bins], aux[sample.bins]])
+    keep = X > 0
+    x, X = x[:, keep] / X[keep], np.ones(int(keep.sum()))  # columns whose totals are 1: a well-conditioned fit
     H = len(sample.sizes)
     nh = np.bincount(sample.stratum, minlength=H).astype(np.float64)
     w = (sample.sizes / nh)[sample.stratum]
@@ -189,7 +194,7 @@ def regression_total(sample: BinSample, y: np.ndarray) -> tuple[np.ndarray, np.n
     ty, _ = stratified_total(sample, y)
     tx, _ = stratified_total(sample, x)
     _, var = stratified_total(sample, y - x @ b)
-    return ty + (frame.sum(axis=0) - tx) @ b, var
+    return ty + (X - tx) @ b, var
 
 
 def sampled_strata(sample: BinSample) -> int:

@@ -129,6 +129,12 @@ void register_render(py::module_& m) {
                                                       res.bin_work.data());
           out["bin_aux"] = py::array_t<double>({static_cast<py::ssize_t>(res.bin_work.size()), py::ssize_t{2}},
                                                res.bin_aux.data());  // (bins, [coverage, footprint])
+          std::vector<double> total = res.bin_aux_total;
+          if (total.empty()) {  // every bin's auxiliaries computed: their sums
+            total.assign(2, 0.0);
+            for (std::size_t b = 0; b < res.bin_work.size(); ++b) total[0] += res.bin_aux[2 * b], total[1] += res.bin_aux[2 * b + 1];
+          }
+          out["bin_aux_total"] = py::array_t<double>(2, total.data());
         }
         if (p.record_timing) {
           py::array_t<TileWork> recs(static_cast<py::ssize_t>(res.timing_records.size()));
@@ -171,7 +177,7 @@ void register_render(py::module_& m) {
       py::arg("progress") = py::none(),
       "Render pixel-homogeneous triangles; returns {'image', 'counters'[, 'timing_records'][, "
       "'sample_depth', 'sample_triangle'][, 'bin_counters', 'bins', 'bin_stratum', 'strata_sizes', "
-      "'bin_work', 'bin_aux'][, 'pixel_stats' (k, H, W)][, 'trace_events', 'trace_samples']}. bins (or params.sample_fraction < 1: a stratified draw): render only these screen bins "
+      "'bin_work', 'bin_aux', 'bin_aux_total'][, 'pixel_stats' (k, H, W)][, 'trace_events', 'trace_samples']}. bins (or params.sample_fraction < 1: a stratified draw): render only these screen bins "
       "(row-major) and return their counters, one row per bin in counter_docs() order. The GIL is "
       "released; Ctrl-C interrupts; progress(done_bins, total_bins) is called while it runs.");
 

@@ -58,6 +58,9 @@ struct RenderResult {
   // With bin_work: 2 per bin, the regression estimator's auxiliary variables (coverage and
   // footprint, samples; traversal/bin_covariates.h).
   std::vector<double> bin_aux;
+  // Their frame totals (2; summed per triangle when only the drawn bins' auxiliaries are computed,
+  // traversal/sampled_setup.h: bin_aux is then NaN in the other bins).
+  std::vector<double> bin_aux_total;
   // Pixel trace (PixelStats::tracing()): the events and samples of the traced pixel, in order.
   std::vector<TraceEvent> trace_events;
   std::vector<TraceSample> trace_samples;
