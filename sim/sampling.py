@@ -4,26 +4,35 @@
 hold triangles by their brute-force work (the pixels of their triangles' bounds in the bin times spp),
 cuts them into H = round(f * K) // 2 strata of similar work and draws 2 bins per stratum
 (traversal/bin_sample.h, seeded with s). Only those bins are traversed; bins without triangles do no
-traversal work (their counters are exactly 0), and triangle setup still runs for every triangle, so
-its counts are exact. Bins heavier than a stratum's share of the work form a take-all stratum (all
-traversed, no variance).
+traversal work (their counters are exactly 0). Bins heavier than a stratum's share of the work form a
+take-all stratum (all traversed, no variance).
 
-Every counter a bin owns is estimated by the stratified regression (GREG) estimator on three
-auxiliary variables the engine knows for every bin before traversing any (traversal/bin_covariates.h):
-brute-force work x1, the triangles' lens-centre coverage x2 and their lens-swept footprint x3:
+Per-triangle work runs only where it is needed (traversal/sampled_setup.h): a bounds pre-pass over
+every triangle (setup's own screen bounds, nothing charged) gives each bin's work and the frame totals
+of the auxiliaries below; full triangle setup and binning run only for the triangles whose bounds
+reach a drawn bin. setup.triangles and the setup of the triangles culled behind the near plane or off
+screen are the frame's exactly; every other triangle's setup counters belong to its home bin (the bin
+of the top-left corner of its bounds, where traversals charge their per-triangle setup too) and are
+estimated with that bin's counters.
 
-    T = T_y + (X - T_x) b,    Var(T) = sum_h N_h^2 (1 - n_h / N_h) s_h^2(e) / n_h
+Every counter a bin owns is estimated by the stratified regression (GREG) estimator on four auxiliary
+variables whose frame totals the engine knows before traversing any bin (traversal/bin_covariates.h):
+brute-force work x1, the triangles' lens-centre coverage x2, their lens-swept footprint x3 and the
+(triangle, bin) pairs x4 (each bin's own values are computed for the drawn bins only):
+
+    T = T_y + (X - T_x) b,    Var(T) = sum_h N_h^2 (1 - n_h / N_h) s_h^2(g e) / n_h
 
 T_y, T_x the stratified expansion estimates (T = sum_h N_h * mean_h), X the frame's known totals of
-the auxiliaries, b the design-weighted least-squares fit of y on x over the drawn bins, and s_h^2(e)
-the within-stratum variance of the residuals e = y - x b (N_h bins in stratum h, n_h = 2 drawn). The
-95% half-width is t_{0.975, H - 2} * sqrt(Var) (H sampled strata less the two coefficients the fit
-adds to a ratio estimator's one as degrees of freedom). A counter that
-follows the auxiliaries (tile tests with the footprint, hits with the coverage) is estimated far more
-tightly than by expansion alone; one that does not is no worse than the stratified estimator, and
-the interval comes from the residuals either way. Derived figures (ratios, sums) are evaluated on the
-estimated totals; their half-widths come from the same formula applied to each bin's linearised
-contribution (the derivative of the figure along that bin's counter vector).
+the auxiliaries, b the design-weighted least-squares fit of y on x over the drawn bins, and s_h^2(g e)
+the within-stratum variance of the residuals e = y - x b weighted by the g-weights
+g = 1 + (X - T_x)' A^-1 x (A the weighted cross-product of x; N_h bins in stratum h, n_h = 2 drawn).
+The 95% half-width is t_{0.975, H - 3} * sqrt(Var) (H sampled strata less the three coefficients the
+fit adds to a ratio estimator's one as degrees of freedom). A counter that follows the auxiliaries
+(tile tests with the footprint, hits with the coverage, per-triangle work with the pairs) is
+estimated far more tightly than by expansion alone; one that does not is no worse than the
+stratified estimator, and the interval comes from the residuals either way. Derived figures (ratios,
+sums) are evaluated on the estimated totals; their half-widths come from the same formula applied to
+each bin's linearised contribution (the derivative of the figure along that bin's counter vector).
 
 Not estimable under sampling (reported as NaN with a NaN half-width, never scaled):
 - the texture cache (``tex.cache.*``): it is replayed after the render in bin order, and a bin's
@@ -190,10 +199,14 @@ def regression_total(sample: BinSample, y: np.ndarray) -> tuple[np.ndarray, np.n
     H = len(sample.sizes)
     nh = np.bincount(sample.stratum, minlength=H).astype(np.float64)
     w = (sample.sizes / nh)[sample.stratum]
-    b = np.linalg.lstsq(x.T @ (x * w[:, None]), (x * w[:, None]).T @ y, rcond=1e-10)[0]
+    A = x.T @ (x * w[:, None])
+    b = np.linalg.lstsq(A, (x * w[:, None]).T @ y, rcond=1e-10)[0]
     ty, _ = stratified_total(sample, y)
     tx, _ = stratified_total(sample, x)
-    _, var = stratified_total(sample, y - x @ b)
+    # The residuals weighted by the g-weights (the estimator is sum_i w_i g_i y_i with
+    # g_i = 1 + (X - T_x)' A^-1 x_i): a draw far from the known totals gets the wider interval it needs.
+    g = 1.0 + x @ np.linalg.lstsq(A, X - tx, rcond=1e-10)[0]
+    _, var = stratified_total(sample, (y - x @ b) * g[:, None])
     return ty + (X - tx) @ b, var
 
 

@@ -10,6 +10,7 @@
 
 #include "backend/shading.h"
 #include "timing/timing.h"
+#include "traversal/bin_covariates.h"
 #include "traversal/bin_sample.h"
 #include "traversal/render.h"
 
@@ -127,14 +128,15 @@ void register_render(py::module_& m) {
                                                  res.strata_sizes.data());
           out["bin_work"] = py::array_t<std::int64_t>(static_cast<py::ssize_t>(res.bin_work.size()),
                                                       res.bin_work.data());
-          out["bin_aux"] = py::array_t<double>({static_cast<py::ssize_t>(res.bin_work.size()), py::ssize_t{2}},
-                                               res.bin_aux.data());  // (bins, [coverage, footprint])
+          out["bin_aux"] = py::array_t<double>({static_cast<py::ssize_t>(res.bin_work.size()), py::ssize_t{kBinAux}},
+                                               res.bin_aux.data());  // (bins, [coverage, footprint, triangles])
           std::vector<double> total = res.bin_aux_total;
           if (total.empty()) {  // every bin's auxiliaries computed: their sums
-            total.assign(2, 0.0);
-            for (std::size_t b = 0; b < res.bin_work.size(); ++b) total[0] += res.bin_aux[2 * b], total[1] += res.bin_aux[2 * b + 1];
+            total.assign(kBinAux, 0.0);
+            for (std::size_t b = 0; b < res.bin_work.size(); ++b)
+              for (int j = 0; j < kBinAux; ++j) total[j] += res.bin_aux[kBinAux * b + j];
           }
-          out["bin_aux_total"] = py::array_t<double>(2, total.data());
+          out["bin_aux_total"] = py::array_t<double>(kBinAux, total.data());
         }
         if (p.record_timing) {
           py::array_t<TileWork> recs(static_cast<py::ssize_t>(res.timing_records.size()));

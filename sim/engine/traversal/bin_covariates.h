@@ -139,11 +139,14 @@ inline void bin_covariate_terms(const TriSetup& t, const TriangleCovariates& c, 
   foot += c.o_ok ? clipped_area(c.o, 3, x0, y0, x1, y1) : share * c.bounds;
 }
 
-// out: 2 values per bin (coverage, footprint), row-major bins.
+// Auxiliaries per bin: coverage, footprint (samples) and the (triangle, bin) pairs (triangles).
+constexpr int kBinAux = 3;
+
+// out: kBinAux values per bin, row-major bins.
 inline void bin_covariates(const std::vector<TriSetup>& setups, const std::vector<std::vector<std::uint32_t>>& bin_lists,
                            int bins_x, int bin_size, int width, int height, int spp, std::vector<double>& out) {
   const int n_bins = static_cast<int>(bin_lists.size());
-  out.assign(static_cast<std::size_t>(n_bins) * 2, 0.0);
+  out.assign(static_cast<std::size_t>(n_bins) * kBinAux, 0.0);
   const double B = bin_size;
   std::vector<TriangleCovariates> tri(setups.size());
   std::vector<char> done(setups.size(), 0);
@@ -155,8 +158,9 @@ inline void bin_covariates(const std::vector<TriSetup>& setups, const std::vecto
     const double x0 = bx * B, y0 = by * B, x1 = std::min<double>(width, x0 + B), y1 = std::min<double>(height, y0 + B);
     double cover = 0, foot = 0;
     for (std::uint32_t i : bin_lists[b]) bin_covariate_terms(setups[i], tri[i], x0, y0, x1, y1, cover, foot);
-    out[2 * b] = cover * spp;
-    out[2 * b + 1] = foot * spp;
+    out[kBinAux * b] = cover * spp;
+    out[kBinAux * b + 1] = foot * spp;
+    out[kBinAux * b + 2] = static_cast<double>(bin_lists[b].size());
   }
 }
 
