@@ -207,7 +207,11 @@ def regression_total(sample: BinSample, y: np.ndarray) -> tuple[np.ndarray, np.n
     # g_i = 1 + (X - T_x)' A^-1 x_i): a draw far from the known totals gets the wider interval it needs.
     g = 1.0 + x @ np.linalg.lstsq(A, X - tx, rcond=1e-10)[0]
     _, var = stratified_total(sample, (y - x @ b) * g[:, None])
-    return ty + (X - tx) @ b, var
+    # Residuals of a fit understate the errors by the coefficients it spent: n / (n - p) over the n
+    # bins drawn from sampled strata (p coefficients; the take-all stratum has no variance).
+    n = int(nh[nh < sample.sizes].sum())
+    p = x.shape[1]
+    return ty + (X - tx) @ b, var * (n / (n - p) if n > p else float("inf"))
 
 
 def sampled_strata(sample: BinSample) -> int:

@@ -1,20 +1,21 @@
 // Sampled simulation (pipeline.sample_fraction, sim/sampling.py) and renders of a bin list: triangle
 // setup and binning only for the triangles that reach the traversed bins.
 //
-// 1. Bounds pre-pass over every triangle (setup_bounds(): setup's own bounds, no culls beyond the
-//    near plane and the screen, no kernel constants, nothing charged). From it, for every bin: the
-//    brute-force work (the stratification's sort key, traversal/bin_sample.h) and the frame totals of
-//    the regression estimator's auxiliaries (traversal/bin_covariates.h), summed per triangle.
+// 1. Bounds pre-pass over every triangle (setup_bounds(): setup's own bounds and culls, without the
+//    kernel constants, nothing charged). From it, for every bin: the brute-force work (the
+//    stratification's sort key, traversal/bin_sample.h), the (triangle, bin) pairs, and the frame
+//    totals of the regression estimator's other auxiliaries (traversal/bin_covariates.h), summed per
+//    triangle.
 // 2. The draw (or the given list).
-// 3. setup_triangle() for the triangles whose bounds overlap a drawn bin, and for those the pre-pass
-//    culled (their counts are exact). The auxiliaries of the drawn bins come from the pre-pass fields.
+// 3. setup_triangle() for the live triangles whose bounds overlap a drawn bin, and for the culled ones
+//    (their counts are exact). The drawn bins' auxiliaries come from the same setup fields.
 //
-// Setup counts: setup.triangles, and the setup of the triangles culled near or off screen, are the
-// frame's exactly. Every other triangle's setup counters belong to its home bin (the bin holding the
-// top-left corner of its bounds, the bin where traversals charge their per-triangle setup too): they
-// are added to that bin's row of RenderResult::bin_counters when it is drawn, and estimated with the
-// rest of the bin's counters; a triangle set up only because it reaches a drawn bin it is not homed in
-// adds nothing to the counters. With every bin listed, the counters equal the whole frame's.
+// Setup counts: setup.triangles and the whole setup of the culled triangles are the frame's exactly.
+// Every live triangle's setup counters belong to its home bin (the bin holding the top-left corner of
+// its bounds, the bin where traversals charge their per-triangle setup too): they are added to that
+// bin's row of RenderResult::bin_counters when it is drawn, and estimated with the rest of the bin's
+// counters; a triangle set up only because it reaches a drawn bin it is not homed in adds nothing to
+// the counters. With every bin listed, the counters equal the whole frame's.
 #pragma once
 
 #include <algorithm>
@@ -116,7 +117,7 @@ inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const Sce
 
   // ---- 3. setup of the triangles that reach the drawn bins ----
   homed.assign(drawn.size(), Counters{});
-  std::vector<std::vector<std::uint32_t>> reach(drawn.size());  // set-up triangles per drawn bin (culled too)
+  std::vector<std::vector<std::uint32_t>> reach(drawn.size());  // live triangles per drawn bin
   Counters c;
   for (std::size_t i = 0; i < n; ++i) {
     const float* v0 = scene.v0 + i * 9;
@@ -128,7 +129,7 @@ inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const Sce
                  ? setup_triangle<ExactArith>(v0, v1, col, static_cast<std::uint32_t>(i), p, fc, setups[i], into)
                  : setup_triangle<FastArith>(v0, v1, col, static_cast<std::uint32_t>(i), p, fc, setups[i], into);
     };
-    if (q.culled) {  // culled before any bin: counted exactly in the frame
+    if (q.culled) {  // culled in setup: counted exactly in the frame
       if (run(frame_setup)) throw std::logic_error("sampled setup: the bounds pre-pass culled a live triangle");
       continue;
     }
@@ -136,7 +137,7 @@ inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const Sce
     const int cx0 = q.bx0 / B, cy0 = q.by0 / B, cx1 = (q.bx1 - 1) / B + 1, cy1 = (q.by1 - 1) / B + 1;
     if (sat[cy1 * sx + cx1] - sat[cy0 * sx + cx1] - sat[cy1 * sx + cx0] + sat[cy0 * sx + cx0] == 0) continue;
     c = Counters{};
-    alive[i] = run(c);
+    if (!(alive[i] = run(c))) throw std::logic_error("sampled setup: setup culled a triangle the pre-pass kept");
     if (scene.alpha) setups[i].alpha = scene.alpha[i];
     const TriSetup& s = setups[i];
     if (s.bx0 != q.bx0 || s.by0 != q.by0 || s.bx1 != q.bx1 || s.by1 != q.by1)
