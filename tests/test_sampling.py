@@ -205,7 +205,7 @@ def test_bench_sampling(tmp_path):
     out = tmp_path if quick else bench_sampling.REPO / "reports" / "bench"
     got = bench_sampling.run(quick=quick, out=out)
     page = got["page"].read_text()
-    for section in ("## Sampled simulation", "## Coverage of the 95% intervals", "## Timing-model granularity"):
+    for section in ("## Sampled simulation", "## Coverage of the 95% intervals", "## Summary", "## Timing-model granularity"):
         assert section in page
     assert all(r["ci ops.total"] > 0 for r in got["sampling"] if r["fraction"] < 1)
     assert all(0.0 <= r["cov ops.total"] <= 1.0 for r in got["coverage"])

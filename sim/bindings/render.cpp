@@ -129,7 +129,7 @@ void register_render(py::module_& m) {
           out["bin_work"] = py::array_t<std::int64_t>(static_cast<py::ssize_t>(res.bin_work.size()),
                                                       res.bin_work.data());
           out["bin_aux"] = py::array_t<double>({static_cast<py::ssize_t>(res.bin_work.size()), py::ssize_t{kBinAux}},
-                                               res.bin_aux.data());  // (bins, [coverage, footprint, triangles])
+                                               res.bin_aux.data());  // (bins, [coverage, footprint])
           std::vector<double> total = res.bin_aux_total;
           if (total.empty()) {  // every bin's auxiliaries computed: their sums
             total.assign(kBinAux, 0.0);

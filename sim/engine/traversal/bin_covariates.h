@@ -139,8 +139,8 @@ inline void bin_covariate_terms(const TriSetup& t, const TriangleCovariates& c, 
   foot += c.o_ok ? clipped_area(c.o, 3, x0, y0, x1, y1) : share * c.bounds;
 }
 
-// Auxiliaries per bin: coverage, footprint (samples) and the (triangle, bin) pairs (triangles).
-constexpr int kBinAux = 3;
+// Auxiliaries per bin: coverage and footprint (samples).
+constexpr int kBinAux = 2;
 
 // out: kBinAux values per bin, row-major bins.
 inline void bin_covariates(const std::vector<TriSetup>& setups, const std::vector<std::vector<std::uint32_t>>& bin_lists,
@@ -160,7 +160,6 @@ inline void bin_covariates(const std::vector<TriSetup>& setups, const std::vecto
     for (std::uint32_t i : bin_lists[b]) bin_covariate_terms(setups[i], tri[i], x0, y0, x1, y1, cover, foot);
     out[kBinAux * b] = cover * spp;
     out[kBinAux * b + 1] = foot * spp;
-    out[kBinAux * b + 2] = static_cast<double>(bin_lists[b].size());
   }
 }
 

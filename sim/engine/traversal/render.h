@@ -56,7 +56,7 @@ struct RenderResult {
   std::vector<std::int64_t> bin_work;
   std::vector<int> sampled_bins, sampled_stratum, strata_sizes;
   // With bin_work: kBinAux per bin, the regression estimator's auxiliary variables (coverage and
-  // footprint, samples; triangles; traversal/bin_covariates.h).
+  // footprint, samples; traversal/bin_covariates.h).
   std::vector<double> bin_aux;
   // Their frame totals (kBinAux; summed per triangle when only the drawn bins' auxiliaries are computed,
   // traversal/sampled_setup.h: bin_aux is then NaN in the other bins).

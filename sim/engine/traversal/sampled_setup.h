@@ -3,9 +3,8 @@
 //
 // 1. Bounds pre-pass over every triangle (setup_bounds(): setup's own bounds and culls, without the
 //    kernel constants, nothing charged). From it, for every bin: the brute-force work (the
-//    stratification's sort key, traversal/bin_sample.h), the (triangle, bin) pairs, and the frame
-//    totals of the regression estimator's other auxiliaries (traversal/bin_covariates.h), summed per
-//    triangle.
+//    stratification's sort key, traversal/bin_sample.h) and the frame totals of the regression
+//    estimator's auxiliaries (traversal/bin_covariates.h), summed per triangle.
 // 2. The draw (or the given list).
 // 3. setup_triangle() for the live triangles whose bounds overlap a drawn bin, and for the culled ones
 //    (their counts are exact). The drawn bins' auxiliaries come from the same setup fields.
@@ -59,7 +58,6 @@ inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const Sce
   };
   std::vector<Pre> pre(n);
   result.bin_work.assign(static_cast<std::size_t>(n_bins), 0);
-  std::vector<double> pairs(static_cast<std::size_t>(n_bins), 0.0);  // triangles reaching each bin
   double total_cover = 0, total_foot = 0;
   TriSetup t;
   for (std::size_t i = 0; i < n; ++i) {
@@ -69,10 +67,8 @@ inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const Sce
     q.bx0 = t.bx0, q.by0 = t.by0, q.bx1 = t.bx1, q.by1 = t.by1;
     for (int by = t.by0 / B; by <= (t.by1 - 1) / B; ++by) {
       const std::int64_t dy = std::min(t.by1, (by + 1) * B) - std::max(t.by0, by * B);
-      for (int bx = t.bx0 / B; bx <= (t.bx1 - 1) / B; ++bx) {
+      for (int bx = t.bx0 / B; bx <= (t.bx1 - 1) / B; ++bx)
         result.bin_work[by * bins_x + bx] += dy * (std::min(t.bx1, (bx + 1) * B) - std::max(t.bx0, bx * B));
-        pairs[by * bins_x + bx] += 1;
-      }
     }
     // The triangle's auxiliaries summed over its bins (bin_covariates' per-bin terms: shares of the
     // bounds sum to 1; clipped areas sum to the area inside the union of its bins).
@@ -87,9 +83,7 @@ inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const Sce
     total_foot += c.o_ok ? clipped_area(c.o, 3, x0, y0, x1, y1) : c.bounds;
   }
   for (auto& w : result.bin_work) w *= spp;
-  double total_pairs = 0;
-  for (double v : pairs) total_pairs += v;
-  result.bin_aux_total = {total_cover * spp, total_foot * spp, total_pairs};
+  result.bin_aux_total = {total_cover * spp, total_foot * spp};
 
   // ---- 2. the drawn bins ----
   if (list) {
@@ -155,7 +149,6 @@ inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const Sce
 
   // ---- the drawn bins' auxiliaries ----
   result.bin_aux.assign(static_cast<std::size_t>(n_bins) * kBinAux, std::numeric_limits<double>::quiet_NaN());
-  for (int b = 0; b < n_bins; ++b) result.bin_aux[kBinAux * b + 2] = pairs[b];
   std::vector<TriangleCovariates> cov;
   std::vector<int> cov_of(reach.empty() ? 0 : n, -1);
   for (std::size_t k = 0; k < drawn.size(); ++k) {
