@@ -69,7 +69,10 @@ def test_bin_counters_sum_to_the_frame(setup, full):
     for i, n in enumerate(names):
         assert allb["counters"][n] == res.flat_stats[n], n
     assert rows[:, names.index("raster.samples_tested")].sum() == res.flat_stats["raster.samples_tested"]
-    assert rows[:, names.index("ops.setup")].sum() < res.flat_stats["ops.setup"]  # setup is mostly per triangle
+    # Setup is counted in each triangle's home bin (no triangle is culled before binning here); only
+    # the submitted triangles are a frame count.
+    assert rows[:, names.index("ops.setup")].sum() == res.flat_stats["ops.setup"] > 0
+    assert rows[:, names.index("setup.triangles")].sum() == 0
     pick = np.array([140, 3, 77, 78, 20], np.int32)
     sub = _engine_bins(setup, pick)
     assert np.array_equal(sub["bin_counters"], rows[pick])
@@ -202,8 +205,67 @@ def test_bench_sampling(tmp_path):
     out = tmp_path if quick else bench_sampling.REPO / "reports" / "bench"
     got = bench_sampling.run(quick=quick, out=out)
     page = got["page"].read_text()
-    for section in ("## Sampled simulation", "## Coverage of the 95% intervals", "## Timing-model granularity"):
+    for section in ("## Sampled simulation", "## Coverage of the 95% intervals", "## Summary", "## Timing-model granularity"):
         assert section in page
     assert all(r["ci ops.total"] > 0 for r in got["sampling"] if r["fraction"] < 1)
     assert all(0.0 <= r["cov ops.total"] <= 1.0 for r in got["coverage"])
     assert all(r["records_visit"] >= r["records_bin"] for r in got["granularity"])
+
+
+def _hard_scene(moving: bool):
+    """Random triangles that take every setup path: wholly behind the near plane, crossing it, off
+    screen, collinear (degenerate), back-facing, large and small; moving ones with positions_t1."""
+    rng = np.random.default_rng(7)
+    n = 400
+    centre = np.column_stack([rng.uniform(-6, 6, n), rng.uniform(-6, 6, n), rng.uniform(-12, 1.0, n)])
+    size = rng.choice([0.05, 0.4, 3.0], n)
+    pos = centre[:, None, :] + size[:, None, None] * rng.normal(size=(n, 3, 3))
+    pos[::17, 2] = pos[::17, 0] + 0.5 * (pos[::17, 1] - pos[::17, 0])  # collinear
+    pos[::23, :, 2] = 0.5  # wholly behind the camera
+    t1 = pos + rng.normal(scale=0.3, size=pos.shape) * (rng.uniform(size=n) < 0.4)[:, None, None] if moving else None
+    return models.Scene.from_arrays(pos, colors=rng.uniform(size=(n, 3)), positions_t1=t1, name="hard")
+
+
+@pytest.mark.parametrize("moving, op_count, backface", [(False, "documented", True), (True, "documented", False),
+                                                        (True, "exact", True)])
+def test_every_bin_listed_equals_the_whole_frame_on_every_setup_path(moving, op_count, backface, monkeypatch):
+    """Setup restricted to the drawn bins after a bounds pre-pass (traversal/sampled_setup.h): with every
+    bin listed, the counters and the image equal the whole frame's, on triangles culled behind the near
+    plane, off screen, degenerate and back-facing, near-clipped, moving and crossing the near plane
+    while moving; a sampled render's setup rows are its home bins' share (setup.triangles exact)."""
+    scene = _hard_scene(moving)
+    camera = sim.Camera(width=96, height=80, fov_y_deg=60.0, focus_distance=4.0, coc_px=6.0)
+    table = sim.SampleTable.stratified(spp=8, seed=2)
+    cfg = sim.PipelineConfig(algorithm="tile", bin_size=16, threads=2, op_count=op_count, backface_cull=backface)
+    full = sim.render(scene, camera, table, cfg, timing=False)
+    for key in ("setup.culled_near", "setup.culled_offscreen", "setup.culled_degenerate", "setup.near_clipped"):
+        assert full.flat_stats[key] > 0, key
+    if moving:
+        assert full.flat_stats["setup.bbox_fallback"] > 0 and full.flat_stats["setup.class_5d"] > 0
+    if backface:
+        assert full.flat_stats["setup.culled_backface"] > 0
+    render = sim._core.render
+    captured = {}
+
+    def listing(params, *a, **kw):
+        kw["bins"] = np.arange(6 * 5, dtype=np.int32)
+        captured["out"] = render(params, *a, **kw)
+        return captured["out"]
+
+    monkeypatch.setattr(sim._core, "render", listing)
+    listed = sim.render(scene, camera, table, cfg, timing=False)
+    monkeypatch.setattr(sim._core, "render", render)
+    for name, value in full.flat_stats.items():
+        if not name.startswith(("time.", "timing.", "energy.")):
+            assert listed.flat_stats[name] == value or (math.isnan(value) and math.isnan(listed.flat_stats[name])), name
+    assert np.array_equal(listed.image, full.image)
+    out = captured["out"]
+    names = list(out["counters"])
+    rows = np.asarray(out["bin_counters"])
+    # The frame part (total minus the rows): every submitted triangle and every cull (exact under
+    # sampling); the live triangles' classes are in their home bins' rows.
+    frame = {n: int(out["counters"][n]) - int(rows[:, i].sum()) for i, n in enumerate(names)}
+    assert frame["setup.triangles"] == len(scene.positions)
+    for key in ("near", "offscreen", "degenerate", "backface"):
+        assert frame[f"setup.culled_{key}"] == full.flat_stats[f"setup.culled_{key}"], key
+    assert frame["setup.class_4d"] == frame["setup.class_5d"] == 0

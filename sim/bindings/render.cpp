@@ -10,6 +10,7 @@
 
 #include "backend/shading.h"
 #include "timing/timing.h"
+#include "traversal/bin_covariates.h"
 #include "traversal/bin_sample.h"
 #include "traversal/render.h"
 
@@ -127,8 +128,15 @@ void register_render(py::module_& m) {
                                                  res.strata_sizes.data());
           out["bin_work"] = py::array_t<std::int64_t>(static_cast<py::ssize_t>(res.bin_work.size()),
                                                       res.bin_work.data());
-          out["bin_aux"] = py::array_t<double>({static_cast<py::ssize_t>(res.bin_work.size()), py::ssize_t{2}},
+          out["bin_aux"] = py::array_t<double>({static_cast<py::ssize_t>(res.bin_work.size()), py::ssize_t{kBinAux}},
                                                res.bin_aux.data());  // (bins, [coverage, footprint])
+          std::vector<double> total = res.bin_aux_total;
+          if (total.empty()) {  // every bin's auxiliaries computed: their sums
+            total.assign(kBinAux, 0.0);
+            for (std::size_t b = 0; b < res.bin_work.size(); ++b)
+              for (int j = 0; j < kBinAux; ++j) total[j] += res.bin_aux[kBinAux * b + j];
+          }
+          out["bin_aux_total"] = py::array_t<double>(kBinAux, total.data());
         }
         if (p.record_timing) {
           py::array_t<TileWork> recs(static_cast<py::ssize_t>(res.timing_records.size()));
@@ -171,7 +179,7 @@ void register_render(py::module_& m) {
       py::arg("progress") = py::none(),
       "Render pixel-homogeneous triangles; returns {'image', 'counters'[, 'timing_records'][, "
       "'sample_depth', 'sample_triangle'][, 'bin_counters', 'bins', 'bin_stratum', 'strata_sizes', "
-      "'bin_work', 'bin_aux'][, 'pixel_stats' (k, H, W)][, 'trace_events', 'trace_samples']}. bins (or params.sample_fraction < 1: a stratified draw): render only these screen bins "
+      "'bin_work', 'bin_aux', 'bin_aux_total'][, 'pixel_stats' (k, H, W)][, 'trace_events', 'trace_samples']}. bins (or params.sample_fraction < 1: a stratified draw): render only these screen bins "
       "(row-major) and return their counters, one row per bin in counter_docs() order. The GIL is "
       "released; Ctrl-C interrupts; progress(done_bins, total_bins) is called while it runs.");
 

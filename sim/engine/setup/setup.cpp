@@ -295,3 +295,138 @@ template bool setup_triangle<ExactArith>(const float*, const float*, const float
                                          const RenderParams&, const FrameConst&, TriSetup&, Counters&);
 
 }  // namespace rast5d
+
+namespace rast5d {
+
+int setup_bounds(const float* v0, const float* v1, const RenderParams& p, const FrameConst& fc, TriSetup& o) {
+  // The same steps and float operations as setup_triangle<FastArith> up to its culls.
+  for (int j = 0; j < 3; ++j) o.X[j] = v0[3 * j + 0], o.Y[j] = v0[3 * j + 1], o.W[j] = v0[3 * j + 2];
+  bool moving = false;
+  if (fc.time_active)
+    for (int i = 0; i < 9; ++i) moving |= (v1[i] != v0[i]);
+  o.moving = moving;
+  const float near_f = -fc.neg_near;
+  bool any_near = false, all_near = true;
+  for (int j = 0; j < 3; ++j)
+    for (int e = 0; e < (moving ? 2 : 1); ++e) {
+      if ((e == 0 ? v0 : v1)[3 * j + 2] < near_f) {
+        any_near = true;
+      } else {
+        all_near = false;
+      }
+    }
+  if (all_near) return 1;
+  bool defocused = false;
+  for (int j = 0; j < 3; ++j) o.cx[j] = o.cy[j] = 0.0f;
+  if (fc.lens_active) {
+    if (!moving) {
+      for (int j = 0; j < 3; ++j) {
+        o.cx[j] = madd(o.W[j], fc.kx, fc.neg_kx_f);
+        o.cy[j] = madd(o.W[j], fc.ky, fc.neg_ky_f);
+        defocused |= (o.cx[j] != 0.0f) || (o.cy[j] != 0.0f);
+      }
+    } else {
+      for (int j = 0; j < 3; ++j) defocused |= (o.W[j] != fc.focus) || (v1[3 * j + 2] - v0[3 * j + 2] != 0.0f);
+    }
+  }
+  o.defocused = defocused;
+  double lo_x, hi_x, lo_y, hi_y;
+  o.near_clipped = o.full_bounds = false;
+  o.poly_n = 0;
+  if (!any_near) {
+    const float inf = std::numeric_limits<float>::infinity();
+    float minx = inf, miny = inf, maxx = -inf, maxy = -inf;
+    for (int e = 0; e < (moving ? 2 : 1); ++e) {
+      const float* v = e == 0 ? v0 : v1;
+      for (int j = 0; j < 3; ++j)
+        bounds_point(v[3 * j], v[3 * j + 1], v[3 * j + 2], -fc.focus, fc.kx, fc.ky, defocused, minx, maxx, miny, maxy);
+    }
+    lo_x = minx, hi_x = maxx, lo_y = miny, hi_y = maxy;
+    if (!moving) {
+      o.poly_n = 3;
+      for (int j = 0; j < 3; ++j) o.poly[j][0] = o.X[j], o.poly[j][1] = o.Y[j], o.poly[j][2] = o.W[j];
+    }
+  } else if (!moving) {
+    o.near_clipped = true;
+    double tri[3][3];
+    for (int j = 0; j < 3; ++j) tri[j][0] = o.X[j], tri[j][1] = o.Y[j], tri[j][2] = o.W[j];
+    o.poly_n = clip_near(tri, fc.near_d * (1.0 - 0x1p-12), o.poly);
+    lo_x = lo_y = std::numeric_limits<double>::infinity();
+    hi_x = hi_y = -std::numeric_limits<double>::infinity();
+    for (int j = 0; j < o.poly_n; ++j) {
+      const double px = o.poly[j][0] / o.poly[j][2], py = o.poly[j][1] / o.poly[j][2];
+      const double b = defocused ? 1.0 - fc.focus_d / o.poly[j][2] : 0.0;
+      const double ex = std::fabs(b * fc.kx_d), ey = std::fabs(b * fc.ky_d);
+      lo_x = std::min(lo_x, px - ex), hi_x = std::max(hi_x, px + ex);
+      lo_y = std::min(lo_y, py - ey), hi_y = std::max(hi_y, py + ey);
+    }
+  } else {
+    o.full_bounds = true;
+    lo_x = lo_y = -1.0;
+    hi_x = p.width + 1.0;
+    hi_y = p.height + 1.0;
+  }
+  auto to_lo = [](double v, int limit) {
+    v = std::floor(widen_lo(v));
+    if (!(v > 0.0)) return 0;
+    return v > limit ? limit : static_cast<int>(v);
+  };
+  auto to_hi = [](double v, int limit) {
+    v = std::floor(widen_hi(v)) + 1.0;
+    if (!(v < limit)) return limit;
+    return v < 0.0 ? 0 : static_cast<int>(v);
+  };
+  o.lo_x = lo_x, o.hi_x = hi_x, o.lo_y = lo_y, o.hi_y = hi_y;
+  o.bx0 = to_lo(lo_x, p.width);
+  o.bx1 = to_hi(hi_x, p.width);
+  o.by0 = to_lo(lo_y, p.height);
+  o.by1 = to_hi(hi_y, p.height);
+  if (o.bx0 >= o.bx1 || o.by0 >= o.by1) return 2;
+  if (!moving) {  // setup_triangle's degenerate tests
+    const double V[3][3] = {{o.X[0], o.X[1], o.X[2]}, {o.Y[0], o.Y[1], o.Y[2]}, {o.W[0], o.W[1], o.W[2]}};
+    double e1[3], e2[3], pmax = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      const double a = V[k][0], b1 = V[k][1], b2 = V[k][2];
+      e1[k] = b1 - a, e2[k] = b2 - a;
+      pmax = std::max({pmax, std::fabs(a), std::fabs(b1), std::fabs(b2)});
+    }
+    const double cx = e1[1] * e2[2] - e1[2] * e2[1], cy = e1[2] * e2[0] - e1[0] * e2[2],
+                 cz = e1[0] * e2[1] - e1[1] * e2[0];
+    const double cross = std::sqrt(cx * cx + cy * cy + cz * cz);
+    const double l1 = std::sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]);
+    const double l2 = std::sqrt(e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]);
+    if (!(cross > 0x1p-20 * pmax * (l1 + l2))) return 3;
+  }
+  if (!moving && o.poly_n >= 3) {
+    double extent = 0.0, mag = 0.0;
+    const int corners = defocused ? 4 : 1;
+    for (int k = 0; k < corners; ++k) {
+      const double u = defocused ? ((k & 1) ? 1.0 : -1.0) : 0.0, v = defocused ? ((k & 2) ? 1.0 : -1.0) : 0.0;
+      double lx = std::numeric_limits<double>::infinity(), hx = -lx, ly = lx, hy = -lx;
+      for (int j = 0; j < o.poly_n; ++j) {
+        const double w = o.poly[j][2];
+        const double b = 1.0 - fc.focus_d / w;
+        const double x = o.poly[j][0] / w + u * fc.kx_d * b, y = o.poly[j][1] / w + v * fc.ky_d * b;
+        lx = std::min(lx, x), hx = std::max(hx, x), ly = std::min(ly, y), hy = std::max(hy, y);
+        mag = std::max(mag, std::max(std::fabs(x), std::fabs(y)));
+      }
+      extent = std::max(extent, (hx - lx) + (hy - ly));
+    }
+    if (!(extent > 0x1p-20 * (mag + 1.0))) return 3;
+  }
+  if (p.backface_cull && !moving) {  // setup_triangle's back-face cull
+    double P[3][3];
+    for (int j = 0; j < 3; ++j) P[j][0] = o.X[j], P[j][1] = o.Y[j], P[j][2] = o.W[j];
+    bool all_back = true;
+    const double us[4] = {-1, 1, -1, 1}, vs[4] = {-1, -1, 1, 1};
+    for (int k = 0; k < (defocused ? 4 : 1); ++k) {
+      const double d = defocused ? sheared_det(P, fc.kx_d, fc.ky_d, fc.focus_d, us[k], vs[k])
+                                 : sheared_det(P, 0, 0, fc.focus_d, 0, 0);
+      all_back &= d > 0.0;
+    }
+    if (all_back) return 4;
+  }
+  return 0;
+}
+
+}  // namespace rast5d

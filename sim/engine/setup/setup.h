@@ -90,3 +90,15 @@ inline void bounds_point(F X, F Y, F W, F neg_focus, F kx, F ky, bool lens, F& m
 }
 
 }  // namespace rast5d
+
+namespace rast5d {
+
+// The bounds pre-pass of sampled simulation (traversal/sampled_setup.h): setup_triangle()'s bounds and
+// culls without its kernel constants, with the same float operations, charging nothing:
+// o.X, o.Y, o.W, o.cx, o.cy, o.moving, o.defocused, o.near_clipped, o.full_bounds, o.poly and the pixel
+// bounds (bx0, by0, bx1, by1 and lo_x..hi_y), equal to setup_triangle()'s for the same triangle.
+// Returns 0, or the cull setup_triangle() counts: 1 every vertex behind the near plane (then only the
+// vertex fields are set), 2 bounds off screen, 3 degenerate, 4 back-facing (back-face culling on).
+int setup_bounds(const float* v0, const float* v1, const RenderParams& p, const FrameConst& fc, TriSetup& o);
+
+}  // namespace rast5d

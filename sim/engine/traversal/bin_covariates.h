@@ -124,12 +124,29 @@ inline TriangleCovariates triangle_covariates(const TriSetup& t, double B) {
   return c;
 }
 
-// out: 2 values per bin (coverage, footprint), row-major bins.
+// Adds triangle t's terms (c = triangle_covariates(t, bin size)) to the coverage and footprint of the
+// bin [x0, x1) x [y0, y1) (pixels; before the factor spp).
+inline void bin_covariate_terms(const TriSetup& t, const TriangleCovariates& c, double x0, double y0, double x1,
+                                double y1, double& cover, double& foot) {
+  using bin_covariates_detail::clipped_area;
+  const double share = (std::min<double>(t.bx1, x1) - std::max<double>(t.bx0, x0)) *
+                       (std::min<double>(t.by1, y1) - std::max<double>(t.by0, y0)) / c.bounds;
+  if (!c.clip) {
+    cover += share * c.area, foot += share * c.foot;
+    return;
+  }
+  cover += clipped_area(c.p, 3, x0, y0, x1, y1);
+  foot += c.o_ok ? clipped_area(c.o, 3, x0, y0, x1, y1) : share * c.bounds;
+}
+
+// Auxiliaries per bin: coverage and footprint (samples).
+constexpr int kBinAux = 2;
+
+// out: kBinAux values per bin, row-major bins.
 inline void bin_covariates(const std::vector<TriSetup>& setups, const std::vector<std::vector<std::uint32_t>>& bin_lists,
                            int bins_x, int bin_size, int width, int height, int spp, std::vector<double>& out) {
-  using bin_covariates_detail::clipped_area;
   const int n_bins = static_cast<int>(bin_lists.size());
-  out.assign(static_cast<std::size_t>(n_bins) * 2, 0.0);
+  out.assign(static_cast<std::size_t>(n_bins) * kBinAux, 0.0);
   const double B = bin_size;
   std::vector<TriangleCovariates> tri(setups.size());
   std::vector<char> done(setups.size(), 0);
@@ -140,20 +157,9 @@ inline void bin_covariates(const std::vector<TriSetup>& setups, const std::vecto
     const int bx = b % bins_x, by = b / bins_x;
     const double x0 = bx * B, y0 = by * B, x1 = std::min<double>(width, x0 + B), y1 = std::min<double>(height, y0 + B);
     double cover = 0, foot = 0;
-    for (std::uint32_t i : bin_lists[b]) {
-      const TriSetup& t = setups[i];
-      const TriangleCovariates& c = tri[i];
-      const double share = (std::min<double>(t.bx1, x1) - std::max<double>(t.bx0, x0)) *
-                           (std::min<double>(t.by1, y1) - std::max<double>(t.by0, y0)) / c.bounds;
-      if (!c.clip) {
-        cover += share * c.area, foot += share * c.foot;
-        continue;
-      }
-      cover += clipped_area(c.p, 3, x0, y0, x1, y1);
-      foot += c.o_ok ? clipped_area(c.o, 3, x0, y0, x1, y1) : share * c.bounds;
-    }
-    out[2 * b] = cover * spp;
-    out[2 * b + 1] = foot * spp;
+    for (std::uint32_t i : bin_lists[b]) bin_covariate_terms(setups[i], tri[i], x0, y0, x1, y1, cover, foot);
+    out[kBinAux * b] = cover * spp;
+    out[kBinAux * b + 1] = foot * spp;
   }
 }
 

@@ -14,6 +14,7 @@
 #include "tiletest/tile_test.h"
 #include "traversal/bin_covariates.h"
 #include "traversal/bin_sample.h"
+#include "traversal/sampled_setup.h"
 #include "traversal/traversal.h"
 
 namespace rast5d {
@@ -150,6 +151,16 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
   std::vector<TriSetup> setups(static_cast<std::size_t>(scene.n));
   std::vector<char> alive(static_cast<std::size_t>(scene.n), 0);
   std::vector<Counters> setup_counters(n_threads);
+  // Sampled simulation or a bin list: setup only for the triangles that reach the drawn bins, their
+  // setup counters in their home bins' rows (traversal/sampled_setup.h).
+  const bool restricted = (bins || p.sample_fraction < 1.0) && !pstats && !p.record_timing;
+  std::vector<int> restricted_bins;
+  std::vector<Counters> homed_setup;
+  if (restricted) {
+    sampled_setup(p, fc, scene, table.spp(), bins, setups, alive, setup_counters[0], homed_setup, restricted_bins,
+                  result);
+    bins = &restricted_bins;
+  }
   {
     auto work = [&](int t) {
       const int lo = static_cast<int>(static_cast<long long>(scene.n) * t / n_threads);
@@ -183,7 +194,7 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
       }
       frame_pool = cur.frame_pool;
       result.trace_events = std::move(cur.events);
-    } else {
+    } else if (!restricted) {
       std::vector<std::thread> pool;
       for (int t = 1; t < n_threads; ++t) pool.emplace_back(work, t);
       work(0);
@@ -211,7 +222,7 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
 
   // ---- the bins to render: all, or a subset (a list, or sampled simulation) ----
   std::vector<int> drawn;
-  if (bins || p.sample_fraction < 1.0) {
+  if (!restricted && (bins || p.sample_fraction < 1.0)) {
     result.bin_work.assign(static_cast<std::size_t>(n_bins), 0);
     for (int b = 0; b < n_bins; ++b) {
       const int bx = b % bins_x, by = b / bins_x;
@@ -400,6 +411,10 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
   }
   for (auto& th : pool) th.join();
   if (error) std::rethrow_exception(error);
+  for (std::size_t k = 0; k < homed_setup.size(); ++k) {  // the setup of the triangles homed in drawn bin k
+    std::uint64_t* row = &result.bin_counters[k * kNumCounters];
+    for (int i = 0; i < kNumCounters; ++i) row[i] += homed_setup[k].v[i];
+  }
 
   if (pstats) {  // what had no pixel bounds, over the whole frame; the trace in bin order
     for (const auto& cur : cursors) {

@@ -46,8 +46,9 @@ struct RenderResult {
   // Independent of the thread count.
   std::vector<TileWork> timing_records;
   // Sampled simulation (render(..., bins)): the rendered bins' counters, one row of kNumCounters
-  // per entry of `bins` in its order (traversal work only; setup and whole-frame figures are in
-  // `counters`, which then holds the setup plus the rendered bins' sum).
+  // per entry of `bins` in its order: its traversal work and the setup of the live triangles homed in
+  // it (traversal/sampled_setup.h; with pixel statistics or timing records, traversal work only);
+  // `counters` holds the rows' sum plus the frame's exact part (setup.triangles, culled triangles).
   std::vector<std::uint64_t> bin_counters;
   // With a bin list or pipeline.sample_fraction < 1: every bin's brute-force work (sum over its
   // triangles of their bounds' pixels in the bin, times spp), the traversed bins (the list, or the
@@ -55,9 +56,12 @@ struct RenderResult {
   // every bin with triangles was traversed).
   std::vector<std::int64_t> bin_work;
   std::vector<int> sampled_bins, sampled_stratum, strata_sizes;
-  // With bin_work: 2 per bin, the regression estimator's auxiliary variables (coverage and
+  // With bin_work: kBinAux per bin, the regression estimator's auxiliary variables (coverage and
   // footprint, samples; traversal/bin_covariates.h).
   std::vector<double> bin_aux;
+  // Their frame totals (kBinAux; summed per triangle when only the drawn bins' auxiliaries are computed,
+  // traversal/sampled_setup.h: bin_aux is then NaN in the other bins).
+  std::vector<double> bin_aux_total;
   // Pixel trace (PixelStats::tracing()): the events and samples of the traced pixel, in order.
   std::vector<TraceEvent> trace_events;
   std::vector<TraceSample> trace_samples;

@@ -1,0 +1,169 @@
+// Sampled simulation (pipeline.sample_fraction, sim/sampling.py) and renders of a bin list: triangle
+// setup and binning only for the triangles that reach the traversed bins.
+//
+// 1. Bounds pre-pass over every triangle (setup_bounds(): setup's own bounds and culls, without the
+//    kernel constants, nothing charged). From it, for every bin: the brute-force work (the
+//    stratification's sort key, traversal/bin_sample.h) and the frame totals of the regression
+//    estimator's auxiliaries (traversal/bin_covariates.h), summed per triangle.
+// 2. The draw (or the given list).
+// 3. setup_triangle() for the live triangles whose bounds overlap a drawn bin, and for the culled ones
+//    (their counts are exact). The drawn bins' auxiliaries come from the same setup fields.
+//
+// Setup counts: setup.triangles and the whole setup of the culled triangles are the frame's exactly.
+// Every live triangle's setup counters belong to its home bin (the bin holding the top-left corner of
+// its bounds, the bin where traversals charge their per-triangle setup too): they are added to that
+// bin's row of RenderResult::bin_counters when it is drawn, and estimated with the rest of the bin's
+// counters; a triangle set up only because it reaches a drawn bin it is not homed in adds nothing to
+// the counters. With every bin listed, the counters equal the whole frame's.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "setup/setup.h"
+#include "traversal/bin_covariates.h"
+#include "traversal/bin_sample.h"
+#include "traversal/render.h"
+
+namespace rast5d {
+
+// Fills setups/alive for the set-up triangles, frame_setup with the frame's setup counters (those
+// of the home bins included), homed[k] with the setup counters of the triangles homed in drawn bin k,
+// drawn with the bins to traverse (the list, or the stratified draw), and result's bin_work,
+// bin_aux (NaN for the bins not drawn), bin_aux_total, sampled_stratum and strata_sizes.
+inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const SceneArrays& scene, int spp,
+                          const std::vector<int>* list, std::vector<TriSetup>& setups, std::vector<char>& alive,
+                          Counters& frame_setup, std::vector<Counters>& homed, std::vector<int>& drawn,
+                          RenderResult& result) {
+  using bin_covariates_detail::clipped_area;
+  const int B = p.bin_size;
+  const int bins_x = (p.width + B - 1) / B, bins_y = (p.height + B - 1) / B;
+  const int n_bins = bins_x * bins_y;
+  const std::size_t n = static_cast<std::size_t>(scene.n);
+  if (list)
+    for (int b : *list)
+      if (b < 0 || b >= n_bins)
+        throw std::invalid_argument("bins: expected distinct bin indices in 0.." + std::to_string(n_bins - 1) +
+                                    ", got " + std::to_string(b));
+
+  // ---- 1. bounds pre-pass: per-bin work, auxiliary totals ----
+  struct Pre {
+    int bx0, by0, bx1, by1;
+    int culled;  // 0, or setup_bounds()'s cull
+  };
+  std::vector<Pre> pre(n);
+  result.bin_work.assign(static_cast<std::size_t>(n_bins), 0);
+  double total_cover = 0, total_foot = 0;
+  TriSetup t;
+  for (std::size_t i = 0; i < n; ++i) {
+    Pre& q = pre[i];
+    q.culled = setup_bounds(scene.v0 + i * 9, scene.v1 + i * 9, p, fc, t);
+    if (q.culled) continue;
+    q.bx0 = t.bx0, q.by0 = t.by0, q.bx1 = t.bx1, q.by1 = t.by1;
+    for (int by = t.by0 / B; by <= (t.by1 - 1) / B; ++by) {
+      const std::int64_t dy = std::min(t.by1, (by + 1) * B) - std::max(t.by0, by * B);
+      for (int bx = t.bx0 / B; bx <= (t.bx1 - 1) / B; ++bx)
+        result.bin_work[by * bins_x + bx] += dy * (std::min(t.bx1, (bx + 1) * B) - std::max(t.bx0, bx * B));
+    }
+    // The triangle's auxiliaries summed over its bins (bin_covariates' per-bin terms: shares of the
+    // bounds sum to 1; clipped areas sum to the area inside the union of its bins).
+    const TriangleCovariates c = triangle_covariates(t, B);
+    if (!c.clip) {
+      total_cover += c.area, total_foot += c.foot;
+      continue;
+    }
+    const double x0 = (t.bx0 / B) * B, y0 = (t.by0 / B) * B;
+    const double x1 = std::min(p.width, ((t.bx1 - 1) / B + 1) * B), y1 = std::min(p.height, ((t.by1 - 1) / B + 1) * B);
+    total_cover += clipped_area(c.p, 3, x0, y0, x1, y1);
+    total_foot += c.o_ok ? clipped_area(c.o, 3, x0, y0, x1, y1) : c.bounds;
+  }
+  for (auto& w : result.bin_work) w *= spp;
+  result.bin_aux_total = {total_cover * spp, total_foot * spp};
+
+  // ---- 2. the drawn bins ----
+  if (list) {
+    drawn = *list;
+  } else {
+    BinSample s = stratify_bins(result.bin_work, p.sample_fraction, static_cast<std::uint64_t>(p.sample_seed));
+    drawn = std::move(s.bins);
+    result.sampled_stratum = std::move(s.stratum);
+    result.strata_sizes = std::move(s.sizes);
+  }
+  std::vector<int> k_of(static_cast<std::size_t>(n_bins), -1);
+  for (std::size_t k = 0; k < drawn.size(); ++k) {
+    if (k_of[drawn[k]] >= 0)
+      throw std::invalid_argument("bins: expected distinct bin indices in 0.." + std::to_string(n_bins - 1) +
+                                  ", got " + std::to_string(drawn[k]));
+    k_of[drawn[k]] = static_cast<int>(k);
+  }
+  // Summed-area table of the drawn bins: does a triangle's bin rectangle hold one?
+  const int sx = bins_x + 1;
+  std::vector<int> sat(static_cast<std::size_t>(sx) * (bins_y + 1), 0);
+  for (int by = 0; by < bins_y; ++by)
+    for (int bx = 0; bx < bins_x; ++bx)
+      sat[(by + 1) * sx + bx + 1] = (k_of[by * bins_x + bx] >= 0) + sat[by * sx + bx + 1] + sat[(by + 1) * sx + bx] -
+                                    sat[by * sx + bx];
+
+  // ---- 3. setup of the triangles that reach the drawn bins ----
+  homed.assign(drawn.size(), Counters{});
+  std::vector<std::vector<std::uint32_t>> reach(drawn.size());  // live triangles per drawn bin
+  Counters c;
+  for (std::size_t i = 0; i < n; ++i) {
+    const float* v0 = scene.v0 + i * 9;
+    const float* v1 = scene.v1 + i * 9;
+    const float* col = scene.colors + i * 9;
+    const Pre& q = pre[i];
+    auto run = [&](Counters& into) {
+      return p.op_count == OpCount::kExact
+                 ? setup_triangle<ExactArith>(v0, v1, col, static_cast<std::uint32_t>(i), p, fc, setups[i], into)
+                 : setup_triangle<FastArith>(v0, v1, col, static_cast<std::uint32_t>(i), p, fc, setups[i], into);
+    };
+    if (q.culled) {  // culled in setup: counted exactly in the frame
+      if (run(frame_setup)) throw std::logic_error("sampled setup: the bounds pre-pass culled a live triangle");
+      continue;
+    }
+    ++frame_setup[Counter::setup_triangles];
+    const int cx0 = q.bx0 / B, cy0 = q.by0 / B, cx1 = (q.bx1 - 1) / B + 1, cy1 = (q.by1 - 1) / B + 1;
+    if (sat[cy1 * sx + cx1] - sat[cy0 * sx + cx1] - sat[cy1 * sx + cx0] + sat[cy0 * sx + cx0] == 0) continue;
+    c = Counters{};
+    if (!(alive[i] = run(c))) throw std::logic_error("sampled setup: setup culled a triangle the pre-pass kept");
+    if (scene.alpha) setups[i].alpha = scene.alpha[i];
+    const TriSetup& s = setups[i];
+    if (s.bx0 != q.bx0 || s.by0 != q.by0 || s.bx1 != q.bx1 || s.by1 != q.by1)
+      throw std::logic_error("sampled setup: the bounds pre-pass differs from setup for triangle " + std::to_string(i));
+    --c[Counter::setup_triangles];  // counted above for every triangle
+    const int home = k_of[cy0 * bins_x + cx0];
+    if (home >= 0) {
+      homed[home].merge(c);
+      frame_setup.merge(c);
+    }
+    for (int by = cy0; by < cy1; ++by)
+      for (int bx = cx0; bx < cx1; ++bx)
+        if (const int k = k_of[by * bins_x + bx]; k >= 0) reach[k].push_back(static_cast<std::uint32_t>(i));
+  }
+
+  // ---- the drawn bins' auxiliaries ----
+  result.bin_aux.assign(static_cast<std::size_t>(n_bins) * kBinAux, std::numeric_limits<double>::quiet_NaN());
+  std::vector<TriangleCovariates> cov;
+  std::vector<int> cov_of(reach.empty() ? 0 : n, -1);
+  for (std::size_t k = 0; k < drawn.size(); ++k) {
+    const int b = drawn[k];
+    const int bx = b % bins_x, by = b / bins_x;
+    const double x0 = bx * B, y0 = by * B;
+    const double x1 = std::min<double>(p.width, x0 + B), y1 = std::min<double>(p.height, y0 + B);
+    double cover = 0, foot = 0;
+    for (std::uint32_t i : reach[k]) {
+      if (cov_of[i] < 0) cov_of[i] = static_cast<int>(cov.size()), cov.push_back(triangle_covariates(setups[i], B));
+      bin_covariate_terms(setups[i], cov[cov_of[i]], x0, y0, x1, y1, cover, foot);
+    }
+    result.bin_aux[kBinAux * b] = cover * spp;
+    result.bin_aux[kBinAux * b + 1] = foot * spp;
+  }
+}
+
+}  // namespace rast5d
