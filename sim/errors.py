@@ -14,6 +14,11 @@ class EmptyFrameWarning(UserWarning):
     screen, degenerate, back-facing), usually a camera inside or facing away from the scene."""
 
 
+class FewStrataWarning(UserWarning):
+    """A sampled render (PipelineConfig.sample_fraction < 1) drew its bins from so few strata that
+    its 95% intervals can cover far below 95%; the message says what to raise."""
+
+
 def check_int(owner: str, field: str, value, lo: int, hi: int) -> int:
     """Return value as int if it is an integer in [lo, hi], else raise ConfigError."""
     import numbers

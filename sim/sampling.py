@@ -39,7 +39,7 @@ The intervals assume no sampled stratum is dominated by a few of its bins. With 
 frame whose work sits in a few very dense bins that stay below the take-all threshold, they can cover
 far below 95% (modern_hall at 512 x 288, 8-px bins, f = 0.01, 11 strata: 0.41 over 100 draws; at
 1024 x 576 and every fraction from 0.01: >= 0.90): prefer fractions giving a few tens of strata
-(``sample.strata``).
+(``sample.strata``). ``estimate`` warns (``sim.errors.FewStrataWarning``) below FEW_STRATA sampled strata.
 
 Not estimable under sampling (reported as NaN with a NaN half-width, never scaled):
 - the texture cache (``tex.cache.*``): it is replayed after the render in bin order, and a bin's
@@ -62,6 +62,7 @@ from .errors import ConfigError
 # Figures that need the whole frame (prefixes of counter and figure names).
 NOT_ESTIMABLE = ("tex.cache.", "timing.")
 MIN_STRATA = 2  # two strata of two bins: the fewest that give a variance estimate
+FEW_STRATA = 20  # below this many sampled strata the intervals can cover well under 95% (a warning)
 
 DOCS = {
     "sample.fraction": ("ratio", "Sampled simulation: sample.bins / sample.candidates"),
@@ -271,4 +272,13 @@ def estimate(sample: BinSample, counters: dict, bin_counters: np.ndarray, derive
         ci[d] = math.nan if bad else float(tq * math.sqrt(dvar[j]))
     flat.update({"sample.fraction": sample.fraction, "sample.bins": len(sample.bins),
                  "sample.strata": len(sample.sizes), "sample.candidates": sample.candidates})
+    if not sample.exact and sampled_strata(sample) < FEW_STRATA:
+        import warnings
+
+        from .errors import FewStrataWarning
+
+        warnings.warn(f"sample_fraction: drawing {len(sample.bins)} of {sample.candidates} bins gives "
+                      f"{sampled_strata(sample)} sampled strata (fewer than {FEW_STRATA}): the 95% intervals "
+                      "can cover far below 95%; raise sample_fraction or use smaller bins (pipeline.bin_size)",
+                      FewStrataWarning, stacklevel=3)
     return flat, ci

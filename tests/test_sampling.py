@@ -182,6 +182,21 @@ def test_too_few_bins_is_an_error(setup):
         sim.render(scene, camera, table, config(sample_fraction=0.02))
 
 
+def test_few_strata_warn(setup):
+    """Below sampling.FEW_STRATA sampled strata the render warns (naming sample_fraction and what to
+    raise); with enough strata it does not."""
+    scene, camera, table = setup
+    with pytest.warns(sim.errors.FewStrataWarning, match=r"sample_fraction: drawing \d+ of \d+ bins gives \d+ sampled strata"):
+        sim.render(scene, camera, table, config(sample_fraction=0.25, sample_seed=5), timing=False)
+    import warnings
+
+    small = sim.PipelineConfig(algorithm="tile", bin_size=8, threads=2, sample_fraction=0.5, sample_seed=5)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", sim.errors.FewStrataWarning)
+        r = sim.render(scene, camera, table, small, timing=False)
+    assert r.flat_stats["sample.strata"] >= sampling.FEW_STRATA
+
+
 def test_whole_frame_fraction_is_exact(setup, full):
     scene, camera, table = setup
     res, _ = full
