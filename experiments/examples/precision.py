@@ -386,6 +386,111 @@ def rows_4d(V, seed=5):
     return rows
 
 
+# ----------------------------------------------------------------------------- the motion tile tests
+
+FRAC_5D = (2, 4, 8)
+TILE_5D, SPLITS_5D, GRID_5D, N_POINTS_5D, N_RANDOM_5D = 2, 4, 4, 600, 16
+MOTION_5D = np.array([0.6, -0.4, 1.5])  # world units: a sideways, receding move for the suite's static cases
+
+
+def _motion_cases(V, rng):
+    """Moving triangles at viewport V: every hard case moving (its own shutter-close positions, or moved by
+    MOTION_5D: through the near plane, behind the camera, gigantic coordinates, huge blur...) with the suite's
+    blur scaled with the viewport (5D) and in focus (3D), and N_RANDOM_5D motion_field-style triangles (random
+    screen positions 20 % beyond the viewport, depths 0.3-20, motion up to a quarter of the viewport and 3
+    depth units, some through the near plane) at CoC V / 32 and 0."""
+    sys.path.insert(0, str(REPO))
+    from tests import reference as ref
+
+    for name, cam, p0, p1 in _hard_cameras(V):
+        if np.array_equal(p0, p1):
+            p1 = p0 + MOTION_5D
+        for i in range(p0.shape[0]):
+            yield name, cam, p0[i], p1[i]
+    for coc in (V / 32.0, 0.0):
+        cam = sim.Camera(width=V, height=V, fov_y_deg=45.0, focus_distance=5.0, coc_px=coc, lens="square", near=0.1)
+        for i in range(N_RANDOM_5D):
+            w0 = rng.uniform(0.3, 20.0, 3)
+            xy0 = rng.uniform(-0.2 * V, 1.2 * V, (3, 2))
+            xy1 = xy0 + rng.uniform(-0.25, 0.25, 2) * V + rng.normal(0, 0.02 * V, (3, 2))
+            w1 = np.maximum(w0 + rng.uniform(-3.0, 3.0, 3), 0.02)
+            p0 = np.array([ref.screen_to_world(cam, x, y, d) for (x, y), d in zip(xy0, w0)])
+            p1 = np.array([ref.screen_to_world(cam, x, y, d) for (x, y), d in zip(xy1, w1)])
+            yield f"random_{i}", cam, p0, p1
+
+
+def _probe_5d(ref, cam, v0, v1, tiles, pts, prec):
+    params = ref.engine_params(cam)
+    params.lens_grid, params.time_splits, params.halfspace_H5 = GRID_5D, SPLITS_5D, True
+    params.precision_tile = prec
+    return _core.precision_probe_5d(params, v0, v1, tiles, pts)
+
+
+def rows_5d(V, seed=7):
+    """The render's motion tile tests (t̂ and 5D lens sets per time sub-interval, H5 cells; tile with
+    motion_test intervals, time_splits 4, a 4x4 lens grid; sim._core.precision_probe_5d, tiletest/precision_5d.h)
+    on moving triangles at viewport V, per class (3D: in focus, 5D: blurred), in float32 and fixed point at 2, 4
+    and 8 fraction bits: N_POINTS_5D samples per triangle (half aimed at it at their lens point and time), each
+    asked against the 2x2 tile holding it; samples the float64 ray caster hits that the format's region
+    excludes (must be none; float64's own too), samples float64 excludes and the share of them the format keeps
+    (cull lost), the fewest int_bits (all; in band: every vertex in front of the near plane at both shutter ends,
+    projected within a guard band of one viewport, blur below V) and the overflowing tests at one bit fewer."""
+    from tests import reference as ref
+
+    rng = np.random.default_rng(seed)
+    cases = []
+    for name, cam, p0, p1 in _motion_cases(V, rng):
+        pts = ref.sample_points(rng, cam, p0, p1, N_POINTS_5D).astype(np.float64)
+        pts = pts[(pts[:, :2] >= 0).all(1) & (pts[:, :2] < V).all(1)]
+        if len(pts) == 0:
+            continue
+        x, y = np.floor(pts[:, 0] / TILE_5D) * TILE_5D, np.floor(pts[:, 1] / TILE_5D) * TILE_5D
+        tiles = np.stack([x, x + TILE_5D, y, y + TILE_5D], axis=1)
+        v0, v1 = cam.engine_vertices(p0[None], p1[None])
+        v0, v1 = np.asarray(v0[0], np.float32), np.asarray(v1[0], np.float32)
+        r64 = _probe_5d(ref, cam, v0, v1, tiles, pts, "float64")
+        if "kept" not in r64:  # static (no motion left after projection) or culled at the near plane
+            continue
+        rc = ref.ray_cast(cam, p0, p1, pts)
+        hit = rc.hit & (ref.near_rel_distance(cam, rc.w) > 1e-3)
+        H = np.concatenate([v0, v1]).astype(np.float64)
+        W = H[:, 2]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            xy = H[:, :2] / W[:, None]
+        band = bool((W >= cam.near).all() and (np.abs(xy - V / 2) <= 1.5 * V).all() and cam.coc_px <= V)
+        cls = "5D" if cam.coc_px > 0 else "3D"
+        cases.append((cls, cam, v0, v1, tiles, pts, hit, ~np.asarray(r64["kept64"]), band))
+    rows = []
+    for cls in ("3D", "5D"):
+        sub = [c for c in cases if c[0] == cls]
+        for kind, F in [("float32", None)] + [("fixed", F) for F in FRAC_5D]:
+            prec = kind if F is None else {"fixed": {"int_bits": PROBE_BITS, "frac_bits": F}}
+            a = dict(triangles=len(sub), samples=0, hits=0, culled64=0, lost=0, viol=0, viol64=0, max_all=0.0,
+                     max_band=0.0)
+            for _cls, cam, v0, v1, tiles, pts, hit, culled64_w, band in sub:
+                r = _probe_5d(ref, cam, v0, v1, tiles, pts, prec)
+                kept, kept64 = np.asarray(r["kept"]), np.asarray(r["kept64"])
+                a["samples"] += len(pts)
+                a["hits"] += int(hit.sum())
+                a["culled64"] += int((~kept64).sum())
+                a["lost"] += int((kept & ~kept64).sum())
+                a["viol"] += int((hit & ~kept).sum())
+                a["viol64"] += int((hit & ~kept64).sum())
+                if F is not None:
+                    a["max_all"] = max(a["max_all"], float(r["max_abs"]))
+                    if band:
+                        a["max_band"] = max(a["max_band"], float(r["max_abs"]))
+            if F is not None:
+                ib = int_bits_for(a["max_all"])
+                a["int_bits_all"], a["int_bits_band"], a["below"] = ib, int_bits_for(a["max_band"]), 0
+                for _cls, cam, v0, v1, tiles, pts, *_ in sub:
+                    r = _probe_5d(ref, cam, v0, v1, tiles, pts, {"fixed": {"int_bits": max(ib - 1, 1), "frac_bits": F}})
+                    a["below"] += int(np.asarray(r["overflow"]).sum())
+            rows.append(dict(viewport=V, cls=cls, kind=kind, frac_bits=F, **a))
+    print(rows, flush=True)
+    return rows
+
+
 ROWS = REPO / "results" / "precision_rows.json"  # finished viewports: a rerun resumes
 
 
@@ -402,14 +507,25 @@ def study():
         ROWS.parent.mkdir(exist_ok=True)
         ROWS.write_text(json.dumps(data))
     for V in VIEWPORTS:
+        if "rows_5d" not in data[str(V)]:
+            t0 = time.process_time()
+            data[str(V)]["rows_5d"] = rows_5d(V)
+            data[str(V)]["cpu_s"] += time.process_time() - t0
+            ROWS.write_text(json.dumps(data))
+    for V in VIEWPORTS:
         if "rows_4d" not in data[str(V)]:
             t0 = time.process_time()
             data[str(V)]["rows_4d"] = rows_4d(V)
             data[str(V)]["cpu_s"] += time.process_time() - t0
             ROWS.write_text(json.dumps(data))
+    if "renders" in data and "motion" not in data["renders"]:
+        t0 = time.process_time()
+        data["renders"]["motion"] = render_motion_rows()
+        data["renders"]["cpu_s"] += time.process_time() - t0
+        ROWS.write_text(json.dumps(data))
     if "renders" not in data:
         t0 = time.process_time()
-        data["renders"] = dict(image=render_rows(), depth=depth_rows(), cpu_s=0.0)
+        data["renders"] = dict(image=render_rows(), depth=depth_rows(), motion=render_motion_rows(), cpu_s=0.0)
         data["renders"]["cpu_s"] = time.process_time() - t0
         ROWS.write_text(json.dumps(data))
     return data
@@ -473,6 +589,43 @@ def render_rows():
     return out
 
 
+MOTION_PRECISIONS = [
+    ("default", {}),
+    ("tile float32", {"tile": "float32"}),
+    ("tile fixed 8", {"tile": {"fixed": {"int_bits": 40, "frac_bits": 8}}}),
+    ("tile fixed 4", {"tile": {"fixed": {"int_bits": 40, "frac_bits": 4}}}),
+    ("tile fixed 2", {"tile": {"fixed": {"int_bits": 40, "frac_bits": 2}}}),
+    ("tile fixed 4, 14 int bits", {"tile": {"fixed": {"int_bits": 14, "frac_bits": 4}}}),
+]
+
+
+def render_motion_rows():
+    """Culls lost at fewer bits in renders of moving triangles: motion_field (400 triangles moving 50 px) at
+    RENDER_SIZE^2, 4 spp, tile 2x2 with t̂ + lens sets + H5 over 4 sub-intervals, CoC 0 and 10, each tile
+    precision against the default's render (samples tested, samples whose visible triangle differs)."""
+    out = []
+    scene = _scene("motion_field", resolution=RENDER_SIZE, motion_px=50.0 * RENDER_SIZE / 128)
+    table = sim.SampleTable.stratified(spp=4, seed=1)
+    for coc in (0.0, 10.0):
+        cam = _camera(scene, width=RENDER_SIZE, height=RENDER_SIZE, coc_px=coc)
+        base = None
+        for label, prec in MOTION_PRECISIONS:
+            r = sim.render(scene, cam, table, sim.PipelineConfig(
+                algorithm="tile", precision=prec, time_splits=4, halfspace={"h": True, "H": True, "H5": True}),
+                export_samples=True, timing=False)
+            s = r.flat_stats
+            if base is None:
+                base = r
+            out.append(dict(coc=coc, label=label, samples=int(r.sample_triangle.size),
+                            samples_differ=int((r.sample_triangle != base.sample_triangle).sum()),
+                            tested=int(s["raster.samples_tested"]), tested_base=int(base.flat_stats["raster.samples_tested"]),
+                            culled_t=int(s["interval.culled_t"]), culled_H5=int(s["tile.H5_cells_culled"]),
+                            culled_H5_base=int(base.flat_stats["tile.H5_cells_culled"]),
+                            tile5d_overflows=int(s["precision.tile5d_overflows"])))
+            print(out[-1], flush=True)
+    return out
+
+
 DEPTH_BITS = (8, 12, 16, 20, 24)
 
 
@@ -499,6 +652,10 @@ def depth_resolution(w, near, frac_bits):
     """The smallest view-depth gap that a frac_bits unorm z = 1 - near / w resolves at depth w (closed form:
     dz/dw = near / w^2; one step 2^-frac_bits)."""
     return 2.0 ** -frac_bits * w * w / near
+
+
+MOTION_TEXT = "(text pending)"
+MOTION_RENDER_TEXT = "(text pending)"
 
 
 def _pct(x):
@@ -632,6 +789,41 @@ def markdown(data):
             "bits: mostly the 2^(1 - frac_bits) px widening of every 2x2 tile, which these rows share with float64 "
             "(the 'lens cells culled (float64)' column is on the widened tiles); no sample changes.",
             "",
+            "## Motion tile tests (t̂, 5D lens sets, H5): fewest bits per viewport",
+            "",
+            "The render's motion tile tests in the format (`tiletest/precision_5d.h`, `sim._core.precision_probe_5d`): "
+            "`tile` with `motion_test: intervals`, 4 time sub-intervals, H5 on, a 4x4 lens grid; per sub-interval the "
+            "time interval t̂ (002 §2, intervals/time_interval.h), the 5D lens sets (h_i lines over the six end "
+            "vertices) and the H5 cells (001's H_j lines extended to time). Workload per viewport: every hard case "
+            "moving (its own shutter-close positions, else moved by (0.6, -0.4, 1.5) world units: through the near "
+            "plane, behind the camera, gigantic coordinates, huge blur), blurred with the suite's CoC scaled to the "
+            "viewport (5D) and in focus (3D), plus 16 motion_field-style random triangles per class (motion up to a "
+            "quarter of the viewport and 3 depth units, some through the near plane; CoC V / 32). 600 samples per "
+            "triangle (half aimed at it at their lens point and time), each asked against the 2x2 tile holding it "
+            "(widened as a render widens it). Check: samples the float64 ray caster hits (in front of the near "
+            "plane) that the format's region excludes: must be none (and none for float64). Cull lost = samples "
+            "float64 excludes that the format keeps, of all float64 excludes. Fewest int_bits: 'in band' over the "
+            "triangles whose six end vertices are in front of the near plane and project within a guard band of "
+            "one viewport (blur below V), 'all' over every triangle.",
+            "",
+            "| viewport [px] | class | arithmetic | triangles | samples | ray-cast hits | excluded by float64 | cull "
+            "lost | hits excluded (format / float64) | fewest int_bits in band (total bits) | fewest int_bits all | "
+            "overflowing tests at all - 1 |",
+            "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for v in vs:
+        for r in data[str(v)].get("rows_5d", []):
+            arith = "float32" if r["kind"] == "float32" else f"fixed, frac_bits {r['frac_bits']}"
+            if r["kind"] == "fixed":
+                F = r["frac_bits"]
+                ib, ia, below = f"{r['int_bits_band']} ({1 + r['int_bits_band'] + 2 * F})", r["int_bits_all"], r["below"]
+            else:
+                ib = ia = below = "-"
+            out.append(f"| {v} | {r['cls']} | {arith} | {r['triangles']} | {r['samples']} | {r['hits']} | "
+                       f"{r['culled64']} | {_pct(r['lost'] / max(r['culled64'], 1))} | {r['viol']} / {r['viol64']} | "
+                       f"{ib} | {ia} | {below} |")
+    out += ["",
+            MOTION_TEXT,
+            "",
             "## Sample test by class: vertices placed per sample",
             "",
             "The render's sample test (`sim._core.precision_probe`: vertices placed at each sample's (u, v, t) in "
@@ -683,8 +875,26 @@ def markdown(data):
                 "tests never overflow at 256 px, while its 2D tile-test set-up (C = x_j y_k - y_j x_k, screen-sized) "
                 "overflows 22,851 times in focus and its 4D tile tests 76,824 times at CoC 10 (the 4D rows' 2 log2 V "
                 "+ 2 is 18 at 256 px); the hard-case suite's large triangles need the full viewport-sized formats of "
-                "the first tables. float32 and float64 sample tests change no sample here.",
-                "",
+                "the first tables. float32 and float64 sample tests change no sample here."]
+        if "motion" in data["renders"]:
+            out += ["",
+                    "## Moving triangles: culls lost at fewer bits in renders",
+                    "",
+                    f"`motion_field` (400 triangles of 4-400 px² at 128 px, here {RENDER_SIZE} x {RENDER_SIZE}, each "
+                    f"moving {50 * RENDER_SIZE // 128} px), 4 spp, `tile` 2x2 with t̂ + lens sets + H5 over 4 time "
+                    "sub-intervals, in focus (3D) and at CoC 10 (5D); each tile precision against the default render "
+                    "(tile float64). Samples whose visible triangle differs; samples tested against the default's; H5 "
+                    "lens cells culled against the default's.",
+                    "",
+                    "| CoC [px] | tile precision | samples differing | samples tested / default | H5 cells culled "
+                    "(default) | motion tile-test overflows |",
+                    "|---|---|---|---|---|---|"]
+            for r in data["renders"]["motion"]:
+                out.append(f"| {r['coc']:g} | {r['label']} | {r['samples_differ']} of {r['samples']} | "
+                           f"{r['tested'] / r['tested_base']:.4f} | {r['culled_H5']} ({r['culled_H5_base']}) | "
+                           f"{r['tile5d_overflows']} |")
+            out += ["", MOTION_RENDER_TEXT]
+        out += ["",
                 "## Depth",
                 "",
                 "A unorm depth buffer of frac_bits bits stores z = 1 - near / w rounded to 2^-frac_bits; the depth test "

@@ -50,6 +50,7 @@ namespace rast5d::tiletest {
 // A set-up value rounded into the format with its rounding carried (plus rel relative error of the
 // float64 value itself); overflow recorded.
 inline PVal carried_in(Arith4D& ar, double x, double rel = 0x1p-52) {
+  if (!ar.fixed() && !(std::fabs(x) < 0x1p127)) return {x, kInf};  // beyond binary32: no bound (culls nothing)
   PVal r = ar.rounded(x);
   r.e += rel * std::fabs(x);
   return r;
