@@ -476,6 +476,7 @@ void register_selftest(py::module_& m) {
         out["kept"] = kept;
         out["overflow"] = overflow;
         out["max_abs"] = prec.kind == PrecisionKind::kFixed ? p5.ar.max_abs : 0.0;
+        out["max_abs_h5"] = prec.kind == PrecisionKind::kFixed ? p5.ar_h5.max_abs : 0.0;
         out["h5_usable"] = usable;
         out["bounds"] = py::make_tuple(tri.bx0, tri.bx1, tri.by0, tri.by1);
         return out;
@@ -486,7 +487,8 @@ void register_selftest(py::module_& m) {
       "params.precision_tile, tiles widened as a render widens them) of one triangle moving from v0 to v1 (3, 3) "
       "(pixel-homogeneous): per row r the tile tiles[r] = (x0, x1, y0, y1) and the sample points[r] = (x, y, u, v, "
       "t); kept64 / kept (N,): the sample passes the tile's (lens, time) region in float64 / in the precision; "
-      "overflow (N,); max_abs (fixed: the largest register, the fewest int_bits n satisfy max_abs < 2^n); "
+      "overflow (N,); max_abs / max_abs_h5 (fixed: the largest register of t̂ with the lens sets / of H5, the "
+      "fewest int_bits n satisfy max_abs < 2^n); "
       "h5_usable (sub-intervals with an H5 test); bounds (the set-up's pixel bounds x0, x1, y0, y1). A static "
       "triangle returns dim_class and moving only.");
 }

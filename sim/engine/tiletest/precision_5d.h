@@ -33,7 +33,7 @@
 //    float64 set-up's decisions, as the lens vertices are.
 //  * Overflow: a fixed-point value reaching 2^int_bits sets `overflow` (counted per tile in
 //    precision.tile5d_overflows); `max_abs` records the largest register (the fewest int_bits n satisfy
-//    max_abs < 2^n).
+//    max_abs < 2^n), for t̂ with the lens sets (ar) and for H5 (ar_h5) apart.
 #pragma once
 
 #include <algorithm>
@@ -210,7 +210,8 @@ inline CellMask h5_cells_in(Arith4D& ar, const SubIntervalIn& si, const SubH5& s
 // active() is false for float64 (the render then never calls it).
 struct Motion5DPrecision {
   Precision p = Precision::float64();
-  Arith4D ar{Precision::float64()};
+  Arith4D ar{Precision::float64()};     // t̂ and the 5D lens sets
+  Arith4D ar_h5{Precision::float64()};  // H5 (its own registers: max_abs per test)
   int S = 1;
   bool lens = false, with_h5 = false, setup_overflow = false;
   SubIntervalIn sub[iv::kMaxSplits];
@@ -220,6 +221,7 @@ struct Motion5DPrecision {
   void setup(const Precision& prec, const iv::MotionSetup& ms, double w_eps, const MotionH5* h5) {
     p = prec;
     ar = Arith4D(prec);
+    ar_h5 = Arith4D(prec);
     S = ms.S;
     lens = ms.lens;
     with_h5 = h5 != nullptr;
@@ -247,13 +249,13 @@ struct Motion5DPrecision {
         for (int e = 0; e < 3; ++e)
           for (int m = 0; m < kH5Fields; ++m) {
             const EdgeH5& eh = h5->sub[k].edges[e];
-            sub[k].f0[e][m] = carried_in(ar, eh.f0[m] * sc2, 0x1p-50);
-            sub[k].g[e][m] = carried_in(ar, eh.g[m] * sc2, 0x1p-50);
-            sub[k].f2[e][m] = carried_in(ar, eh.f2[m] * sc2, 0x1p-50);
+            sub[k].f0[e][m] = carried_in(ar_h5, eh.f0[m] * sc2, 0x1p-50);
+            sub[k].g[e][m] = carried_in(ar_h5, eh.g[m] * sc2, 0x1p-50);
+            sub[k].f2[e][m] = carried_in(ar_h5, eh.f2[m] * sc2, 0x1p-50);
           }
       }
     }
-    setup_overflow = ar.overflow;
+    setup_overflow = ar.overflow || ar_h5.overflow;
   }
 
   // iv::motion_tile_intervals in the format: replaces ti's sub-intervals, lens sets, t̂ and hulls; returns
@@ -295,11 +297,11 @@ struct Motion5DPrecision {
   // The H5 cells of sub-interval k in the format (h5: the float64 set-up's sigma, usability and oracle).
   CellMask h5_cells(const MotionH5& h5, int k, double x0, double x1, double y0, double y1, double t_lo, double t_hi,
                     int G, int i0, int i1, int j0, int j1, bool& overflow) {
-    ar.overflow = false;
+    ar_h5.overflow = false;
     CellMask m;
     if (with_h5 && h5.sub[k].usable)
-      m = h5_cells_in(ar, sub[k], h5.sub[k], h5.lens, S, k, x0, x1, y0, y1, t_lo, t_hi, G, i0, i1, j0, j1);
-    overflow = ar.overflow || setup_overflow;
+      m = h5_cells_in(ar_h5, sub[k], h5.sub[k], h5.lens, S, k, x0, x1, y0, y1, t_lo, t_hi, G, i0, i1, j0, j1);
+    overflow = ar_h5.overflow || setup_overflow;
     return m;
   }
 };
