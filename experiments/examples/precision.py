@@ -386,6 +386,89 @@ def rows_4d(V, seed=5):
     return rows
 
 
+# ----------------------------------------------------------------------------- INTERVAL's box bounds
+
+N_POINTS_BOX = 600
+
+
+def rows_box(V, seed=11):
+    """INTERVAL's (and INTERLEAVE's) screen bounds of a static defocused triangle over a lens box
+    (tiletest/box_bounds.h; precision_4d.h box_bounds_in; sim._core.precision_probe_4d boxes) on the static
+    defocused triangles of the hard-case suite at viewport V (blur scaled with V), over the 16 cells of a 4x4
+    lens grid, in float32 and fixed point at 2, 4 and 8 fraction bits: the fewest int_bits (all; in band as
+    rows_4d), the overflows at one bit fewer, how far the format moves the bounds outward (mean and largest, px)
+    and the check: N_POINTS_BOX samples per triangle (half aimed at it), each hit of the float64 ray caster must
+    lie inside its cell's bounds widened as a render widens them (pixel_range: 2^-10 px + 2^-18 |x|, and
+    2^(1 - frac_bits) px in fixed point)."""
+    from tests import reference as ref
+
+    rng = np.random.default_rng(seed)
+    step = 2.0 / GRID_4D
+    cells = np.array([[-1 + i * step, -1 + (i + 1) * step, -1 + j * step, -1 + (j + 1) * step]
+                      for j in range(GRID_4D) for i in range(GRID_4D)])
+    cases = []
+    for name, cam, p0, _p1 in _hard_cameras(V):
+        if cam.coc_px == 0.0:
+            continue
+        for i in range(p0.shape[0]):
+            v0, _ = cam.engine_vertices(p0[i][None], p0[i][None])
+            params = ref.engine_params(cam)
+            params.lens_grid = GRID_4D
+            r = _core.precision_probe_4d(params, v0[0], np.zeros((0, 4)))
+            if r["dim_class"] != 2:
+                continue
+            lv = np.asarray(r["lens_vertices"])
+            band = bool((np.abs(lv[:, :2] - V / 2) <= 1.5 * V).all() and (np.abs(lv[:, 2:]) <= V).all())
+            pts = ref.sample_points(rng, cam, p0[i], p0[i], N_POINTS_BOX).astype(np.float64)
+            pts[:, 4] = 0.0
+            rc = ref.ray_cast(cam, p0[i], p0[i], pts)
+            hit = rc.hit & (ref.near_rel_distance(cam, rc.w) > 1e-3)
+            ci = np.clip(np.floor((pts[:, 2] + 1) / step), 0, GRID_4D - 1).astype(int)
+            cj = np.clip(np.floor((pts[:, 3] + 1) / step), 0, GRID_4D - 1).astype(int)
+            cases.append((cam, v0[0], pts[hit], (cj * GRID_4D + ci)[hit], band))
+    rows = []
+    for kind, F in [("float32", None)] + [("fixed", F) for F in FRAC_4D]:
+        prec = kind if F is None else {"fixed": {"int_bits": PROBE_BITS, "frac_bits": F}}
+        a = dict(triangles=len(cases), boxes=0, hits=0, outside=0, outside64=0, grow_sum=0.0, grow_max=0.0,
+                 max_all=0.0, max_band=0.0)
+        for cam, v0, hp, hc, band in cases:
+            params = ref.engine_params(cam)
+            params.lens_grid = GRID_4D
+            params.precision_tile = prec
+            r = _core.precision_probe_4d(params, v0, np.zeros((0, 4)), cells)
+            b, b64 = np.asarray(r["box"]), np.asarray(r["box64"])
+            grow = np.concatenate([b64[:, 0] - b[:, 0], b[:, 1] - b64[:, 1], b64[:, 2] - b[:, 2], b[:, 3] - b64[:, 3]])
+            grow = grow[np.isfinite(grow)]
+            a["boxes"] += len(cells)
+            a["grow_sum"] += float(grow.sum())
+            a["grow_max"] = max(a["grow_max"], float(grow.max()) if len(grow) else 0.0)
+            snap = 2.0 ** (1 - F) if F is not None else 0.0
+            for bb, key in ((b, "outside"), (b64, "outside64")):
+                lo = bb[hc][:, [0, 2]]
+                hi = bb[hc][:, [1, 3]]
+                tol_lo = 2.0 ** -10 + snap + 2.0 ** -18 * np.abs(lo)
+                tol_hi = 2.0 ** -10 + snap + 2.0 ** -18 * np.abs(hi)
+                xy = hp[:, :2]
+                a[key] += int(((xy < lo - tol_lo) | (xy > hi + tol_hi)).any(1).sum())
+            a["hits"] += len(hp)
+            if F is not None:
+                a["max_all"] = max(a["max_all"], float(r["max_abs_box"]))
+                if band:
+                    a["max_band"] = max(a["max_band"], float(r["max_abs_box"]))
+        a["grow_mean"] = a.pop("grow_sum") / max(4 * a["boxes"], 1)
+        if F is not None:
+            ib = int_bits_for(a["max_all"])
+            a["int_bits_all"], a["int_bits_band"], a["below"] = ib, int_bits_for(a["max_band"]), 0
+            for cam, v0, *_ in cases:
+                params = ref.engine_params(cam)
+                params.lens_grid = GRID_4D
+                params.precision_tile = {"fixed": {"int_bits": max(ib - 1, 1), "frac_bits": F}}
+                a["below"] += int(np.asarray(_core.precision_probe_4d(params, v0, np.zeros((0, 4)), cells)["box_overflow"]).sum())
+        rows.append(dict(viewport=V, kind=kind, frac_bits=F, **a))
+    print(rows, flush=True)
+    return rows
+
+
 # ----------------------------------------------------------------------------- the motion tile tests
 
 FRAC_5D = (2, 4, 8)
@@ -509,6 +592,12 @@ def study():
                             cpu_s=time.process_time() - t0)
         ROWS.parent.mkdir(exist_ok=True)
         ROWS.write_text(json.dumps(data))
+    for V in VIEWPORTS:
+        if "rows_box" not in data[str(V)]:
+            t0 = time.process_time()
+            data[str(V)]["rows_box"] = rows_box(V)
+            data[str(V)]["cpu_s"] += time.process_time() - t0
+            ROWS.write_text(json.dumps(data))
     for V in VIEWPORTS:
         if "rows_5d" not in data[str(V)]:
             t0 = time.process_time()
@@ -659,6 +748,7 @@ def depth_resolution(w, near, frac_bits):
     return 2.0 ** -frac_bits * w * w / near
 
 
+BOX_TEXT = "(text pending)"
 MOTION_TEXT = (
     "Conservative at every width: no sample the ray caster hits is excluded by any format at any viewport "
     "(about 9,500-11,800 hits per row), nor by float64. float32 gives up no cull; fixed point gives up "
@@ -818,6 +908,33 @@ def markdown(data):
             "below) the fixed tile stage raises the samples tested by 0.5 % / 9 % / 29 % at 8 / 4 / 2 fraction "
             "bits: mostly the 2^(1 - frac_bits) px widening of every 2x2 tile, which these rows share with float64 "
             "(the 'lens cells culled (float64)' column is on the widened tiles); no sample changes.",
+            "",
+            "## INTERVAL's box bounds and ẑ: fewest bits per viewport",
+            "",
+            "The screen bounds of a static defocused footprint over a lens box (`tiletest/box_bounds.h`, the passes "
+            "of `interval` and `interleave`; their format form `box_bounds_in` in `tiletest/precision_4d.h`: a + u b "
+            "at the box's lens corners with running bounds, moved outward) on the static defocused triangles of the "
+            "hard-case suite at each viewport (blur scaled as above), over the 16 cells of a 4x4 lens grid. Check: "
+            "600 samples per triangle (half aimed at it); every ray-cast hit must lie inside its lens cell's bounds "
+            "widened as the render's pixel_range widens them (2^-10 px + 2^-18 |x|, plus 2^(1 - frac_bits) px in "
+            "fixed point). Growth = how far the format moves a bound outward (px). In band: as the 4D rows.",
+            "",
+            "| viewport [px] | arithmetic | triangles | boxes | ray-cast hits | hits outside (format / float64) | "
+            "growth mean / max [px] | fewest int_bits in band (total bits) | fewest int_bits all | overflowing boxes "
+            "at all - 1 |",
+            "|---|---|---|---|---|---|---|---|---|---|"]
+    for v in vs:
+        for r in data[str(v)].get("rows_box", []):
+            if r["kind"] == "fixed":
+                F = r["frac_bits"]
+                arith, ib = f"fixed, frac_bits {F}", f"{r['int_bits_band']} ({1 + r['int_bits_band'] + 2 * F})"
+                ia, below = r["int_bits_all"], r["below"]
+            else:
+                arith, ib, ia, below = "float32", "-", "-", "-"
+            out.append(f"| {v} | {arith} | {r['triangles']} | {r['boxes']} | {r['hits']} | {r['outside']} / "
+                       f"{r['outside64']} | {r['grow_mean']:.3g} / {r['grow_max']:.3g} | {ib} | {ia} | {below} |")
+    out += ["",
+            BOX_TEXT,
             "",
             "## Motion tile tests (t̂, 5D lens sets, H5): fewest bits per viewport",
             "",

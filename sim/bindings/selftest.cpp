@@ -15,6 +15,7 @@
 #include "sampletest/hardware.h"
 #include "sampletest/precision.h"
 #include "setup/footprint.h"
+#include "tiletest/box_bounds.h"
 #include "tiletest/edges_2d.h"
 #include "tiletest/precision_4d.h"
 #include "tiletest/precision_5d.h"
@@ -283,9 +284,13 @@ void register_selftest(py::module_& m) {
 
   m.def(
       "precision_probe_4d",
-      [](const RenderParams& p, const FArr& v0, const DArr& tiles) {
+      [](const RenderParams& p, const FArr& v0, const DArr& tiles, const DArr& boxes) {
         require_shape(v0, {3, 3}, "v0");
         require_shape(tiles, {-1, 4}, "tiles");
+        require_shape(boxes, {-1, 4}, "boxes");
+        for (py::ssize_t i = 0; i < boxes.size(); ++i)
+          if (!std::isfinite(boxes.data()[i]))
+            throw std::invalid_argument("boxes: expected finite lens coordinates, got " + std::to_string(boxes.data()[i]));
         validate_domains(p);  // lens_grid sizes the (tiles, G * G) outputs
         for (py::ssize_t i = 0; i < tiles.size(); ++i)
           if (!(std::fabs(tiles.data()[i]) <= 0x1p24))  // lens-cell indices are ints: finite, screen-sized tiles
@@ -357,6 +362,27 @@ void register_selftest(py::module_& m) {
           cells(sx, sy, keep, H, culled.mutable_data() + static_cast<std::size_t>(t) * G * G);
           overflow.mutable_data()[t] = o1 || o2;
         }
+        // INTERVAL's and INTERLEAVE's screen bounds over the lens boxes (box_bounds.h; precision_4d.h box_bounds_in)
+        const int k_boxes = static_cast<int>(boxes.shape(0));
+        py::array_t<double> box64({k_boxes, 4}), boxf({k_boxes, 4});
+        py::array_t<bool> box_overflow(k_boxes);
+        tiletest::Arith4D arb(prec);
+        for (int b = 0; b < k_boxes; ++b) {
+          const double* q = boxes.data() + 4 * static_cast<std::size_t>(b);
+          double* d64 = box64.mutable_data() + 4 * static_cast<std::size_t>(b);
+          double* df = boxf.mutable_data() + 4 * static_cast<std::size_t>(b);
+          tiletest::box_bounds<double>(lv, n, q[0], q[1], q[2], q[3], d64[0], d64[1], d64[2], d64[3]);
+          for (int k = 0; k < 4; ++k) df[k] = d64[k];
+          box_overflow.mutable_data()[b] = false;
+          if (prec.kind == PrecisionKind::kFloat64) continue;
+          arb.overflow = false;
+          tiletest::box_bounds_in(arb, lv, n, q[0], q[1], q[2], q[3], df[0], df[1], df[2], df[3]);
+          box_overflow.mutable_data()[b] = arb.overflow;
+        }
+        out["box64"] = box64;
+        out["box"] = boxf;
+        out["box_overflow"] = box_overflow;
+        out["max_abs_box"] = prec.kind == PrecisionKind::kFixed ? arb.max_abs : 0.0;
         tiletest::t_snap_margin_px = saved;
         py::array_t<double> lens_vertices({n, 4});
         for (int j = 0; j < n; ++j) {
@@ -372,13 +398,15 @@ void register_selftest(py::module_& m) {
         out["lens_vertices"] = lens_vertices;
         return out;
       },
-      py::arg("params"), py::arg("v0"), py::arg("tiles"),
+      py::arg("params"), py::arg("v0"), py::arg("tiles"), py::arg("boxes") = DArr(std::vector<py::ssize_t>{0, 4}),
       "The render's 4D tile test (h_i sets and H_j cells of tile's static path; tiletest/precision_4d.h in "
       "params.precision_tile, tiles widened as a render widens them) of one static triangle v0 (3, 3) "
       "(pixel-homogeneous) against tiles (K, 4) = (x0, x1, y0, y1): culled64 / culled (K, G*G), the lens cells "
       "culled in float64 and in the precision; overflow (K,); max_abs (fixed: the largest register, the "
       "fewest int_bits n satisfy max_abs < 2^n); sigma64 / sigma (orientation over the lens; 0: no H_j); "
-      "lens_vertices (n, 4) = (a_x, a_y, b_x, b_y) of the footprint polygon.");
+      "lens_vertices (n, 4) = (a_x, a_y, b_x, b_y) of the footprint polygon; per lens box boxes[b] = (u0, u1, v0, "
+      "v1) INTERVAL's screen bounds (lx, hx, ly, hy) in float64 (box64) and in the precision (box, moved outward "
+      "by their error bounds), box_overflow, max_abs_box (fixed: the largest register of the bounds).");
 
   m.def(
       "precision_probe_5d",
