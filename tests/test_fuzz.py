@@ -286,7 +286,12 @@ def _probe_4d_case(data):
                                                   {"fixed": {"int_bits": 62, "frac_bits": 18}}]))
     k = data.draw(st.integers(0, 6))
     tiles = np.array(data.draw(st.lists(wild_float, min_size=4 * k, max_size=4 * k)), np.float64).reshape(k, 4)
-    _call(sim._core.precision_probe_4d, p, v0, tiles)
+    if data.draw(st.booleans()):  # lens boxes for the screen bounds (wild values are refused or bounded)
+        kb = data.draw(st.integers(0, 4))
+        boxes = np.array(data.draw(st.lists(wild_float, min_size=4 * kb, max_size=4 * kb)), np.float64).reshape(kb, 4)
+        _call(sim._core.precision_probe_4d, p, v0, tiles, boxes)
+    else:
+        _call(sim._core.precision_probe_4d, p, v0, tiles)
 
 
 @FAST

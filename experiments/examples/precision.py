@@ -748,7 +748,19 @@ def depth_resolution(w, near, frac_bits):
     return 2.0 ** -frac_bits * w * w / near
 
 
-BOX_TEXT = "(text pending)"
+BOX_TEXT = (
+    "Every ray-cast hit lies inside its cell's bounds at every width, in float64 and in every format (about "
+    "5,460 hits per row). The bounds' registers grow by one bit per doubling of the viewport: log2 V + 1 integer "
+    "bits in band (10 at 512 px, 14 at 8192: a + u b is a pixel coordinate within the guard band), so an 8192 px "
+    "datapath with cudaraster's 4 sub-pixel bits needs 23-bit registers for them (1 + 14 + 2 x 4); unclipped "
+    "footprints (a vertex near the lens plane) need log2 V + 18 (27-31). In fixed point the bounds are those of "
+    "the snapped footprint, within a few hundredths of a pixel of float64's on average (inward or outward: the "
+    "2^(1 - frac_bits) px widening covers both), at most 0.23 px at 2 fraction bits; float32 carries its "
+    "rounding outward: 0.04-0.32 px on average, and up to 14-114 px for the suite's near-lens-plane vertices, "
+    "whose a and b are huge. ẑ needs no such row: the format form rounds the compared depth interval "
+    "z = 1 - near / w, in [0, 1), outward onto the format (docs/precision.md), so it needs 1 integer bit at "
+    "every viewport and its fraction bits are a depth resolution, not a screen one (the depth section below "
+    "gives the closed form 2^-bits w^2 / near of the smallest gap resolved).")
 MOTION_TEXT = (
     "Conservative at every width: no sample the ray caster hits is excluded by any format at any viewport "
     "(about 9,500-11,800 hits per row), nor by float64. float32 gives up no cull; fixed point gives up "
@@ -1070,9 +1082,9 @@ def markdown(data):
             "4D tile test's lens vertices (a, b of 001 Eq. 1), the motion tests' homogeneous end vertices and H5 "
             "quadratics, and the fixed-point sample test's placed vertices come from float64 before rounding into "
             "the format; a datapath computing them in fixed point would add that rounding. H5's orientation, "
-            "usability and oracle are float64 set-up decisions. The 4D rows measure h_i and H_j (TILE's static "
-            "path); the box bounds (INTERVAL, INTERLEAVE) and ẑ in the format are covered by the render tests "
-            "only. Line samples (`lines`) and the gpu_* pipeline's own tests do not take `pipeline.precision`.",
+            "usability and oracle are float64 set-up decisions. The box-bound rows measure INTERVAL's per-cell "
+            "bounds; INTERLEAVE's per-lens-position bounds are the same function on point boxes (covered by the "
+            "render tests). Line samples (`lines`) and the gpu_* pipeline's own tests do not take `pipeline.precision`.",
             ""]
     return "\n".join(out)
 
