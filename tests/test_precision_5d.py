@@ -178,3 +178,48 @@ def test_motion_algorithms_render_the_same_image_with_a_reduced_tile_stage(preci
             assert np.array_equal(r.image, base.image), f"{name}: {algo} {extra} differs at {precision}"
             if precision["tile"] != "float32":
                 assert r.flat_stats["raster.samples_tested"] >= d.flat_stats["raster.samples_tested"]
+
+
+@pytest.mark.parametrize("precision", [{"tile": fixed(40, 2)}, {"tile": fixed(40, 6)}, {"tile": "float32"}],
+                         ids=["fixed2", "fixed6", "float32"])
+def test_conservative_raster_in_the_format_holds_every_hit(precision):
+    """sim.conservative_raster with the tile stage in the format (its 1 x 1 tile tests: t̂ and lens sets of moving
+    triangles, h_i of static defocused ones, the 2D test): every brute-force hit lies in its (triangle, pixel)
+    record, (u, v, t) inside (û, v̂, t̂), on the adversarial moving classes at CoC 0 / 6 / 25 (float32's 2D test is
+    unguarded, docs/precision.md: CoC 0 is left out for it)."""
+    from tests.test_intervals import ADVERSARIAL, camera, make_scene, table
+
+    tab = table(8)
+    checked = 0
+    for coc in (0.0, 6.0, 25.0):
+        if precision["tile"] == "float32" and coc == 0.0:
+            continue
+        cam = camera(coc)
+        samples = tab.samples(cam.lens)
+        P = samples.shape[0]
+        for name, tris in sorted(ADVERSARIAL.items()):
+            scene = make_scene(np.array([a for a, _ in tris]), np.array([b for _, b in tris]))
+            cons = sim.conservative_raster(scene, cam, sim.PipelineConfig(time_splits=4, time_strata=8, precision=precision))
+            rec = {(int(r["x"]), int(r["y"]), int(r["triangle"])): r for r in cons.records}
+            res = sim.render(scene, cam, tab, sim.PipelineConfig(algorithm="bruteforce", threads=1), export_samples=True)
+            for y, x, s in zip(*[a.tolist() for a in np.nonzero(res.sample_triangle >= 0)]):
+                i = int(res.sample_triangle[y, x, s])
+                r = rec.get((x, y, i))
+                assert r is not None, f"{name} CoC {coc}: hit at ({x}, {y}) sample {s}, no record at {precision}"
+                _, _, u, v, t = samples[y % P, x % P, s]
+                assert r["u_lo"] <= u <= r["u_hi"] and r["v_lo"] <= v <= r["v_hi"] and r["t_lo"] <= t <= r["t_hi"], (
+                    name, coc, x, y, s)
+                checked += 1
+    assert checked > 1000
+
+
+def test_conservative_raster_counts_overflow():
+    """The conservative rasterizer counts the format's overflows (5 integer bits at 32 px) and none with 40."""
+    from tests.test_intervals import ADVERSARIAL, camera, make_scene
+
+    tris = ADVERSARIAL["through_focus"] + ADVERSARIAL["fast_600px"]
+    scene = make_scene(np.array([a for a, _ in tris]), np.array([b for _, b in tris]))
+    few = sim.conservative_raster(scene, camera(6.0), sim.PipelineConfig(precision={"tile": fixed(5, 4)}))
+    ok = sim.conservative_raster(scene, camera(6.0), sim.PipelineConfig(precision={"tile": fixed(40, 4)}))
+    assert few.flat_stats["precision.tile5d_overflows"] > 0
+    assert ok.flat_stats["precision.tile5d_overflows"] == 0
