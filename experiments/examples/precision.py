@@ -824,9 +824,11 @@ def markdown(data):
            "still hit it: no sample of spot changes at 2 fraction bits below). The 4D tile test (h_i, H_j, box "
            "bounds, ẑ) in float32 or fixed point is conservative by construction: its inputs are the lens "
            "vertices (snapped in fixed point, within the widening), every value carries a bound of its error "
-           "and every decision moves inward by it. The 2D float32 tile test gets no extra margin and may lose "
-           "samples (the float32 rows below). Values reaching 2^int_bits are counted (`precision.sample_overflows`, "
-           "`precision.tile_overflows`, `precision.tile4d_overflows`); the render keeps the unwrapped decision, "
+           "and every decision moves inward by it; so are the motion tile tests (t̂, 5D lens sets, H5: "
+           "`tiletest/precision_5d.h`), whose homogeneous inputs carry their rounding. The 2D float32 tile test "
+           "gets no extra margin and may lose samples (the float32 rows below). Values reaching 2^int_bits are "
+           "counted (`precision.sample_overflows`, `precision.tile_overflows`, `precision.tile4d_overflows`, "
+           "`precision.tile5d_overflows`); the render keeps the unwrapped decision, "
            "where hardware would wrap. "
            "Operation counts do not depend on the precision.",
            "",
@@ -961,7 +963,8 @@ def markdown(data):
             "triangle (half aimed at it at their lens point and time), each asked against the 2x2 tile holding it "
             "(widened as a render widens it). Check: samples the float64 ray caster hits (in front of the near "
             "plane) that the format's region excludes: must be none (and none for float64). Cull lost = samples "
-            "float64 excludes that the format keeps, of all float64 excludes. Fewest int_bits: 'in band' over the "
+            "float64 excludes that the format keeps, of all float64 excludes (float64 on the same widened tiles, "
+            "so its column varies a little by row). Fewest int_bits: 'in band' over the "
             "triangles whose six end vertices are in front of the near plane and project within a guard band of "
             "one viewport (blur below V), 'all' over every triangle.",
             "",
