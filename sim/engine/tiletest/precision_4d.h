@@ -154,7 +154,7 @@ struct Arith4D {
   // 2^-11 would keep no significant bit at 4 fraction bits).
   PVal rcp(PVal b) {
     const double m = std::fabs(b.v);
-    if (!(m > b.e)) return {0.0, kInf};
+    if (!(m > b.e) || !std::isfinite(m)) return {0.0, kInf};  // unbounded (an infinite b: ilogb(1/b) undefined)
     const double q = 1.0 / b.v;
     double v = static_cast<double>(static_cast<float>(q));
     if (fixed()) {
