@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _core, params
+from . import params as _params
 from .camera import Camera
 from .errors import ConfigError
 from .pipeline import PipelineConfig
@@ -40,7 +41,8 @@ class ConservativeResult:
 def conservative_raster(scene, camera: Camera, pipeline: PipelineConfig | None = None, *,
                         reduce: str | None = None, max_records: int = 20_000_000) -> ConservativeResult:
     """Conservative 5D rasterization of ``scene``: for every (triangle, pixel) pair whose 1 x 1 tile
-    test passes, the tile's (û, v̂, t̂) and ẑ. pipeline supplies time_splits, clip and zhat.
+    test passes, the tile's (û, v̂, t̂) and ẑ. pipeline supplies time_splits, clip, zhat and precision (the
+    tile tests in pipeline.precision.tile: docs/precision.md).
     Raises ConfigError when more than ``max_records`` records would be produced (the message
     suggests reduce="tz_box", whose memory is 20 bytes per pixel)."""
     pipeline = pipeline or PipelineConfig()
@@ -58,6 +60,7 @@ def conservative_raster(scene, camera: Camera, pipeline: PipelineConfig | None =
     params.table_has_lens = True
     params.table_has_time = True
     _interval_params(params, pipeline)
+    _params.set_layer(params, "pipeline", pipeline, only=_params.stage("pipeline", "precision"))  # pipeline.precision
     try:
         out = _core.conservative_raster(params, np.ascontiguousarray(v0, np.float32),
                                         np.ascontiguousarray(v1, np.float32), reduce == "tz_box", int(max_records))

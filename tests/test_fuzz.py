@@ -286,13 +286,40 @@ def _probe_4d_case(data):
                                                   {"fixed": {"int_bits": 62, "frac_bits": 18}}]))
     k = data.draw(st.integers(0, 6))
     tiles = np.array(data.draw(st.lists(wild_float, min_size=4 * k, max_size=4 * k)), np.float64).reshape(k, 4)
-    _call(sim._core.precision_probe_4d, p, v0, tiles)
+    if data.draw(st.booleans()):  # lens boxes for the screen bounds (wild values are refused or bounded)
+        kb = data.draw(st.integers(0, 4))
+        boxes = np.array(data.draw(st.lists(wild_float, min_size=4 * kb, max_size=4 * kb)), np.float64).reshape(kb, 4)
+        _call(sim._core.precision_probe_4d, p, v0, tiles, boxes)
+    else:
+        _call(sim._core.precision_probe_4d, p, v0, tiles)
 
 
 @FAST
 @given(st.data())
 def test_fuzz_precision_probe_4d(data):
     _probe_4d_case(data)
+
+
+def _probe_5d_case(data):
+    TRIED["precision_probe_5d"] += 1
+    p, cam = data.draw(camera_params())
+    v0, v1 = data.draw(triangles(cam, n_max=1))
+    v0 = v0[0] if v0.ndim == 3 and len(v0) else np.zeros((3, 3), np.float32)
+    v1 = v1[0] if v1.ndim == 3 and len(v1) else v0
+    p.precision_tile = data.draw(st.sampled_from(["float64", "float32", {"fixed": {"int_bits": 8, "frac_bits": 0}},
+                                                  {"fixed": {"int_bits": 40, "frac_bits": 4}},
+                                                  {"fixed": {"int_bits": 62, "frac_bits": 18}}]))
+    k = data.draw(st.integers(0, 6))
+    tiles = np.array(data.draw(st.lists(wild_float, min_size=4 * k, max_size=4 * k)), np.float64).reshape(k, 4)
+    m = k if data.draw(st.floats(0, 1)) < 0.9 else data.draw(st.integers(0, 7))  # sometimes a wrong count
+    pts = np.array(data.draw(st.lists(wild_float, min_size=5 * m, max_size=5 * m)), np.float64).reshape(m, 5)
+    _call(sim._core.precision_probe_5d, p, v0, v1, tiles, pts)
+
+
+@FAST
+@given(st.data())
+def test_fuzz_precision_probe_5d(data):
+    _probe_5d_case(data)
 
 
 def _gpu_bound_case(data):
@@ -429,6 +456,7 @@ def test_fuzz_timing_and_cache_models(data):
 CASES = {"render": lambda d: _render_case(d, False), "occlusion_query": lambda d: _render_case(d, True),
          "conservative_raster": _conservative_case, "probe": _probe_case, "gpu_bound": _gpu_bound_case,
          "precision_probe_4d": _probe_4d_case,
+         "precision_probe_5d": _probe_5d_case,
          "lens_grid_buckets": _buckets_case,
          "sample_table": _table_case, "texture_setup": _texture_case, "timing_and_cache": _timing_case}
 

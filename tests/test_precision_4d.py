@@ -134,12 +134,13 @@ def test_fewer_bits_cull_less_and_float32_nearly_as_float64():
 
 
 def test_narrow_formats_overflow_and_are_counted():
-    """With 8 integer bits the lens vertices of a 512 px screen overflow (counted per test); 30 suffice."""
+    """With 8 integer bits the lens vertices of a 512 px screen overflow (counted per test; laine5d's static
+    triangles too); 30 suffice."""
     cam = sim.Camera(width=512, height=512, fov_y_deg=45.0, focus_distance=5.0, coc_px=6.0, lens="square")
     p0 = np.array([[ref.screen_to_world(cam, 10, 20, 3.0), ref.screen_to_world(cam, 500, 40, 4.0),
                     ref.screen_to_world(cam, 200, 490, 8.0)]])
     table = sim.SampleTable.stratified(spp=2, seed=1)
-    for algo in ("tile", "interval", "laine"):
+    for algo in ("tile", "interval", "laine", "laine5d"):
         few = sim.render(ref.make_scene(p0), cam, table,
                          sim.PipelineConfig(algorithm=algo, precision={"tile": fixed(8, 4)}), timing=False)
         ok = sim.render(ref.make_scene(p0), cam, table,
@@ -160,7 +161,7 @@ def test_exact_algorithms_render_the_same_image_with_a_reduced_tile_stage(precis
         cam_kw, p0, p1, _ = HARD[name]
         cam = sim.Camera(**{**cam_kw, "width": 256, "height": 256})
         scene = ref.make_scene(p0, p1)
-        for table, algos in ((strat, ["tile", "interval", "laine"]),
+        for table, algos in ((strat, ["tile", "interval", "laine", "laine5d"]),
                              (inter, ["interleave", "hinterleave", "tile_interleaved"])):
             base = sim.render(scene, cam, table, sim.PipelineConfig(algorithm="bruteforce"), timing=False)
             for algo in algos:
@@ -168,3 +169,51 @@ def test_exact_algorithms_render_the_same_image_with_a_reduced_tile_stage(precis
                     r = sim.render(scene, cam, table,
                                    sim.PipelineConfig(algorithm=algo, precision=precision, hiz={"enabled": hiz}), timing=False)
                     assert np.array_equal(r.image, base.image), f"{name}: {algo} (hiz {hiz}) differs at {precision}"
+
+
+CELLS4 = np.array([[-1 + i * 0.5, -0.5 + i * 0.5, -1 + j * 0.5, -0.5 + j * 0.5] for j in range(4) for i in range(4)])
+
+
+def box_outside(cam, p0, precision, rng, shrink=0.0):
+    """Ray-cast hits (of 400 samples, half aimed at the triangle) outside the INTERVAL screen bounds of their lens
+    cell in the precision, the bounds widened as pixel_range widens them (and each moved inward by `shrink` of
+    their extent)."""
+    v0, _ = cam.engine_vertices(p0[None], p0[None])
+    params = ref.engine_params(cam)
+    params.lens_grid = 4
+    params.precision_tile = precision
+    r = _core.precision_probe_4d(params, np.asarray(v0[0], np.float32), np.zeros((0, 4)), CELLS4)
+    if r["dim_class"] != 2:
+        return None
+    pts = ref.sample_points(rng, cam, p0, p0, 400).astype(np.float64)
+    pts[:, 4] = 0.0
+    rc = ref.ray_cast(cam, p0, p0, pts)
+    hit = rc.hit & (ref.near_rel_distance(cam, rc.w) > 1e-3)
+    c = (np.clip(np.floor((pts[:, 3] + 1) / 0.5), 0, 3) * 4 + np.clip(np.floor((pts[:, 2] + 1) / 0.5), 0, 3)).astype(int)
+    b = np.asarray(r["box"])[c[hit]]
+    F = precision["fixed"]["frac_bits"] if isinstance(precision, dict) else None
+    tol = 2.0 ** -10 + (2.0 ** (1 - F) if F is not None else 0.0)
+    lo, hi = b[:, [0, 2]], b[:, [1, 3]]
+    lo, hi = lo + shrink * (hi - lo), hi - shrink * (hi - lo)
+    xy = pts[hit][:, :2]
+    out = (xy < lo - tol - 2.0 ** -18 * np.abs(lo)) | (xy > hi + tol + 2.0 ** -18 * np.abs(hi))
+    return int(out.any(1).sum()), int(hit.sum()), bool(np.asarray(r["box_overflow"]).any())
+
+
+@pytest.mark.parametrize("precision", TILE_PRECISIONS, ids=IDS)
+def test_box_bounds_hold_every_hit(precision, rng):
+    """INTERVAL's screen bounds over a lens cell in the precision (box_bounds_in) hold every ray-cast hit of the
+    cell on the hard cases at 1024 px (blur x32), and the check fails on bounds moved inward by 10 % of their
+    extent."""
+    hits = moved = 0
+    for name, (cam_kw, p0, _p1, _) in sorted(HARD.items()):
+        cam = sim.Camera(**{**cam_kw, "width": 1024, "height": 1024, "coc_px": cam_kw["coc_px"] * 32})
+        for k in range(p0.shape[0]):
+            out = box_outside(cam, p0[k], precision, rng)
+            if out is None:
+                continue
+            bad, n, _ovf = out
+            assert bad == 0, f"{name}[{k}]: {bad} of {n} hits outside the bounds at {precision}"
+            hits += n
+            moved += box_outside(cam, p0[k], precision, rng, shrink=0.1)[0]
+    assert hits > 1000 and moved > 0

@@ -386,6 +386,197 @@ def rows_4d(V, seed=5):
     return rows
 
 
+# ----------------------------------------------------------------------------- INTERVAL's box bounds
+
+N_POINTS_BOX = 600
+
+
+def rows_box(V, seed=11):
+    """INTERVAL's (and INTERLEAVE's) screen bounds of a static defocused triangle over a lens box
+    (tiletest/box_bounds.h; precision_4d.h box_bounds_in; sim._core.precision_probe_4d boxes) on the static
+    defocused triangles of the hard-case suite at viewport V (blur scaled with V), over the 16 cells of a 4x4
+    lens grid, in float32 and fixed point at 2, 4 and 8 fraction bits: the fewest int_bits (all; in band as
+    rows_4d), the overflows at one bit fewer, how far the format moves the bounds outward (mean and largest, px)
+    and the check: N_POINTS_BOX samples per triangle (half aimed at it), each hit of the float64 ray caster must
+    lie inside its cell's bounds widened as a render widens them (pixel_range: 2^-10 px + 2^-18 |x|, and
+    2^(1 - frac_bits) px in fixed point)."""
+    from tests import reference as ref
+
+    rng = np.random.default_rng(seed)
+    step = 2.0 / GRID_4D
+    cells = np.array([[-1 + i * step, -1 + (i + 1) * step, -1 + j * step, -1 + (j + 1) * step]
+                      for j in range(GRID_4D) for i in range(GRID_4D)])
+    cases = []
+    for name, cam, p0, _p1 in _hard_cameras(V):
+        if cam.coc_px == 0.0:
+            continue
+        for i in range(p0.shape[0]):
+            v0, _ = cam.engine_vertices(p0[i][None], p0[i][None])
+            params = ref.engine_params(cam)
+            params.lens_grid = GRID_4D
+            r = _core.precision_probe_4d(params, v0[0], np.zeros((0, 4)))
+            if r["dim_class"] != 2:
+                continue
+            lv = np.asarray(r["lens_vertices"])
+            band = bool((np.abs(lv[:, :2] - V / 2) <= 1.5 * V).all() and (np.abs(lv[:, 2:]) <= V).all())
+            pts = ref.sample_points(rng, cam, p0[i], p0[i], N_POINTS_BOX).astype(np.float64)
+            pts[:, 4] = 0.0
+            rc = ref.ray_cast(cam, p0[i], p0[i], pts)
+            hit = rc.hit & (ref.near_rel_distance(cam, rc.w) > 1e-3)
+            ci = np.clip(np.floor((pts[:, 2] + 1) / step), 0, GRID_4D - 1).astype(int)
+            cj = np.clip(np.floor((pts[:, 3] + 1) / step), 0, GRID_4D - 1).astype(int)
+            cases.append((cam, v0[0], pts[hit], (cj * GRID_4D + ci)[hit], band))
+    rows = []
+    for kind, F in [("float32", None)] + [("fixed", F) for F in FRAC_4D]:
+        prec = kind if F is None else {"fixed": {"int_bits": PROBE_BITS, "frac_bits": F}}
+        a = dict(triangles=len(cases), boxes=0, hits=0, outside=0, outside64=0, grow_sum=0.0, grow_max=0.0,
+                 max_all=0.0, max_band=0.0)
+        for cam, v0, hp, hc, band in cases:
+            params = ref.engine_params(cam)
+            params.lens_grid = GRID_4D
+            params.precision_tile = prec
+            r = _core.precision_probe_4d(params, v0, np.zeros((0, 4)), cells)
+            b, b64 = np.asarray(r["box"]), np.asarray(r["box64"])
+            grow = np.concatenate([b64[:, 0] - b[:, 0], b[:, 1] - b64[:, 1], b64[:, 2] - b[:, 2], b[:, 3] - b64[:, 3]])
+            grow = grow[np.isfinite(grow)]
+            a["boxes"] += len(cells)
+            a["grow_sum"] += float(grow.sum())
+            a["grow_max"] = max(a["grow_max"], float(grow.max()) if len(grow) else 0.0)
+            snap = 2.0 ** (1 - F) if F is not None else 0.0
+            for bb, key in ((b, "outside"), (b64, "outside64")):
+                lo = bb[hc][:, [0, 2]]
+                hi = bb[hc][:, [1, 3]]
+                tol_lo = 2.0 ** -10 + snap + 2.0 ** -18 * np.abs(lo)
+                tol_hi = 2.0 ** -10 + snap + 2.0 ** -18 * np.abs(hi)
+                xy = hp[:, :2]
+                a[key] += int(((xy < lo - tol_lo) | (xy > hi + tol_hi)).any(1).sum())
+            a["hits"] += len(hp)
+            if F is not None:
+                a["max_all"] = max(a["max_all"], float(r["max_abs_box"]))
+                if band:
+                    a["max_band"] = max(a["max_band"], float(r["max_abs_box"]))
+        a["grow_mean"] = a.pop("grow_sum") / max(4 * a["boxes"], 1)
+        if F is not None:
+            ib = int_bits_for(a["max_all"])
+            a["int_bits_all"], a["int_bits_band"], a["below"] = ib, int_bits_for(a["max_band"]), 0
+            for cam, v0, *_ in cases:
+                params = ref.engine_params(cam)
+                params.lens_grid = GRID_4D
+                params.precision_tile = {"fixed": {"int_bits": max(ib - 1, 1), "frac_bits": F}}
+                a["below"] += int(np.asarray(_core.precision_probe_4d(params, v0, np.zeros((0, 4)), cells)["box_overflow"]).sum())
+        rows.append(dict(viewport=V, kind=kind, frac_bits=F, **a))
+    print(rows, flush=True)
+    return rows
+
+
+# ----------------------------------------------------------------------------- the motion tile tests
+
+FRAC_5D = (2, 4, 8)
+TILE_5D, SPLITS_5D, GRID_5D, N_POINTS_5D, N_RANDOM_5D = 2, 4, 4, 600, 16
+MOTION_5D = np.array([0.6, -0.4, 1.5])  # world units: a sideways, receding move for the suite's static cases
+
+
+def _motion_cases(V, rng):
+    """Moving triangles at viewport V: every hard case moving (its own shutter-close positions, or moved by
+    MOTION_5D: through the near plane, behind the camera, gigantic coordinates, huge blur...) with the suite's
+    blur scaled with the viewport (5D) and in focus (3D), and N_RANDOM_5D motion_field-style triangles (random
+    screen positions 20 % beyond the viewport, depths 0.3-20, motion up to a quarter of the viewport and 3
+    depth units, some through the near plane) at CoC V / 32 and 0."""
+    sys.path.insert(0, str(REPO))
+    from tests import reference as ref
+
+    for name, cam, p0, p1 in _hard_cameras(V):
+        if np.array_equal(p0, p1):
+            p1 = p0 + MOTION_5D
+        for i in range(p0.shape[0]):
+            yield name, cam, p0[i], p1[i]
+    for coc in (V / 32.0, 0.0):
+        cam = sim.Camera(width=V, height=V, fov_y_deg=45.0, focus_distance=5.0, coc_px=coc, lens="square", near=0.1)
+        for i in range(N_RANDOM_5D):
+            w0 = rng.uniform(0.3, 20.0, 3)
+            xy0 = rng.uniform(-0.2 * V, 1.2 * V, (3, 2))
+            xy1 = xy0 + rng.uniform(-0.25, 0.25, 2) * V + rng.normal(0, 0.02 * V, (3, 2))
+            w1 = np.maximum(w0 + rng.uniform(-3.0, 3.0, 3), 0.02)
+            p0 = np.array([ref.screen_to_world(cam, x, y, d) for (x, y), d in zip(xy0, w0)])
+            p1 = np.array([ref.screen_to_world(cam, x, y, d) for (x, y), d in zip(xy1, w1)])
+            yield f"random_{i}", cam, p0, p1
+
+
+def _probe_5d(ref, cam, v0, v1, tiles, pts, prec):
+    params = ref.engine_params(cam)
+    params.lens_grid, params.time_splits, params.halfspace_H5 = GRID_5D, SPLITS_5D, True
+    params.precision_tile = prec
+    return _core.precision_probe_5d(params, v0, v1, tiles, pts)
+
+
+def rows_5d(V, seed=7):
+    """The render's motion tile tests (t̂ and 5D lens sets per time sub-interval, H5 cells; tile with
+    motion_test intervals, time_splits 4, a 4x4 lens grid; sim._core.precision_probe_5d, tiletest/precision_5d.h)
+    on moving triangles at viewport V, per class (3D: in focus, 5D: blurred), in float32 and fixed point at 2, 4
+    and 8 fraction bits: N_POINTS_5D samples per triangle (half aimed at it at their lens point and time), each
+    asked against the 2x2 tile holding it; samples the float64 ray caster hits that the format's region
+    excludes (must be none; float64's own too), samples float64 excludes and the share of them the format keeps
+    (cull lost), the fewest int_bits (all; in band: every vertex in front of the near plane at both shutter ends,
+    projected within a guard band of one viewport, blur below V) and the overflowing tests at one bit fewer."""
+    from tests import reference as ref
+
+    rng = np.random.default_rng(seed)
+    cases = []
+    for name, cam, p0, p1 in _motion_cases(V, rng):
+        pts = ref.sample_points(rng, cam, p0, p1, N_POINTS_5D).astype(np.float64)
+        pts = pts[(pts[:, :2] >= 0).all(1) & (pts[:, :2] < V).all(1)]
+        if len(pts) == 0:
+            continue
+        x, y = np.floor(pts[:, 0] / TILE_5D) * TILE_5D, np.floor(pts[:, 1] / TILE_5D) * TILE_5D
+        tiles = np.stack([x, x + TILE_5D, y, y + TILE_5D], axis=1)
+        v0, v1 = cam.engine_vertices(p0[None], p1[None])
+        v0, v1 = np.asarray(v0[0], np.float32), np.asarray(v1[0], np.float32)
+        r64 = _probe_5d(ref, cam, v0, v1, tiles, pts, "float64")
+        if "kept" not in r64:  # static (no motion left after projection) or culled at the near plane
+            continue
+        rc = ref.ray_cast(cam, p0, p1, pts)
+        hit = rc.hit & (ref.near_rel_distance(cam, rc.w) > 1e-3)
+        H = np.concatenate([v0, v1]).astype(np.float64)
+        W = H[:, 2]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            xy = H[:, :2] / W[:, None]
+        band = bool((W >= cam.near).all() and (np.abs(xy - V / 2) <= 1.5 * V).all() and cam.coc_px <= V)
+        cls = "5D" if cam.coc_px > 0 else "3D"
+        cases.append((cls, cam, v0, v1, tiles, pts, hit, ~np.asarray(r64["kept64"]), band))
+    rows = []
+    for cls in ("3D", "5D"):
+        sub = [c for c in cases if c[0] == cls]
+        for kind, F in [("float32", None)] + [("fixed", F) for F in FRAC_5D]:
+            prec = kind if F is None else {"fixed": {"int_bits": PROBE_BITS, "frac_bits": F}}
+            a = dict(triangles=len(sub), samples=0, hits=0, culled64=0, lost=0, viol=0, viol64=0, max_all=0.0,
+                     max_band=0.0, max_all_h5=0.0, max_band_h5=0.0)
+            for _cls, cam, v0, v1, tiles, pts, hit, culled64_w, band in sub:
+                r = _probe_5d(ref, cam, v0, v1, tiles, pts, prec)
+                kept, kept64 = np.asarray(r["kept"]), np.asarray(r["kept64"])
+                a["samples"] += len(pts)
+                a["hits"] += int(hit.sum())
+                a["culled64"] += int((~kept64).sum())
+                a["lost"] += int((kept & ~kept64).sum())
+                a["viol"] += int((hit & ~kept).sum())
+                a["viol64"] += int((hit & ~kept64).sum())
+                if F is not None:
+                    for key, m in (("", float(r["max_abs"])), ("_h5", float(r["max_abs_h5"]))):
+                        a["max_all" + key] = max(a["max_all" + key], m)
+                        if band:
+                            a["max_band" + key] = max(a["max_band" + key], m)
+            if F is not None:
+                ib = int_bits_for(max(a["max_all"], a["max_all_h5"]))
+                a["int_bits_all"], a["int_bits_band"], a["below"] = ib, int_bits_for(a["max_band"]), 0
+                a["int_bits_all_t"], a["int_bits_all_h5"] = int_bits_for(a["max_all"]), int_bits_for(a["max_all_h5"])
+                a["int_bits_band_h5"] = int_bits_for(a["max_band_h5"])
+                for _cls, cam, v0, v1, tiles, pts, *_ in sub:
+                    r = _probe_5d(ref, cam, v0, v1, tiles, pts, {"fixed": {"int_bits": max(ib - 1, 1), "frac_bits": F}})
+                    a["below"] += int(np.asarray(r["overflow"]).sum())
+            rows.append(dict(viewport=V, cls=cls, kind=kind, frac_bits=F, **a))
+    print(rows, flush=True)
+    return rows
+
+
 ROWS = REPO / "results" / "precision_rows.json"  # finished viewports: a rerun resumes
 
 
@@ -402,14 +593,31 @@ def study():
         ROWS.parent.mkdir(exist_ok=True)
         ROWS.write_text(json.dumps(data))
     for V in VIEWPORTS:
+        if "rows_box" not in data[str(V)]:
+            t0 = time.process_time()
+            data[str(V)]["rows_box"] = rows_box(V)
+            data[str(V)]["cpu_s"] += time.process_time() - t0
+            ROWS.write_text(json.dumps(data))
+    for V in VIEWPORTS:
+        if "rows_5d" not in data[str(V)]:
+            t0 = time.process_time()
+            data[str(V)]["rows_5d"] = rows_5d(V)
+            data[str(V)]["cpu_s"] += time.process_time() - t0
+            ROWS.write_text(json.dumps(data))
+    for V in VIEWPORTS:
         if "rows_4d" not in data[str(V)]:
             t0 = time.process_time()
             data[str(V)]["rows_4d"] = rows_4d(V)
             data[str(V)]["cpu_s"] += time.process_time() - t0
             ROWS.write_text(json.dumps(data))
+    if "renders" in data and "motion" not in data["renders"]:
+        t0 = time.process_time()
+        data["renders"]["motion"] = render_motion_rows()
+        data["renders"]["cpu_s"] += time.process_time() - t0
+        ROWS.write_text(json.dumps(data))
     if "renders" not in data:
         t0 = time.process_time()
-        data["renders"] = dict(image=render_rows(), depth=depth_rows(), cpu_s=0.0)
+        data["renders"] = dict(image=render_rows(), depth=depth_rows(), motion=render_motion_rows(), cpu_s=0.0)
         data["renders"]["cpu_s"] = time.process_time() - t0
         ROWS.write_text(json.dumps(data))
     return data
@@ -473,6 +681,45 @@ def render_rows():
     return out
 
 
+MOTION_PRECISIONS = [
+    ("default", {}),
+    ("tile float32", {"tile": "float32"}),
+    ("tile fixed 8", {"tile": {"fixed": {"int_bits": 40, "frac_bits": 8}}}),
+    ("tile fixed 4", {"tile": {"fixed": {"int_bits": 40, "frac_bits": 4}}}),
+    ("tile fixed 2", {"tile": {"fixed": {"int_bits": 40, "frac_bits": 2}}}),
+    ("tile fixed 4, 12 int bits", {"tile": {"fixed": {"int_bits": 12, "frac_bits": 4}}}),
+]
+
+
+def render_motion_rows():
+    """Culls lost at fewer bits in renders of moving triangles: motion_field (400 triangles moving 50 px) at
+    RENDER_SIZE^2, 4 spp, tile 2x2 with t̂ + lens sets + H5 (every edge: the oracle would disable H5 at 4 spp)
+    over 4 sub-intervals, CoC 0 and 10, each tile
+    precision against the default's render (samples tested, samples whose visible triangle differs)."""
+    out = []
+    scene = _scene("motion_field", resolution=RENDER_SIZE, motion_px=50.0 * RENDER_SIZE / 128)
+    table = sim.SampleTable.stratified(spp=4, seed=1)
+    for coc in (0.0, 10.0):
+        cam = _camera(scene, width=RENDER_SIZE, height=RENDER_SIZE, coc_px=coc)
+        base = None
+        for label, prec in MOTION_PRECISIONS:
+            r = sim.render(scene, cam, table, sim.PipelineConfig(
+                algorithm="tile", precision=prec, time_splits=4, halfspace={"h": True, "H": True, "H5": True},
+                selective_H=False),
+                export_samples=True, timing=False)
+            s = r.flat_stats
+            if base is None:
+                base = r
+            out.append(dict(coc=coc, label=label, samples=int(r.sample_triangle.size),
+                            samples_differ=int((r.sample_triangle != base.sample_triangle).sum()),
+                            tested=int(s["raster.samples_tested"]), tested_base=int(base.flat_stats["raster.samples_tested"]),
+                            culled_t=int(s["interval.culled_t"]), culled_H5=int(s["tile.H5_cells_culled"]),
+                            culled_H5_base=int(base.flat_stats["tile.H5_cells_culled"]),
+                            tile5d_overflows=int(s["precision.tile5d_overflows"])))
+            print(out[-1], flush=True)
+    return out
+
+
 DEPTH_BITS = (8, 12, 16, 20, 24)
 
 
@@ -501,6 +748,47 @@ def depth_resolution(w, near, frac_bits):
     return 2.0 ** -frac_bits * w * w / near
 
 
+BOX_TEXT = (
+    "Every ray-cast hit lies inside its cell's bounds at every width, in float64 and in every format (about "
+    "5,460 hits per row). The bounds' registers grow by one bit per doubling of the viewport: log2 V + 1 integer "
+    "bits in band (10 at 512 px, 14 at 8192: a + u b is a pixel coordinate within the guard band), so an 8192 px "
+    "datapath with cudaraster's 4 sub-pixel bits needs 23-bit registers for them (1 + 14 + 2 x 4); unclipped "
+    "footprints (a vertex near the lens plane) need log2 V + 18 (27-31). In fixed point the bounds are those of "
+    "the snapped footprint, within a few hundredths of a pixel of float64's on average (inward or outward: the "
+    "2^(1 - frac_bits) px widening covers both), at most 0.23 px at 2 fraction bits; float32 carries its "
+    "rounding outward: 0.04-0.32 px on average, and up to 14-114 px for the suite's near-lens-plane vertices, "
+    "whose a and b are huge. ẑ needs no such row: the format form rounds the compared depth interval "
+    "z = 1 - near / w, in [0, 1), outward onto the format (docs/precision.md), so it needs 1 integer bit at "
+    "every viewport and its fraction bits are a depth resolution, not a screen one (the depth section below "
+    "gives the closed form 2^-bits w^2 / near of the smallest gap resolved).")
+MOTION_TEXT = (
+    "Conservative at every width: no sample the ray caster hits is excluded by any format at any viewport "
+    "(about 9,500-11,800 hits per row), nor by float64. float32 gives up no cull; fixed point gives up "
+    "5.3-5.9 % (3D) and 1.5-1.8 % (5D) of float64's exclusions at 2 fraction bits, 0.24-0.44 % and 0.09-0.13 % "
+    "at 4 (cudaraster's), at most 0.012 % at 8, at every viewport (the workload scales with it). t̂ and the lens "
+    "coordinates are held on the register grid 2^-2 frac_bits (1/16 of the shutter at 2 fraction bits), and the "
+    "homogeneous inputs carry their rounding: that, not the pixel snapping, is what 2 bits lose. The integer "
+    "bits split by test: t̂ with the 5D lens sets needs log2 V + 1 in focus (10 at 512 px, 14 at 8192: its forms "
+    "X' - e W are of degree 1 in the scaled homogeneous coordinates, about pixels) and 12-20 with blur, where "
+    "the lens coordinate (e - a) / b of a vertex near the focus plane grows as 1 / b, up to V 2^frac_bits (a "
+    "datapath saturating it to the lens would not need those bits). H5 needs 2 log2 V + 2 (20 at 512 px, 28 "
+    "at 8192), as the 4D H_j test: its constants are of degree 2 (px^2). So at 8192 px with cudaraster's 4 "
+    "sub-pixel bits t̂ and the lens sets fit 26-bit registers (1 + 17 + 2 x 4) and H5 needs 37, like the 4D "
+    "tile test. Unclipped triangles (a vertex near the lens plane, or moving through it) need 27-31 (t̂) and "
+    "53-61 (H5) integer bits.")
+MOTION_RENDER_TEXT = (
+    "No sample changes at any width; the tile stage gives up culls only. float32 loses 9 of 1.13 M H5 cells at "
+    "CoC 10 and tests not one sample more. Fixed point raises the samples tested by 0.3 % / 9 % / 95 % in focus and "
+    "0.2 % / 8 % / 74 % at CoC 10 at 8 / 4 / 2 fraction bits. The 2^(1 - frac_bits) px tile widening alone "
+    "(measured with the sample stage in fixed point and the tile stage in float64) accounts for 0.2 % / 3.2 % "
+    "/ 13 % in focus and 0.2 % / 2.8 % / 11 % at CoC 10; the rest is the format: t̂ on the register grid "
+    "(1/16 of the shutter, 6 px of these 100 px motions, at 2 fraction bits) and the H5 bounds, which lose 6 % "
+    "(4 bits) and 46 % (2 bits) of H5's cells. Small triangles moving far feel the time grid more than the "
+    "hard-case rows above. With 12 integer bits the motion tile tests of this 256 px frame overflow (190,363 "
+    "and 223,484 tests; counted, the image unchanged); at CoC 10, 13 bits still overflow 6,190 times and 14 "
+    "none (measured separately): the registers of these small triangles stay below the hard cases' 2 log2 V + 2.")
+
+
 def _pct(x):
     return f"{100 * x:.3f} %"
 
@@ -515,7 +803,8 @@ def markdown(data):
            "`frac_bits` sub-pixel bits; registers of a sign, `int_bits` integer and 2 `frac_bits` fraction bits, "
            "so the edge set-up and the edge functions are exact on the snapped inputs) instantiating the 2D tile "
            "test (`tiletest/edges_2d.h`) and the sample test (`sampletest/precision.h`), and the 4D tile test's "
-           "format form with running error bounds (`tiletest/precision_4d.h`). cudaraster (Laine & "
+           "and motion tile tests' format forms with running error bounds (`tiletest/precision_4d.h`, "
+           "`tiletest/precision_5d.h`). cudaraster (Laine & "
            "Karras 2011) snaps to 4 sub-pixel bits; 8 is shown beside it. Total bits = 1 + int_bits + 2 frac_bits.",
            "",
            "## The choice in a render",
@@ -535,9 +824,11 @@ def markdown(data):
            "still hit it: no sample of spot changes at 2 fraction bits below). The 4D tile test (h_i, H_j, box "
            "bounds, ẑ) in float32 or fixed point is conservative by construction: its inputs are the lens "
            "vertices (snapped in fixed point, within the widening), every value carries a bound of its error "
-           "and every decision moves inward by it. The 2D float32 tile test gets no extra margin and may lose "
-           "samples (the float32 rows below). Values reaching 2^int_bits are counted (`precision.sample_overflows`, "
-           "`precision.tile_overflows`, `precision.tile4d_overflows`); the render keeps the unwrapped decision, "
+           "and every decision moves inward by it; so are the motion tile tests (t̂, 5D lens sets, H5: "
+           "`tiletest/precision_5d.h`), whose homogeneous inputs carry their rounding. The 2D float32 tile test "
+           "gets no extra margin and may lose samples (the float32 rows below). Values reaching 2^int_bits are "
+           "counted (`precision.sample_overflows`, `precision.tile_overflows`, `precision.tile4d_overflows`, "
+           "`precision.tile5d_overflows`); the render keeps the unwrapped decision, "
            "where hardware would wrap. "
            "Operation counts do not depend on the precision.",
            "",
@@ -632,6 +923,71 @@ def markdown(data):
             "bits: mostly the 2^(1 - frac_bits) px widening of every 2x2 tile, which these rows share with float64 "
             "(the 'lens cells culled (float64)' column is on the widened tiles); no sample changes.",
             "",
+            "## INTERVAL's box bounds and ẑ: fewest bits per viewport",
+            "",
+            "The screen bounds of a static defocused footprint over a lens box (`tiletest/box_bounds.h`, the passes "
+            "of `interval` and `interleave`; their format form `box_bounds_in` in `tiletest/precision_4d.h`: a + u b "
+            "at the box's lens corners with running bounds, moved outward) on the static defocused triangles of the "
+            "hard-case suite at each viewport (blur scaled as above), over the 16 cells of a 4x4 lens grid. Check: "
+            "600 samples per triangle (half aimed at it); every ray-cast hit must lie inside its lens cell's bounds "
+            "widened as the render's pixel_range widens them (2^-10 px + 2^-18 |x|, plus 2^(1 - frac_bits) px in "
+            "fixed point). Growth = how far the format moves a bound outward (px). In band: as the 4D rows.",
+            "",
+            "| viewport [px] | arithmetic | triangles | boxes | ray-cast hits | hits outside (format / float64) | "
+            "growth mean / max [px] | fewest int_bits in band (total bits) | fewest int_bits all | overflowing boxes "
+            "at all - 1 |",
+            "|---|---|---|---|---|---|---|---|---|---|"]
+    for v in vs:
+        for r in data[str(v)].get("rows_box", []):
+            if r["kind"] == "fixed":
+                F = r["frac_bits"]
+                arith, ib = f"fixed, frac_bits {F}", f"{r['int_bits_band']} ({1 + r['int_bits_band'] + 2 * F})"
+                ia, below = r["int_bits_all"], r["below"]
+            else:
+                arith, ib, ia, below = "float32", "-", "-", "-"
+            out.append(f"| {v} | {arith} | {r['triangles']} | {r['boxes']} | {r['hits']} | {r['outside']} / "
+                       f"{r['outside64']} | {r['grow_mean']:.3g} / {r['grow_max']:.3g} | {ib} | {ia} | {below} |")
+    out += ["",
+            BOX_TEXT,
+            "",
+            "## Motion tile tests (t̂, 5D lens sets, H5): fewest bits per viewport",
+            "",
+            "The render's motion tile tests in the format (`tiletest/precision_5d.h`, `sim._core.precision_probe_5d`): "
+            "`tile` with `motion_test: intervals`, 4 time sub-intervals, H5 on, a 4x4 lens grid; per sub-interval the "
+            "time interval t̂ (002 §2, intervals/time_interval.h), the 5D lens sets (h_i lines over the six end "
+            "vertices) and the H5 cells (001's H_j lines extended to time). Workload per viewport: every hard case "
+            "moving (its own shutter-close positions, else moved by (0.6, -0.4, 1.5) world units: through the near "
+            "plane, behind the camera, gigantic coordinates, huge blur), blurred with the suite's CoC scaled to the "
+            "viewport (5D) and in focus (3D), plus 16 motion_field-style random triangles per class (motion up to a "
+            "quarter of the viewport and 3 depth units, some through the near plane; CoC V / 32). 600 samples per "
+            "triangle (half aimed at it at their lens point and time), each asked against the 2x2 tile holding it "
+            "(widened as a render widens it). Check: samples the float64 ray caster hits (in front of the near "
+            "plane) that the format's region excludes: must be none (and none for float64). Cull lost = samples "
+            "float64 excludes that the format keeps, of all float64 excludes (float64 on the same widened tiles, "
+            "so its column varies a little by row). Fewest int_bits: 'in band' over the "
+            "triangles whose six end vertices are in front of the near plane and project within a guard band of "
+            "one viewport (blur below V), 'all' over every triangle.",
+            "",
+            "| viewport [px] | class | arithmetic | triangles | samples | ray-cast hits | excluded by float64 | cull "
+            "lost | hits excluded (format / float64) | fewest int_bits in band: t̂ + lens sets / H5 (total bits) | "
+            "fewest int_bits all: t̂ + lens sets / H5 | overflowing tests at all - 1 |",
+            "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for v in vs:
+        for r in data[str(v)].get("rows_5d", []):
+            arith = "float32" if r["kind"] == "float32" else f"fixed, frac_bits {r['frac_bits']}"
+            if r["kind"] == "fixed":
+                F = r["frac_bits"]
+                hb = max(r["int_bits_band"], r["int_bits_band_h5"])
+                ib = f"{r['int_bits_band']} / {r['int_bits_band_h5']} ({1 + hb + 2 * F})"
+                ia, below = f"{r['int_bits_all_t']} / {r['int_bits_all_h5']}", r["below"]
+            else:
+                ib = ia = below = "-"
+            out.append(f"| {v} | {r['cls']} | {arith} | {r['triangles']} | {r['samples']} | {r['hits']} | "
+                       f"{r['culled64']} | {_pct(r['lost'] / max(r['culled64'], 1))} | {r['viol']} / {r['viol64']} | "
+                       f"{ib} | {ia} | {below} |")
+    out += ["",
+            MOTION_TEXT,
+            "",
             "## Sample test by class: vertices placed per sample",
             "",
             "The render's sample test (`sim._core.precision_probe`: vertices placed at each sample's (u, v, t) in "
@@ -683,8 +1039,26 @@ def markdown(data):
                 "tests never overflow at 256 px, while its 2D tile-test set-up (C = x_j y_k - y_j x_k, screen-sized) "
                 "overflows 22,851 times in focus and its 4D tile tests 76,824 times at CoC 10 (the 4D rows' 2 log2 V "
                 "+ 2 is 18 at 256 px); the hard-case suite's large triangles need the full viewport-sized formats of "
-                "the first tables. float32 and float64 sample tests change no sample here.",
-                "",
+                "the first tables. float32 and float64 sample tests change no sample here."]
+        if "motion" in data["renders"]:
+            out += ["",
+                    "## Moving triangles: culls lost at fewer bits in renders",
+                    "",
+                    f"`motion_field` (400 triangles of 4-400 px² at 128 px, here {RENDER_SIZE} x {RENDER_SIZE}, each "
+                    f"moving {50 * RENDER_SIZE // 128} px), 4 spp, `tile` 2x2 with t̂ + lens sets + H5 on every edge "
+                    "(`selective_H: false`: at 4 spp the oracle disables H5) over 4 time sub-intervals, in focus (3D) and at CoC 10 (5D); each tile precision against the default render "
+                    "(tile float64). Samples whose visible triangle differs; samples tested against the default's; H5 "
+                    "lens cells culled against the default's.",
+                    "",
+                    "| CoC [px] | tile precision | samples differing | samples tested / default | H5 cells culled "
+                    "(default) | motion tile-test overflows |",
+                    "|---|---|---|---|---|---|"]
+            for r in data["renders"]["motion"]:
+                out.append(f"| {r['coc']:g} | {r['label']} | {r['samples_differ']} of {r['samples']} | "
+                           f"{r['tested'] / r['tested_base']:.4f} | {r['culled_H5']} ({r['culled_H5_base']}) | "
+                           f"{r['tile5d_overflows']} |")
+            out += ["", MOTION_RENDER_TEXT]
+        out += ["",
                 "## Depth",
                 "",
                 "A unorm depth buffer of frac_bits bits stores z = 1 - near / w rounded to 2^-frac_bits; the depth test "
@@ -707,13 +1081,13 @@ def markdown(data):
     out += ["",
             "## Not measured",
             "",
-            "The time intervals t̂, the 5D lens sets and H5 of moving triangles, laine5d and the conservative "
-            "rasterizer run in float64 on widened tiles in every render (no format form). The 4D tile test's lens "
-            "vertices (a, b of 001 Eq. 1) and the fixed-point sample test's placed vertices come from float64 "
-            "before snapping; a datapath computing them in fixed point would add that rounding. The 4D rows "
-            "measure h_i and H_j (TILE's static path); the box bounds (INTERVAL, INTERLEAVE) and ẑ in the format "
-            "are covered by the render tests only. Line samples (`lines`) and the gpu_* pipeline's own tests do not "
-            "take `pipeline.precision`.",
+            "The conservative rasterizer runs the same format forms (tested, not measured here). The "
+            "4D tile test's lens vertices (a, b of 001 Eq. 1), the motion tests' homogeneous end vertices and H5 "
+            "quadratics, and the fixed-point sample test's placed vertices come from float64 before rounding into "
+            "the format; a datapath computing them in fixed point would add that rounding. H5's orientation, "
+            "usability and oracle are float64 set-up decisions. The box-bound rows measure INTERVAL's per-cell "
+            "bounds; INTERLEAVE's per-lens-position bounds are the same function on point boxes (covered by the "
+            "render tests). Line samples (`lines`) and the gpu_* pipeline's own tests do not take `pipeline.precision`.",
             ""]
     return "\n".join(out)
 

@@ -15,8 +15,10 @@
 #include "sampletest/hardware.h"
 #include "sampletest/precision.h"
 #include "setup/footprint.h"
+#include "tiletest/box_bounds.h"
 #include "tiletest/edges_2d.h"
 #include "tiletest/precision_4d.h"
+#include "tiletest/precision_5d.h"
 #include "selftest/kernel_costs.h"
 #include "selftest/probe.h"
 
@@ -282,9 +284,13 @@ void register_selftest(py::module_& m) {
 
   m.def(
       "precision_probe_4d",
-      [](const RenderParams& p, const FArr& v0, const DArr& tiles) {
+      [](const RenderParams& p, const FArr& v0, const DArr& tiles, const DArr& boxes) {
         require_shape(v0, {3, 3}, "v0");
         require_shape(tiles, {-1, 4}, "tiles");
+        require_shape(boxes, {-1, 4}, "boxes");
+        for (py::ssize_t i = 0; i < boxes.size(); ++i)
+          if (!std::isfinite(boxes.data()[i]))
+            throw std::invalid_argument("boxes: expected finite lens coordinates, got " + std::to_string(boxes.data()[i]));
         validate_domains(p);  // lens_grid sizes the (tiles, G * G) outputs
         for (py::ssize_t i = 0; i < tiles.size(); ++i)
           if (!(std::fabs(tiles.data()[i]) <= 0x1p24))  // lens-cell indices are ints: finite, screen-sized tiles
@@ -356,6 +362,27 @@ void register_selftest(py::module_& m) {
           cells(sx, sy, keep, H, culled.mutable_data() + static_cast<std::size_t>(t) * G * G);
           overflow.mutable_data()[t] = o1 || o2;
         }
+        // INTERVAL's and INTERLEAVE's screen bounds over the lens boxes (box_bounds.h; precision_4d.h box_bounds_in)
+        const int k_boxes = static_cast<int>(boxes.shape(0));
+        py::array_t<double> box64({k_boxes, 4}), boxf({k_boxes, 4});
+        py::array_t<bool> box_overflow(k_boxes);
+        tiletest::Arith4D arb(prec);
+        for (int b = 0; b < k_boxes; ++b) {
+          const double* q = boxes.data() + 4 * static_cast<std::size_t>(b);
+          double* d64 = box64.mutable_data() + 4 * static_cast<std::size_t>(b);
+          double* df = boxf.mutable_data() + 4 * static_cast<std::size_t>(b);
+          tiletest::box_bounds<double>(lv, n, q[0], q[1], q[2], q[3], d64[0], d64[1], d64[2], d64[3]);
+          for (int k = 0; k < 4; ++k) df[k] = d64[k];
+          box_overflow.mutable_data()[b] = false;
+          if (prec.kind == PrecisionKind::kFloat64) continue;
+          arb.overflow = false;
+          tiletest::box_bounds_in(arb, lv, n, q[0], q[1], q[2], q[3], df[0], df[1], df[2], df[3]);
+          box_overflow.mutable_data()[b] = arb.overflow;
+        }
+        out["box64"] = box64;
+        out["box"] = boxf;
+        out["box_overflow"] = box_overflow;
+        out["max_abs_box"] = prec.kind == PrecisionKind::kFixed ? arb.max_abs : 0.0;
         tiletest::t_snap_margin_px = saved;
         py::array_t<double> lens_vertices({n, 4});
         for (int j = 0; j < n; ++j) {
@@ -371,13 +398,127 @@ void register_selftest(py::module_& m) {
         out["lens_vertices"] = lens_vertices;
         return out;
       },
-      py::arg("params"), py::arg("v0"), py::arg("tiles"),
+      py::arg("params"), py::arg("v0"), py::arg("tiles"), py::arg("boxes") = DArr(std::vector<py::ssize_t>{0, 4}),
       "The render's 4D tile test (h_i sets and H_j cells of tile's static path; tiletest/precision_4d.h in "
       "params.precision_tile, tiles widened as a render widens them) of one static triangle v0 (3, 3) "
       "(pixel-homogeneous) against tiles (K, 4) = (x0, x1, y0, y1): culled64 / culled (K, G*G), the lens cells "
       "culled in float64 and in the precision; overflow (K,); max_abs (fixed: the largest register, the "
       "fewest int_bits n satisfy max_abs < 2^n); sigma64 / sigma (orientation over the lens; 0: no H_j); "
-      "lens_vertices (n, 4) = (a_x, a_y, b_x, b_y) of the footprint polygon.");
+      "lens_vertices (n, 4) = (a_x, a_y, b_x, b_y) of the footprint polygon; per lens box boxes[b] = (u0, u1, v0, "
+      "v1) INTERVAL's screen bounds (lx, hx, ly, hy) in float64 (box64) and in the precision (box, moved outward "
+      "by their error bounds), box_overflow, max_abs_box (fixed: the largest register of the bounds).");
+
+  m.def(
+      "precision_probe_5d",
+      [](const RenderParams& p, const FArr& v0, const FArr& v1, const DArr& tiles, const DArr& points) {
+        require_shape(v0, {3, 3}, "v0");
+        require_shape(v1, {3, 3}, "v1");
+        require_shape(tiles, {-1, 4}, "tiles");
+        require_shape(points, {tiles.shape(0), 5}, "points");
+        validate_domains(p);  // time_splits sizes the sub-intervals, lens_grid the cells
+        require_finite(v0, "v0");
+        require_finite(v1, "v1");
+        for (py::ssize_t i = 0; i < tiles.size(); ++i)
+          if (!(std::fabs(tiles.data()[i]) <= 0x1p24))
+            throw std::invalid_argument("tiles: expected finite pixel coordinates within +-2^24, got " +
+                                        std::to_string(tiles.data()[i]));
+        for (py::ssize_t i = 0; i < points.size(); ++i)
+          if (!(std::fabs(points.data()[i]) <= 0x1p24))
+            throw std::invalid_argument("points: expected finite coordinates within +-2^24, got " +
+                                        std::to_string(points.data()[i]));
+        const FrameConst fc = make_frame_const(p);
+        const float col[9] = {1, 1, 1, 1, 1, 1, 1, 1, 1};
+        TriSetup tri;
+        Counters c;
+        setup_triangle<FastArith>(v0.data(), v1.data(), col, 0, p, fc, tri, c);
+        py::dict out;
+        out["dim_class"] = c[Counter::setup_culled_near] ? -1 : static_cast<int>(tri.cls);
+        out["moving"] = tri.moving;
+        if (c[Counter::setup_culled_near] || !tri.moving) return out;
+        // the render's set-up of a moving triangle (tile, motion_test intervals): sub-intervals, H5 (no oracle)
+        const int S = p.time_splits, G = p.lens_grid, n = static_cast<int>(tiles.shape(0));
+        std::uint64_t ops = 0;
+        iv::MotionSetup ms;
+        iv::motion_setup<FastArith>(tri, fc, S, ms, ops);
+        tiletest::MotionH5 h5;
+        tiletest::h5_setup<FastArith>(ms, fc, tiletest::H5Oracle{}, h5, ops);
+        const bool with_h5 = p.halfspace_H5;
+        const Precision prec = p.precision_tile;
+        const iv::ClipBox clip = iv::clip_box(p);
+        const double saved = tiletest::t_snap_margin_px;
+        tiletest::t_snap_margin_px = snap_margin_px(p.precision_sample, prec);
+        tiletest::Motion5DPrecision p5;
+        if (prec.kind != PrecisionKind::kFloat64) p5.setup(prec, ms, 0.5 * fc.near_d, with_h5 ? &h5 : nullptr);
+        py::array_t<bool> kept64(n), kept(n), overflow(n);
+        iv::TileIntervals ti;
+        tiletest::CellMask h5m[iv::kMaxSplits];
+        // a sample of the tile passes the (lens, time) region: t in t̂_k, (u, v) in the lens sets and not in
+        // an H5-culled cell of its sub-interval k (the render's selection, tile.cpp raster_motion)
+        auto pass = [&](bool any, const double* q) {
+          if (!any) return false;
+          const float u = static_cast<float>(q[2]), v = static_cast<float>(q[3]), t = static_cast<float>(q[4]);
+          const int k = std::clamp(static_cast<int>(std::floor(static_cast<double>(t) * S)), 0, S - 1);
+          if (!ti.active[k] || !(t >= ti.tlo[k] && t <= ti.thi[k])) return false;
+          if (ms.lens && !(tiletest::axis_pass(ti.sx[k], u) && tiletest::axis_pass(ti.sy[k], v))) return false;
+          const int i = std::clamp(static_cast<int>(std::floor((u + 1.0) * 0.5 * G)), 0, G - 1);
+          const int j = std::clamp(static_cast<int>(std::floor((v + 1.0) * 0.5 * G)), 0, G - 1);
+          return !h5m[k].test(j * G + i);
+        };
+        for (int r = 0; r < n; ++r) {
+          const double* q = tiles.data() + 4 * static_cast<std::size_t>(r);
+          const double* pt = points.data() + 5 * static_cast<std::size_t>(r);
+          const double x0 = tiletest::expand_lo(q[0]), x1 = tiletest::expand_hi(q[1]);
+          const double y0 = tiletest::expand_lo(q[2]), y1 = tiletest::expand_hi(q[3]);
+          Counters cc;
+          bool any = iv::motion_tile_intervals<FastArith>(ms, clip, tri.cls, x0, x1, y0, y1, ti, ops, cc, p.halfspace_h);
+          for (int k = 0; k < S; ++k) {
+            h5m[k].reset();
+            std::uint64_t lines = 0;
+            if (with_h5 && any && ti.active[k] && h5.sub[k].usable)
+              h5m[k] = tiletest::h5_culled_cells<FastArith>(h5, k, x0, x1, y0, y1, ti.tlo[k], ti.thi[k], G, 0, G - 1, 0,
+                                                            G - 1, ops, lines);
+          }
+          kept64.mutable_data()[r] = pass(any, pt);
+          if (prec.kind == PrecisionKind::kFloat64) {
+            kept.mutable_data()[r] = kept64.mutable_data()[r];
+            overflow.mutable_data()[r] = false;
+            continue;
+          }
+          bool o1, o2 = false;
+          any = p5.tile_intervals(clip, x0, x1, y0, y1, ti, p.halfspace_h, o1);
+          for (int k = 0; k < S; ++k) {
+            h5m[k].reset();
+            bool ok;
+            if (with_h5 && any && ti.active[k]) {
+              h5m[k] = p5.h5_cells(h5, k, x0, x1, y0, y1, ti.tlo[k], ti.thi[k], G, 0, G - 1, 0, G - 1, ok);
+              o2 |= ok;
+            }
+          }
+          kept.mutable_data()[r] = pass(any, pt);
+          overflow.mutable_data()[r] = o1 || o2;
+        }
+        tiletest::t_snap_margin_px = saved;
+        int usable = 0;
+        for (int k = 0; k < S; ++k) usable += h5.sub[k].usable;
+        out["kept64"] = kept64;
+        out["kept"] = kept;
+        out["overflow"] = overflow;
+        out["max_abs"] = prec.kind == PrecisionKind::kFixed ? p5.ar.max_abs : 0.0;
+        out["max_abs_h5"] = prec.kind == PrecisionKind::kFixed ? p5.ar_h5.max_abs : 0.0;
+        out["h5_usable"] = usable;
+        out["bounds"] = py::make_tuple(tri.bx0, tri.bx1, tri.by0, tri.by1);
+        return out;
+      },
+      py::arg("params"), py::arg("v0"), py::arg("v1"), py::arg("tiles"), py::arg("points"),
+      "The render's motion tile tests (tile with motion_test intervals: t̂ and 5D lens sets per time sub-interval, "
+      "and with params.halfspace_H5 the H5 cells over the whole lens grid; tiletest/precision_5d.h in "
+      "params.precision_tile, tiles widened as a render widens them) of one triangle moving from v0 to v1 (3, 3) "
+      "(pixel-homogeneous): per row r the tile tiles[r] = (x0, x1, y0, y1) and the sample points[r] = (x, y, u, v, "
+      "t); kept64 / kept (N,): the sample passes the tile's (lens, time) region in float64 / in the precision; "
+      "overflow (N,); max_abs / max_abs_h5 (fixed: the largest register of t̂ with the lens sets / of H5, the "
+      "fewest int_bits n satisfy max_abs < 2^n); "
+      "h5_usable (sub-intervals with an H5 test); bounds (the set-up's pixel bounds x0, x1, y0, y1). A static "
+      "triangle returns dim_class and moving only.");
 }
 
 }  // namespace rast5d::bindings

@@ -10,7 +10,10 @@
 #include "intervals/time_interval.h"
 #include "setup/footprint.h"
 #include "tiletest/edges_2d.h"
+#include "sampletest/precision.h"
 #include "tiletest/halfspace_lens.h"
+#include "tiletest/precision_4d.h"
+#include "tiletest/precision_5d.h"
 
 namespace rast5d {
 
@@ -39,6 +42,16 @@ ConservativeResult conservative_raster(const RenderParams& p, const SceneArrays&
   iv::MotionSetup ms;
   iv::TileIntervals ti;
   iv::MovingPlanes planes;
+  // pipeline.precision.tile (not float64): the tile tests decided in the format (tiletest/precision_4d.h,
+  // precision_5d.h), tiles widened by the fixed-point snapping as in a render (restored on return)
+  const bool prec = p.precision_tile.kind != PrecisionKind::kFloat64;
+  struct MarginGuard {
+    double saved = tiletest::t_snap_margin_px;
+    ~MarginGuard() { tiletest::t_snap_margin_px = saved; }
+  } margin_guard;
+  tiletest::t_snap_margin_px = snap_margin_px(p.precision_sample, p.precision_tile);
+  tiletest::Tile4DPrecision p4;
+  tiletest::Motion5DPrecision p5;
   const double lens_lo = -1.0, lens_hi = 1.0;  // in focus / no blur: every lens point
   for (int i = 0; i < scene.n; ++i) {
     TriSetup tri;
@@ -53,10 +66,13 @@ ConservativeResult conservative_raster(const RenderParams& p, const SceneArrays&
     tiletest::Edges2D e2{};
     if (tri.cls == DimClass::k2D) {
       e2 = tiletest::edges_2d<D>(tri.X, tri.Y, tri.W);
+      if (prec) e2 = tiletest::edges_2d_in<D>(p.precision_tile, tri.X, tri.Y, tri.W);
     } else if (tri.moving) {
       iv::motion_setup<A>(tri, fc, p.time_splits, ms, sops);
+      if (prec) p5.setup(p.precision_tile, ms, 0.5 * fc.near_d, nullptr);
     } else {
       fp = build_footprint<A>(tri, frame, false, sops);
+      if (prec && fp.h_valid) p4.setup(p.precision_tile, fp.lv, fp.n, nullptr, false);
     }
     c[Counter::ops_setup] += sops;
     for (int py = tri.by0; py < tri.by1; ++py)
@@ -67,14 +83,32 @@ ConservativeResult conservative_raster(const RenderParams& p, const SceneArrays&
         double u0 = lens_lo, u1 = lens_hi, w0 = lens_lo, w1 = lens_hi, t0 = 0.0, t1 = 1.0;
         bool lens = tri.defocused;
         if (tri.cls == DimClass::k2D) {
-          if (tiletest::tile_outside_2d<D>(e2, x0, x1, y0, y1) || !e2.valid) continue;
+          bool out2 = tiletest::tile_outside_2d<D>(e2, x0, x1, y0, y1);
+          if (prec) {  // the decision in pipeline.precision.tile (counted as the float64 form)
+            bool ovf;
+            out2 = tiletest::tile_outside_2d_in<D>(e2, x0, x1, y0, y1, ovf);
+            if (ovf) ++c[Counter::precision_tile_overflows];
+          }
+          if (out2 || !e2.valid) continue;
         } else if (tri.moving) {
-          if (!iv::motion_tile_intervals<A>(ms, clip, tri.cls, x0, x1, y0, y1, ti, c[Counter::ops_tile], c)) continue;
+          bool keep = iv::motion_tile_intervals<A>(ms, clip, tri.cls, x0, x1, y0, y1, ti, c[Counter::ops_tile], c);
+          if (prec) {  // the decision in pipeline.precision.tile (counted as the float64 form)
+            bool ovf;
+            keep = p5.tile_intervals(clip, x0, x1, y0, y1, ti, true, ovf);
+            if (ovf) ++c[Counter::precision_tile5d_overflows];
+          }
+          if (!keep) continue;
           if (lens) u0 = ti.u0, u1 = ti.u1, w0 = ti.v0, w1 = ti.v1;
           t0 = ti.t0, t1 = ti.t1;
         } else {
           tiletest::AxisSet sx = tiletest::full_axis(), sy = tiletest::full_axis();
-          if (fp.h_valid && !tile_h_sets<A>(fp, x0, x1, y0, y1, sx, sy, c[Counter::ops_tile])) continue;
+          bool keep = !fp.h_valid || tile_h_sets<A>(fp, x0, x1, y0, y1, sx, sy, c[Counter::ops_tile]);
+          if (prec && fp.h_valid) {  // the decision in pipeline.precision.tile (counted as the float64 form)
+            bool ovf;
+            keep = p4.h_sets(x0, x1, y0, y1, sx, sy, ovf);
+            if (ovf) ++c[Counter::precision_tile4d_overflows];
+          }
+          if (!keep) continue;
           if (!iv::clip_lens<A>(clip, sx, sy, c[Counter::ops_tile])) continue;
           u0 = sx.iv_lo[0], u1 = sx.iv_hi[sx.n_intervals - 1];
           w0 = sy.iv_lo[0], w1 = sy.iv_hi[sy.n_intervals - 1];
@@ -91,8 +125,10 @@ ConservativeResult conservative_raster(const RenderParams& p, const SceneArrays&
                                        y1, u0, u1, w0, w1, std::max(0.0, t0), std::min(1.0, t1),
                                        c[Counter::ops_zhat]);
         ++c[Counter::conservative_records];
+        double zlo = z.zlo, zhi = z.zhi;
+        if (prec) tiletest::zhat_round_out(p.precision_tile, zlo, zhi);  // outward to the format
         // Round outwards to float.
-        const float zl = tiletest::round_down_to_float(z.zlo), zh = tiletest::round_up_to_float(z.zhi);
+        const float zl = tiletest::round_down_to_float(zlo), zh = tiletest::round_up_to_float(zhi);
         const float tl = tiletest::round_down_to_float(t0), th = tiletest::round_up_to_float(t1);
         if (reduce) {
           const std::size_t k = static_cast<std::size_t>(py) * p.width + px;

@@ -40,7 +40,7 @@
 //  * Overflow: a fixed-point value reaching 2^int_bits sets `overflow` (hardware would wrap); the render
 //    keeps the unwrapped value and counts the tile test in precision.tile4d_overflows. `max_abs` records
 //    the largest value (precision study: the fewest int_bits n satisfy max_abs < 2^n).
-// Time intervals t̂, the 5D lens sets of moving triangles and H5 stay float64.
+// Time intervals t̂, the 5D lens sets of moving triangles and H5: precision_5d.h.
 #pragma once
 
 #include <algorithm>
@@ -154,7 +154,7 @@ struct Arith4D {
   // 2^-11 would keep no significant bit at 4 fraction bits).
   PVal rcp(PVal b) {
     const double m = std::fabs(b.v);
-    if (!(m > b.e)) return {0.0, kInf};
+    if (!(m > b.e) || !std::isfinite(m)) return {0.0, kInf};  // unbounded (an infinite b: ilogb(1/b) undefined)
     const double q = 1.0 / b.v;
     double v = static_cast<double>(static_cast<float>(q));
     if (fixed()) {

@@ -9,6 +9,7 @@
 //   candidates.h       fast-path selection of a pixel's candidate samples
 //   exact_region.h     the exact region, evaluated point-wise (instrumentation only)
 //   precision_4d.h     h_i, H_j, box bounds and ẑ in float32 / fixed point (pipeline.precision.tile)
+//   precision_5d.h     t̂, 5D lens sets and H5 of moving triangles in float32 / fixed point (the same)
 //
 // Contract: every test is *conservative*: it never removes a (u, v) from which the float sample
 // test could hit a sample of the tile. They run in double on the tile expanded by a margin

@@ -23,6 +23,8 @@
 #include "tiletest/candidates.h"
 #include "tiletest/exact_region.h"
 #include "tiletest/halfspace_lens.h"
+#include "tiletest/precision_4d.h"
+#include "tiletest/precision_5d.h"
 #include "traversal/traversal.h"
 
 namespace rast5d {
@@ -47,6 +49,9 @@ class Laine5D final : public Traversal {
     const RenderParams& p = f_.p;
     const int T = p.tile_size, spp = f_.table.spp();
     const bool use_h = !tri.moving && p.halfspace_h && fp.h_valid;
+    const bool prec = p.precision_tile.kind != PrecisionKind::kFloat64;  // tiletest/precision_{4d,5d}.h
+    if (prec && tri.moving) p5_.setup(p.precision_tile, ms_, 0.5 * f_.fc.near_d, nullptr);
+    if (prec && use_h) p4_.setup(p.precision_tile, fp.lv, fp.n, nullptr, false);
     pipe_.begin(tri);
     const int x0 = std::max(tri.bx0, bin.x0), x1 = std::min(tri.bx1, bin.x1);
     const int y0 = std::max(tri.by0, bin.y0), y1 = std::min(tri.by1, bin.y1);
@@ -62,9 +67,19 @@ class Laine5D final : public Traversal {
         if (tri.moving) {
           timed = true;
           empty = !iv::motion_tile_intervals<A>(ms_, clip_, tri.cls, ex0, ex1, ey0, ey1, ti_, c_[Counter::ops_tile], c_);
+          if (prec) {  // the decision in pipeline.precision.tile (counted as the float64 form)
+            bool ovf;
+            empty = !p5_.tile_intervals(clip_, ex0, ex1, ey0, ey1, ti_, true, ovf);
+            if (ovf) ++c_[Counter::precision_tile5d_overflows];
+          }
           if (!empty) sx = ti_.sx[0], sy = ti_.sy[0], tlo = ti_.tlo[0], thi = ti_.thi[0];
         } else if (use_h) {
           empty = !tile_h_sets<A>(fp, ex0, ex1, ey0, ey1, sx, sy, c_[Counter::ops_tile]);
+          if (prec) {  // the decision in pipeline.precision.tile (counted as the float64 form)
+            bool ovf;
+            empty = !p4_.h_sets(ex0, ex1, ey0, ey1, sx, sy, ovf);
+            if (ovf) ++c_[Counter::precision_tile4d_overflows];
+          }
         }
         ++c_[Counter::tile_accepted];
         const std::uint64_t region_cost =
@@ -115,6 +130,8 @@ class Laine5D final : public Traversal {
   const iv::ClipBox clip_ = iv::clip_box(f_.p);
   iv::MotionSetup ms_;
   iv::TileIntervals ti_;
+  tiletest::Tile4DPrecision p4_;    // static: the h_i sets in pipeline.precision.tile (not float64)
+  tiletest::Motion5DPrecision p5_;  // moving: t̂ and lens sets in pipeline.precision.tile (not float64)
   std::vector<int> cand_ = std::vector<int>(f_.table.spp());
 };
 

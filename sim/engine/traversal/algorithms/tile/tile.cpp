@@ -28,6 +28,7 @@
 #include "tiletest/halfspace_lens.h"
 #include "tiletest/lens_shape.h"
 #include "tiletest/precision_4d.h"
+#include "tiletest/precision_5d.h"
 #include "traversal/algorithms/tile/active_cells.h"
 #include "traversal/algorithms/tile/axis_cache.h"
 #include "traversal/algorithms/tile/hj_cells.h"
@@ -78,6 +79,8 @@ class Tile final : public Traversal {
         tiletest::h5_setup<A>(ms_, f_.fc, h5_oracle(tri), h5_, setup_ops);
         if (charge_setup) c_[Counter::tile_H5_sub_unoriented] += static_cast<std::uint64_t>(h5_.n_unoriented);
       }
+      if (f_.p.precision_tile.kind != PrecisionKind::kFloat64)  // t̂, lens sets, H5 in the format (precision_5d.h)
+        p5_.setup(f_.p.precision_tile, ms_, 0.5 * f_.fc.near_d, f_.p.halfspace_H5 ? &h5_ : nullptr);
       if (charge_setup) c_[Counter::ops_setup] += setup_ops;
       raster_motion(tri, bin);
       return;
@@ -384,7 +387,13 @@ class Tile final : public Traversal {
       ++c_[Counter::tile_visited];
       const double x0 = tiletest::expand_lo(tx), x1 = tiletest::expand_hi(tx + T);
       const double y0 = tiletest::expand_lo(ty), y1 = tiletest::expand_hi(ty + T);
-      if (!iv::motion_tile_intervals<A>(ms_, clip_, tri.cls, x0, x1, y0, y1, ti, c_[Counter::ops_tile], c_, p.halfspace_h)) {
+      bool keep_t = iv::motion_tile_intervals<A>(ms_, clip_, tri.cls, x0, x1, y0, y1, ti, c_[Counter::ops_tile], c_, p.halfspace_h);
+      if (p5_.active()) {  // the decision in pipeline.precision.tile (counted as the float64 form)
+        bool ovf;
+        keep_t = p5_.tile_intervals(clip_, x0, x1, y0, y1, ti, p.halfspace_h, ovf);
+        if (ovf) ++c_[Counter::precision_tile5d_overflows];
+      }
+      if (!keep_t) {
         ++c_[Counter::interval_culled_t];
         return;
       }
@@ -491,10 +500,16 @@ class Tile final : public Traversal {
   void h5_cull(int k, double x0, double x1, double y0, double y1, const iv::TileIntervals& ti, ActiveCells& cells,
                bool& emptied) {
     std::uint64_t lines = 0;
-    const tiletest::CellMask culled =
+    tiletest::CellMask culled =
         tiletest::h5_culled_cells<A>(h5_, k, x0, x1, y0, y1, ti.tlo[k], ti.thi[k], f_.p.lens_grid, cells.i0, cells.i1,
                                      cells.j0, cells.j1, c_[Counter::ops_tile], lines);
     c_[Counter::tile_H5_lines] += lines;
+    if (p5_.active()) {  // H5 in pipeline.precision.tile: counted as the float64 form, decided in the format
+      bool ovf;
+      culled = p5_.h5_cells(h5_, k, x0, x1, y0, y1, ti.tlo[k], ti.thi[k], f_.p.lens_grid, cells.i0, cells.i1, cells.j0,
+                            cells.j1, ovf);
+      if (ovf) ++c_[Counter::precision_tile5d_overflows];
+    }
     const std::uint64_t before = cells.small ? static_cast<std::uint64_t>(__builtin_popcountll(cells.bits64)) : cells.bits.count();
     if (cells.small)
       cells.bits64 &= ~(culled & low64_).to_ullong();
@@ -522,6 +537,7 @@ class Tile final : public Traversal {
   const bool fused_select_ = SamplePipeline<A>::kFusedSelect && f_.p.simd && f_.table.spp() <= 64;
   AxisCache axes_;  // fast path: h_i sets per tile column and row of the current triangle and bin
   tiletest::Tile4DPrecision p4_;  // the 4D tile test in pipeline.precision.tile (not float64)
+  tiletest::Motion5DPrecision p5_;  // t̂, 5D lens sets and H5 in pipeline.precision.tile (not float64)
   const iv::ClipBox clip_ = iv::clip_box(f_.p);
   iv::MotionSetup ms_;
   tiletest::MotionH5 h5_;
