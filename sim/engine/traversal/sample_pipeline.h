@@ -109,6 +109,7 @@ class SamplePipeline {
     sheared_ = false;
     stride_ = 0;
     free_order_ = order_free();
+    need_t_ = tri.cls == DimClass::k3D || tri.cls == DimClass::k5D;
   }
   // Static triangle pre-sheared to discrete lens coordinates: lens_stride 0 = every sample uses
   // Xs/Ys; 3 = sample s uses Xs + 3 * lens_index[s] (interleaved tables).
@@ -118,6 +119,7 @@ class SamplePipeline {
     sheared_ = true;
     xs_ = Xs, ys_ = Ys, stride_ = lens_stride;
     free_order_ = order_free();
+    need_t_ = false;
   }
   inline void push(int px, int py, const PixelSamples& ps, int s) {
     if (one_at_a_time()) {
@@ -268,8 +270,10 @@ class SamplePipeline {
     const __m512 a0 = _mm512_set1_ps(b.a0), b0 = _mm512_set1_ps(b.b0), a1 = _mm512_set1_ps(b.a1),
                  b1 = _mm512_set1_ps(b.b1), c0 = _mm512_set1_ps(b.c0), d0 = _mm512_set1_ps(b.d0),
                  c1 = _mm512_set1_ps(b.c1), d1 = _mm512_set1_ps(b.d1);
-    std::uint64_t sel = 0;
-    for (int w = 0; w < spp; w += 16) {
+    // Without cuts (interval's cells; tiles whose h_i sets cut nothing) the active cells' samples.
+    const bool cuts = b.u0 | b.u1 | b.v0 | b.v1;
+    std::uint64_t sel = cuts ? 0 : act;
+    for (int w = 0; cuts && w < spp; w += 16) {
       const __mmask16 lanes = static_cast<__mmask16>(tail >> w);
       __mmask16 keep = static_cast<__mmask16>(act >> w);
       const __m512 u = _mm512_maskz_loadu_ps(lanes, ps.u + w);
@@ -287,8 +291,10 @@ class SamplePipeline {
       push_each(px, py, ps, spp, [sel](int s) { return (sel >> s) & 1 ? s : -1; });
       return in_cells;
     }
-    if (spp >= 32 && 3 * n_sel >= spp) {  // the pixel as its own batch, masked to the selection
-      run_pixel(px, py, ps, nullptr, n_sel, n_sel == spp ? kAllLanes : sel);
+    // Every sample: the pixel as its own batch (push_pixel). Fewer: compressed into the batch, which
+    // measured faster than the whole pixel's kernel with a mask down to a few unselected samples.
+    if (spp >= 32 && n_sel == spp) {
+      run_pixel(px, py, ps, nullptr, spp);
       return in_cells;
     }
     if (n_ + spp > cap_) flush();
@@ -301,6 +307,7 @@ class SamplePipeline {
     int* __restrict bpx = bpx_.data();
     int* __restrict bpy = bpy_.data();
     int* __restrict bs = bs_.data();
+    const bool need_t = need_t_;
     const __m512 fx = _mm512_set1_ps(static_cast<float>(px)), fy = _mm512_set1_ps(static_cast<float>(py));
     const __m512i vpx = _mm512_set1_epi32(px), vpy = _mm512_set1_epi32(py);
     const __m512i iota = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
@@ -315,7 +322,7 @@ class SamplePipeline {
       _mm512_storeu_ps(gy + n, _mm512_maskz_compress_ps(m, _mm512_add_ps(fy, _mm512_maskz_loadu_ps(m, ps.y + w))));
       _mm512_storeu_ps(gu + n, _mm512_maskz_compress_ps(m, _mm512_maskz_loadu_ps(m, ps.u + w)));
       _mm512_storeu_ps(gv + n, _mm512_maskz_compress_ps(m, _mm512_maskz_loadu_ps(m, ps.v + w)));
-      _mm512_storeu_ps(gt + n, _mm512_maskz_compress_ps(m, _mm512_maskz_loadu_ps(m, ps.t + w)));
+      if (need_t) _mm512_storeu_ps(gt + n, _mm512_maskz_compress_ps(m, _mm512_maskz_loadu_ps(m, ps.t + w)));
       _mm512_storeu_si512(bpx + n, vpx);
       _mm512_storeu_si512(bpy + n, vpy);
       _mm512_storeu_si512(bs + n, _mm512_maskz_compress_epi32(m, _mm512_add_epi32(iota, _mm512_set1_epi32(w))));
@@ -381,7 +388,6 @@ class SamplePipeline {
       Counter::raster_samples_tested_4d, Counter::raster_samples_tested_5d};
   static constexpr int kBatch = 1024;  // small enough for the batch to stay in L1/L2
   static constexpr int kSlack = 16;    // push_flagged() stores whole SIMD vectors past the batch's end
-  static constexpr std::uint64_t kAllLanes = ~std::uint64_t(0);  // run_pixel(): no lane mask
 
   // Where run_pixel() evaluates a pixel while a batch is pending: past the batch region.
   int pixel_at() const { return cap_ + kSlack; }
@@ -453,12 +459,11 @@ class SamplePipeline {
            sample_test_cost(model_, DimClass::k2D) + n_ties * tie_break_cost(model_, DimClass::k2D));
   }
 
-  // One pixel's samples as a batch of their own (no per-sample pixel/index bookkeeping); with sel
-  // (flag bytes) or lanes (bit s = sample s; spp <= 64), only the selected samples count (fast path
-  // only). When the test order is free (order_free()) a pending batch stays pending and the pixel is
-  // evaluated in the second region; else the batch is flushed first.
-  void run_pixel(int px, int py, const PixelSamples& ps, const std::uint8_t* sel, int n_sel,
-                 std::uint64_t lanes = kAllLanes) {
+  // One pixel's samples as a batch of their own (no per-sample pixel/index bookkeeping); with sel,
+  // only the selected samples count (fast path only). When the test order is free (order_free()) a
+  // pending batch stays pending and the pixel is evaluated in the second region; else the batch is
+  // flushed first.
+  void run_pixel(int px, int py, const PixelSamples& ps, const std::uint8_t* sel, int n_sel) {
     const int spp = f_.table.spp();
     int at = 0;
     if (n_ > 0 && free_order_) at = pixel_at();
@@ -468,7 +473,7 @@ class SamplePipeline {
     if (stride_)
       for (int s = 0; s < spp; ++s) bl_[at + s] = ps.lens_index[s];
     uniform_px_ = px, uniform_py_ = py;
-    run_batch(true, at, spp, sel, n_sel, lanes);
+    run_batch(true, at, spp, sel, n_sel);
   }
 
   // Every sample of pixel (px, py) appended to the batch (fast path, spp < 32).
@@ -488,7 +493,7 @@ class SamplePipeline {
       _mm512_storeu_ps(&gy_[i], _mm512_add_ps(fy, _mm512_maskz_loadu_ps(m, ps.y + w)));
       _mm512_storeu_ps(&gu_[i], _mm512_maskz_loadu_ps(m, ps.u + w));
       _mm512_storeu_ps(&gv_[i], _mm512_maskz_loadu_ps(m, ps.v + w));
-      _mm512_storeu_ps(&gt_[i], _mm512_maskz_loadu_ps(m, ps.t + w));
+      if (need_t_) _mm512_storeu_ps(&gt_[i], _mm512_maskz_loadu_ps(m, ps.t + w));
       _mm512_storeu_si512(&bpx_[i], vpx);
       _mm512_storeu_si512(&bpy_[i], vpy);
       _mm512_storeu_si512(&bs_[i], _mm512_add_epi32(iota, _mm512_set1_epi32(w)));
@@ -533,12 +538,11 @@ class SamplePipeline {
 
   // Evaluate n samples from region offset at (fast path): the pending batch (at 0, n_), or with
   // uniform, samples 0..n-1 of pixel (uniform_px_, uniform_py_), of which only those flagged in sel
-  // or set in lanes (n_sel of them) count when either is given.
-  void run_batch(bool uniform, int at, int n, const std::uint8_t* sel = nullptr, int n_sel = 0,
-                 std::uint64_t lanes = kAllLanes) {
+  // (n_sel of them) count when sel is given.
+  void run_batch(bool uniform, int at, int n, const std::uint8_t* sel = nullptr, int n_sel = 0) {
     uniform_ = uniform;
     at_ = at;
-    const bool masked = sel || lanes != kAllLanes;
+    const bool masked = sel != nullptr;
     const TriSetup& tri = *tri_;
     float* e = be_.data() + 3 * static_cast<std::size_t>(at);
     float* d = bdet_.data() + at;
@@ -621,13 +625,9 @@ class SamplePipeline {
     for (int w = 0; w < n; w += 64) {
       const std::uint64_t live = n - w >= 64 ? ~std::uint64_t(0) : ((std::uint64_t(1) << (n - w)) - 1);
       const __m512i f = _mm512_maskz_loadu_epi8(live, flags + w);
-      std::uint64_t m = _mm512_test_epi8_mask(f, f);
-      if (w == 0) m &= lanes;  // lanes: one pixel of at most 64 samples
-      for (; m; m &= m - 1) settle(w + __builtin_ctzll(m));
+      for (std::uint64_t m = _mm512_test_epi8_mask(f, f); m; m &= m - 1) settle(w + __builtin_ctzll(m));
     }
 #else
-    if (lanes != kAllLanes)
-      for (int i = 0; i < n; ++i) flags[i] = static_cast<std::uint8_t>(flags[i] * ((lanes >> i) & 1));
     for (int w = 0; w < n; w += 8) {
       std::uint64_t word;
       std::memcpy(&word, flags + w, 8);
@@ -719,6 +719,7 @@ class SamplePipeline {
   int uniform_px_ = 0, uniform_py_ = 0;
   bool uniform_ = false;
   int at_ = 0;                // region offset of the batch being evaluated (run_batch())
+  bool need_t_ = true;        // the triangle's sample test reads t (3D, 5D): else the batch's t lanes are not stored
   bool free_order_ = false;   // order_free() for the current triangle (set by begin())
   const PixelSamples* uniform_ps_ = nullptr;
   std::vector<float> gx_, gy_, gu_, gv_, gt_, be_, bdet_;
