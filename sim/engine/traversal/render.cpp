@@ -77,8 +77,6 @@ void validate_params(const RenderParams& p, const SampleTable& table) {
          ", got " + std::to_string(p.lens_grid));
 }
 
-// The per-render shading constants: textures with mip chains and addresses, per-triangle texture
-// slots, uvs, analytic uv derivatives and levels of detail (backend/texture.h).
 // The cache lines of a triangle's set-up (TriSetup is several lines; a bin's list visits set-ups far
 // apart in memory), fetched a few triangles ahead (small triangles take less than a miss's latency).
 static inline void prefetch_setup(const TriSetup& t) {
@@ -86,6 +84,8 @@ static inline void prefetch_setup(const TriSetup& t) {
   for (std::size_t o = 0; o < sizeof(TriSetup); o += 64) __builtin_prefetch(p + o);
 }
 
+// The per-render shading constants: textures with mip chains and addresses, per-triangle texture
+// slots, uvs, analytic uv derivatives and levels of detail (backend/texture.h).
 static void build_shade_frame(const RenderParams& p, const SceneArrays& scene, const std::vector<TriSetup>& setups,
                               const std::vector<char>& alive, int n_bins, ShadeFrame& sf) {
   sf.mode = p.shading;

@@ -387,7 +387,7 @@ class SamplePipeline {
       Counter::raster_samples_tested_2d, Counter::raster_samples_tested_3d,
       Counter::raster_samples_tested_4d, Counter::raster_samples_tested_5d};
   static constexpr int kBatch = 1024;  // small enough for the batch to stay in L1/L2
-  static constexpr int kSlack = 16;    // push_flagged() stores whole SIMD vectors past the batch's end
+  static constexpr int kSlack = 16;    // push_flagged / push_selected / append_pixel store whole vectors past the end
 
   // Where run_pixel() evaluates a pixel while a batch is pending: past the batch region.
   int pixel_at() const { return cap_ + kSlack; }
