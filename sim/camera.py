@@ -154,8 +154,11 @@ class Camera:
     def world_to_clip(self, points: np.ndarray) -> np.ndarray:
         """(..., 3) world points -> (..., 4) clip (x, y, z, w), z = w - near (infinite far)."""
         p = np.asarray(points, dtype=np.float64)
-        m = self.view_matrix()
-        v = p @ m[:3, :3].T + m[:3, 3]
+        if not self._pose_given:  # identity view: p @ I + 0 is exactly p + 0.0 (which turns -0.0 into +0.0)
+            v = p + 0.0
+        else:
+            m = self.view_matrix()
+            v = p @ m[:3, :3].T + m[:3, 3]
         w = -v[..., 2]
         x, y = self._s_x * v[..., 0], self._s_y * v[..., 1]
         if self.shift != (0.0, 0.0):  # off-centre viewport: the principal point moves by shift (NDC)
@@ -175,7 +178,7 @@ class Camera:
         if (s_open, s_close) != (0.0, 1.0):
             p0, p1 = p0 + s_open * (p1 - p0), p0 + s_close * (p1 - p0)
         e0 = self.clip_to_engine(self.world_to_clip(p0)).astype(np.float32)
-        if np.array_equal(p0, p1):
+        if positions_t1 is positions or np.array_equal(p0, p1):
             return e0, e0.copy()
         return e0, self.clip_to_engine(self.world_to_clip(p1)).astype(np.float32)
 

@@ -1,6 +1,7 @@
 // Explicit-SIMD batch sample tests: the 4D and 5D batch kernels of sample_test.h (batch_edges_4d /
 // batch_edges_5d followed by batch_flags) fused into one pass over the batch, with AVX-512 or AVX2
-// intrinsics where the compiler targets them and the scalar kernels otherwise.
+// intrinsics where the compiler targets them and the scalar kernels otherwise. With AVX-512 (VL) a
+// batch's last n % 16 samples are one masked vector; elsewhere they take the scalar kernels.
 //
 // Why: the auto-vectorised path runs two loops (edge functions to memory, then the flags reading
 // them back); the fused kernel keeps e_0..e_2 and det in registers for the flags and stores each
@@ -86,15 +87,33 @@ inline void edges(V X0, V X1, V X2, V Y0, V Y1, V Y2, V W0, V W1, V W2, V sx, V 
   det = vmadd(W2, e2, vmadd(W1, e1, mul(W0, e0)));
 }
 
-// batch_flags on vectors.
-inline void flags_of(V a, V b, V c, V d, bool bfc, std::uint8_t* out) {
+// batch_flags on vectors: the covered and undecided lanes.
+inline void flag_masks(V a, V b, V c, V d, bool bfc, M& cov, M& und) {
   const M dpos = gt0(d), dneg = lt0(d);
   const M allpos = gt0(a) & gt0(b) & gt0(c);
   const M allneg = lt0(a) & lt0(b) & lt0(c);
   const M anyzero = eq0(a) | eq0(b) | eq0(c);
-  const M cov = static_cast<M>((bfc ? M(0) : static_cast<M>(dpos & allpos)) | (dneg & allneg));
-  const M und = static_cast<M>(anyzero & (dpos | dneg));
+  cov = static_cast<M>((bfc ? M(0) : static_cast<M>(dpos & allpos)) | (dneg & allneg));
+  und = static_cast<M>(anyzero & (dpos | dneg));
+}
+inline void flags_of(V a, V b, V c, V d, bool bfc, std::uint8_t* out) {
+  M cov, und;
+  flag_masks(a, b, c, d, bfc, cov, und);
   store_flags(out, cov, und);
+}
+#endif
+
+#if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512VL__)
+// The last n % 16 samples of a batch as one masked vector (lanes k < n only are loaded and stored):
+// per lane the same operations as the full vectors, so the same bits as the scalar kernels.
+inline __mmask16 tail_mask(int n) { return static_cast<__mmask16>((1u << n) - 1); }
+inline V load_tail(__mmask16 k, const float* p) { return _mm512_maskz_loadu_ps(k, p); }
+inline void store_tail(__mmask16 k, float* p, V v) { _mm512_mask_storeu_ps(p, k, v); }
+inline void flags_tail(__mmask16 k, V a, V b, V c, V d, bool bfc, std::uint8_t* out) {
+  M cov, und;
+  flag_masks(a, b, c, d, bfc, cov, und);
+  const __m128i f = _mm_or_si128(_mm_maskz_mov_epi8(cov, _mm_set1_epi8(1)), _mm_maskz_mov_epi8(und, _mm_set1_epi8(2)));
+  _mm_mask_storeu_epi8(out, k, f);
 }
 #endif
 
@@ -117,6 +136,18 @@ inline void batch_test_4d(int n, const BatchTri& T, const float* __restrict bx, 
           vmadd(v, cy2, Y2), W0, W1, W2, load(bx + i), load(by + i), a, b, c, d);
     store(e0 + i, a), store(e1 + i, b), store(e2 + i, c), store(dt + i, d);
     flags_of(a, b, c, d, bfc, flags + i);
+  }
+#endif
+#if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512VL__)
+  if (i < n) {
+    const __mmask16 k = tail_mask(n - i);
+    const V u = load_tail(k, bu + i), v = load_tail(k, bv + i);
+    V a, b, c, d;
+    edges(vmadd(u, cx0, X0), vmadd(u, cx1, X1), vmadd(u, cx2, X2), vmadd(v, cy0, Y0), vmadd(v, cy1, Y1),
+          vmadd(v, cy2, Y2), W0, W1, W2, load_tail(k, bx + i), load_tail(k, by + i), a, b, c, d);
+    store_tail(k, e0 + i, a), store_tail(k, e1 + i, b), store_tail(k, e2 + i, c), store_tail(k, dt + i, d);
+    flags_tail(k, a, b, c, d, bfc, flags + i);
+    return;
   }
 #endif
   if (i < n) {
@@ -149,6 +180,22 @@ inline void batch_test_5d(int n, const BatchTri& T, const float* __restrict bx, 
           wt0, wt1, wt2, load(bx + i), load(by + i), a, b, c, d);
     store(e0 + i, a), store(e1 + i, b), store(e2 + i, c), store(dt + i, d);
     flags_of(a, b, c, d, bfc, flags + i);
+  }
+#endif
+#if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512VL__)
+  if (i < n) {
+    const __mmask16 k = tail_mask(n - i);
+    const V t = load_tail(k, bt + i), u = load_tail(k, bu + i), v = load_tail(k, bv + i);
+    const V xt0 = vmadd(t, dX0, X0), yt0 = vmadd(t, dY0, Y0), wt0 = vmadd(t, dW0, W0);
+    const V xt1 = vmadd(t, dX1, X1), yt1 = vmadd(t, dY1, Y1), wt1 = vmadd(t, dW1, W1);
+    const V xt2 = vmadd(t, dX2, X2), yt2 = vmadd(t, dY2, Y2), wt2 = vmadd(t, dW2, W2);
+    V a, b, c, d;
+    edges(vmadd(u, vmadd(wt0, kx, nkx), xt0), vmadd(u, vmadd(wt1, kx, nkx), xt1), vmadd(u, vmadd(wt2, kx, nkx), xt2),
+          vmadd(v, vmadd(wt0, ky, nky), yt0), vmadd(v, vmadd(wt1, ky, nky), yt1), vmadd(v, vmadd(wt2, ky, nky), yt2),
+          wt0, wt1, wt2, load_tail(k, bx + i), load_tail(k, by + i), a, b, c, d);
+    store_tail(k, e0 + i, a), store_tail(k, e1 + i, b), store_tail(k, e2 + i, c), store_tail(k, dt + i, d);
+    flags_tail(k, a, b, c, d, bfc, flags + i);
+    return;
   }
 #endif
   if (i < n) {

@@ -81,6 +81,13 @@ void validate_params(const RenderParams& p, const SampleTable& table) {
          ", got " + std::to_string(p.lens_grid));
 }
 
+// The cache lines of a triangle's set-up (TriSetup is several lines; a bin's list visits set-ups far
+// apart in memory), fetched a few triangles ahead (small triangles take less than a miss's latency).
+static inline void prefetch_setup(const TriSetup& t) {
+  const char* p = reinterpret_cast<const char*>(&t);
+  for (std::size_t o = 0; o < sizeof(TriSetup); o += 64) __builtin_prefetch(p + o);
+}
+
 // The per-render shading constants: textures with mip chains and addresses, per-triangle texture
 // slots, uvs, analytic uv derivatives and levels of detail (backend/texture.h).
 static void build_shade_frame(const RenderParams& p, const SceneArrays& scene, const std::vector<TriSetup>& setups,
@@ -300,8 +307,11 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
         BinRect r{bx * B, by * B, std::min(p.width, (bx + 1) * B), std::min(p.height, (by + 1) * B)};
         ts.buffers.begin(r, table.spp());
         ts.shade.begin_bin(b);
-        for (std::uint32_t i : bin_lists[b]) {
+        const std::vector<std::uint32_t>& list = bin_lists[b];
+        for (std::size_t li = 0; li < list.size(); ++li) {
+          const std::uint32_t i = list[li];
           if (cancel.load(std::memory_order_relaxed)) break;  // Ctrl-C: stop within one triangle
+          if (li + 4 < list.size()) prefetch_setup(setups[list[li + 4]]);  // a later triangle's set-up
           const TriSetup& tri = setups[i];
           const bool home = (tri.by0 / B) * bins_x + (tri.bx0 / B) == b;
           const TileWork before = p.record_timing ? work_from_counters(ts.counters) : TileWork{};

@@ -66,12 +66,14 @@ class SamplePipeline {
         model_(f.p.cost_model),
         precise_(f.p.precision_sample.kind != PrecisionKind::kFloat32),
         cur_(ts.cursor) {
-    for (auto* v : {&gx_, &gy_, &gu_, &gv_, &gt_, &bdet_}) v->resize(cap_ + kSlack);
-    for (auto* v : {&bpx_, &bpy_, &bs_, &bl_}) v->resize(cap_ + kSlack);
+    // Two regions: the batch at 0 and, from pixel_at(), one pixel evaluated while a batch is pending
+    // (run_pixel() when the test order is free).
+    const std::size_t len = 2 * static_cast<std::size_t>(pixel_at());
+    for (auto* v : {&gx_, &gy_, &gu_, &gv_, &gt_, &bdet_}) v->resize(len);
+    for (auto* v : {&bpx_, &bpy_, &bs_, &bl_}) v->resize(len);
     sel_index_.resize(cap_);
-    be_.resize(3 * static_cast<std::size_t>(cap_));
-    flags_.assign(cap_ + 8, 0);
-    sel_bytes_.assign(64, 0);
+    be_.resize(3 * len);
+    flags_.assign(len + 64, 0);
   }
 
   // Test canonical sample s of pixel (px, py) against tri with the kernel of tri's class.
@@ -106,6 +108,8 @@ class SamplePipeline {
     tri_ = &tri;
     sheared_ = false;
     stride_ = 0;
+    free_order_ = order_free();
+    need_t_ = tri.cls == DimClass::k3D || tri.cls == DimClass::k5D;
   }
   // Static triangle pre-sheared to discrete lens coordinates: lens_stride 0 = every sample uses
   // Xs/Ys; 3 = sample s uses Xs + 3 * lens_index[s] (interleaved tables).
@@ -114,11 +118,11 @@ class SamplePipeline {
     tri_ = &tri;
     sheared_ = true;
     xs_ = Xs, ys_ = Ys, stride_ = lens_stride;
+    free_order_ = order_free();
+    need_t_ = false;
   }
   inline void push(int px, int py, const PixelSamples& ps, int s) {
-    bool now = A::counting;
-    if constexpr (!A::counting) now = precise_;  // pipeline.precision.sample not float32: one at a time
-    if (now) {
+    if (one_at_a_time()) {
       if (!sheared_) {
         test(*tri_, px, py, ps, s);
       } else {
@@ -138,10 +142,8 @@ class SamplePipeline {
   // Samples idx[0..n) of pixel (px, py), in order: push() of each, with the batch bookkeeping
   // once per list on the fast path.
   inline void push_list(int px, int py, const PixelSamples& ps, const std::int32_t* idx, int n) {
-    bool one_by_one = A::counting;
-    if constexpr (!A::counting) one_by_one = precise_ || sheared_ || n > cap_;
-    if (one_by_one) {
-      for (int i = 0; i < n; ++i) push(px, py, ps, idx[i]);
+    if (one_at_a_time() || sheared_ || n > cap_) {
+      push_each(px, py, ps, n, [idx](int i) { return idx[i]; });
       return;
     }
     if (n_ + n > cap_) flush();
@@ -164,24 +166,14 @@ class SamplePipeline {
     n_ = i0 + n;
   }
   // Every sample of pixel (px, py).
-  inline void push_pixel(int px, int py, const PixelSamples& ps) {
+  [[gnu::always_inline]] inline void push_pixel(int px, int py, const PixelSamples& ps) {
     at_pixel(px, py);
     const int spp = f_.table.spp();
-    if constexpr (A::counting) {
-      for (int s = 0; s < spp; ++s) push(px, py, ps, s);
-    } else if (precise_) {
-      for (int s = 0; s < spp; ++s) push(px, py, ps, s);
-    } else if (spp >= 32) {
-      run_pixel(px, py, ps, nullptr, spp);  // large enough to be its own batch
-    } else {
-      if (n_ + spp > cap_) flush();
-      const int i0 = n_;
-      const float fx = static_cast<float>(px), fy = static_cast<float>(py);
-      gather_pixel(fx, fy, ps, spp, i0);
-      for (int s = 0; s < spp; ++s) bpx_[i0 + s] = px, bpy_[i0 + s] = py, bs_[i0 + s] = s;
-      if (stride_)
-        for (int s = 0; s < spp; ++s) bl_[i0 + s] = ps.lens_index[s];
-      n_ += spp;
+    if (one_at_a_time()) {
+      push_each(px, py, ps, spp, [](int s) { return s; });
+    } else if constexpr (!A::counting) {
+      if (spp >= 32) run_pixel(px, py, ps, nullptr, spp);  // large enough to be its own batch
+      else append_pixel(px, py, ps, spp);
     }
   }
   // The samples s of pixel (px, py) with sel[s] != 0 (n_sel of them). With enough samples per
@@ -194,12 +186,12 @@ class SamplePipeline {
     at_pixel(px, py);
     if constexpr (!A::counting) {
       const int spp = f_.table.spp();
-      if (spp >= 32 && 3 * n_sel >= spp && !precise_) {
+      if (!one_at_a_time() && spp >= 32 && 3 * n_sel >= spp) {
         run_pixel(px, py, ps, sel, n_sel);
         return;
       }
     }
-    for (int i = 0; i < n_sel; ++i) push(px, py, ps, idx[i]);
+    push_each(px, py, ps, n_sel, [idx](int i) { return idx[i]; });
   }
 
   // Fast path: the samples s of pixel (px, py) with sel[s] != 0, where sel holds spp flags followed
@@ -209,10 +201,9 @@ class SamplePipeline {
   inline void push_flagged(int px, int py, const PixelSamples& ps, const std::uint8_t* sel) {
     static_assert(!A::counting, "push_flagged is the fast path's");
     const int spp = f_.table.spp();
-    if (precise_) [[unlikely]] {  // pipeline.precision.sample not float32: one at a time, as push() does
+    if (one_at_a_time()) [[unlikely]] {
       at_pixel(px, py);
-      for (int s = 0; s < spp; ++s)
-        if (sel[s]) push(px, py, ps, s);
+      push_each(px, py, ps, spp, [sel](int s) { return sel[s] ? s : -1; });
       return;
     }
 #if defined(__AVX512F__) && defined(__AVX512BW__)
@@ -279,8 +270,10 @@ class SamplePipeline {
     const __m512 a0 = _mm512_set1_ps(b.a0), b0 = _mm512_set1_ps(b.b0), a1 = _mm512_set1_ps(b.a1),
                  b1 = _mm512_set1_ps(b.b1), c0 = _mm512_set1_ps(b.c0), d0 = _mm512_set1_ps(b.d0),
                  c1 = _mm512_set1_ps(b.c1), d1 = _mm512_set1_ps(b.d1);
-    std::uint64_t sel = 0;
-    for (int w = 0; w < spp; w += 16) {
+    // Without cuts (interval's cells; tiles whose h_i sets cut nothing) the active cells' samples.
+    const bool cuts = b.u0 | b.u1 | b.v0 | b.v1;
+    std::uint64_t sel = cuts ? 0 : act;
+    for (int w = 0; cuts && w < spp; w += 16) {
       const __mmask16 lanes = static_cast<__mmask16>(tail >> w);
       __mmask16 keep = static_cast<__mmask16>(act >> w);
       const __m512 u = _mm512_maskz_loadu_ps(lanes, ps.u + w);
@@ -294,18 +287,14 @@ class SamplePipeline {
     const int n_sel = __builtin_popcountll(sel);
     at_pixel(px, py);
     if (n_sel == 0) return in_cells;
-    if (precise_ || (spp >= 32 && 3 * n_sel >= spp)) [[unlikely]] {  // through the byte flags
-      if (!precise_ && n_sel == spp) {  // every sample: the unmasked pixel batch (push_pixel)
-        run_pixel(px, py, ps, nullptr, spp);
-        return in_cells;
-      }
-      _mm512_storeu_si512(sel_bytes_.data(), _mm512_maskz_set1_epi8(sel, 1));
-      if (precise_) {
-        for (int s = 0; s < spp; ++s)
-          if (sel_bytes_[s]) push(px, py, ps, s);
-      } else {
-        run_pixel(px, py, ps, sel_bytes_.data(), n_sel);
-      }
+    if (one_at_a_time()) [[unlikely]] {
+      push_each(px, py, ps, spp, [sel](int s) { return (sel >> s) & 1 ? s : -1; });
+      return in_cells;
+    }
+    // Every sample: the pixel as its own batch (push_pixel). Fewer: compressed into the batch, which
+    // measured faster than the whole pixel's kernel with a mask down to a few unselected samples.
+    if (spp >= 32 && n_sel == spp) {
+      run_pixel(px, py, ps, nullptr, spp);
       return in_cells;
     }
     if (n_ + spp > cap_) flush();
@@ -318,6 +307,7 @@ class SamplePipeline {
     int* __restrict bpx = bpx_.data();
     int* __restrict bpy = bpy_.data();
     int* __restrict bs = bs_.data();
+    const bool need_t = need_t_;
     const __m512 fx = _mm512_set1_ps(static_cast<float>(px)), fy = _mm512_set1_ps(static_cast<float>(py));
     const __m512i vpx = _mm512_set1_epi32(px), vpy = _mm512_set1_epi32(py);
     const __m512i iota = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
@@ -332,7 +322,7 @@ class SamplePipeline {
       _mm512_storeu_ps(gy + n, _mm512_maskz_compress_ps(m, _mm512_add_ps(fy, _mm512_maskz_loadu_ps(m, ps.y + w))));
       _mm512_storeu_ps(gu + n, _mm512_maskz_compress_ps(m, _mm512_maskz_loadu_ps(m, ps.u + w)));
       _mm512_storeu_ps(gv + n, _mm512_maskz_compress_ps(m, _mm512_maskz_loadu_ps(m, ps.v + w)));
-      _mm512_storeu_ps(gt + n, _mm512_maskz_compress_ps(m, _mm512_maskz_loadu_ps(m, ps.t + w)));
+      if (need_t) _mm512_storeu_ps(gt + n, _mm512_maskz_compress_ps(m, _mm512_maskz_loadu_ps(m, ps.t + w)));
       _mm512_storeu_si512(bpx + n, vpx);
       _mm512_storeu_si512(bpy + n, vpy);
       _mm512_storeu_si512(bs + n, _mm512_maskz_compress_epi32(m, _mm512_add_epi32(iota, _mm512_set1_epi32(w))));
@@ -367,7 +357,7 @@ class SamplePipeline {
 
   inline void flush() {
     if constexpr (!A::counting) {
-      if (n_ > 0) run_batch(false);
+      if (n_ > 0) run_batch(false, 0, n_);
       n_ = 0;
     }
   }
@@ -397,7 +387,24 @@ class SamplePipeline {
       Counter::raster_samples_tested_2d, Counter::raster_samples_tested_3d,
       Counter::raster_samples_tested_4d, Counter::raster_samples_tested_5d};
   static constexpr int kBatch = 1024;  // small enough for the batch to stay in L1/L2
-  static constexpr int kSlack = 16;    // push_flagged() stores whole SIMD vectors past the batch's end
+  static constexpr int kSlack = 16;    // push_flagged / push_selected / append_pixel store whole vectors past the end
+
+  // Where run_pixel() evaluates a pixel while a batch is pending: past the batch region.
+  int pixel_at() const { return cap_ + kSlack; }
+
+  // Samples are tested one at a time as they are pushed (push() -> test()), not batched: the
+  // counting path, and a sample-test decision other than float32 (pipeline.precision.sample,
+  // sampletest/precision.h). Every entry point then hands its samples to push_each().
+  bool one_at_a_time() const {
+    if constexpr (A::counting) return true;
+    else return precise_;
+  }
+  // push() of the samples pick(0), ..., pick(n - 1) of pixel (px, py) that are >= 0, in that order.
+  template <class Pick>
+  [[gnu::noinline]] void push_each(int px, int py, const PixelSamples& ps, int n, Pick pick) {
+    for (int i = 0; i < n; ++i)
+      if (const int s = pick(i); s >= 0) push(px, py, ps, s);
+  }
 
   // Indices of the set flags of sel[0..n) into sel_index_ (tiletest/candidates.h compact_flags).
   int compact_index(const std::uint8_t* sel, int n) {
@@ -453,27 +460,60 @@ class SamplePipeline {
   }
 
   // One pixel's samples as a batch of their own (no per-sample pixel/index bookkeeping); with sel,
-  // only the selected samples count (fast path only).
+  // only the selected samples count (fast path only). When the test order is free (order_free()) a
+  // pending batch stays pending and the pixel is evaluated in the second region; else the batch is
+  // flushed first.
   void run_pixel(int px, int py, const PixelSamples& ps, const std::uint8_t* sel, int n_sel) {
     const int spp = f_.table.spp();
-    flush();
-    gather_xy(static_cast<float>(px), static_cast<float>(py), ps, spp);
+    int at = 0;
+    if (n_ > 0 && free_order_) at = pixel_at();
+    else flush();
+    gather_xy(static_cast<float>(px), static_cast<float>(py), ps, spp, at);
     uniform_ps_ = &ps;
     if (stride_)
-      for (int s = 0; s < spp; ++s) bl_[s] = ps.lens_index[s];
-    n_ = spp;
+      for (int s = 0; s < spp; ++s) bl_[at + s] = ps.lens_index[s];
     uniform_px_ = px, uniform_py_ = py;
-    run_batch(true, sel, n_sel);
-    n_ = 0;
+    run_batch(true, at, spp, sel, n_sel);
+  }
+
+  // Every sample of pixel (px, py) appended to the batch (fast path, spp < 32).
+  inline void append_pixel(int px, int py, const PixelSamples& ps, int spp) {
+    if (n_ + spp > cap_) flush();
+    const int i0 = n_;
+#if defined(__AVX512F__)
+    // 16 lanes at a time (the arrays have kSlack lanes beyond cap_); lanes past spp are overwritten
+    // by the next push or never read.
+    const __m512 fx = _mm512_set1_ps(static_cast<float>(px)), fy = _mm512_set1_ps(static_cast<float>(py));
+    const __m512i vpx = _mm512_set1_epi32(px), vpy = _mm512_set1_epi32(py);
+    const __m512i iota = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+    for (int w = 0; w < spp; w += 16) {
+      const __mmask16 m = spp - w >= 16 ? __mmask16(0xffff) : static_cast<__mmask16>((1u << (spp - w)) - 1);
+      const int i = i0 + w;
+      _mm512_storeu_ps(&gx_[i], _mm512_add_ps(fx, _mm512_maskz_loadu_ps(m, ps.x + w)));
+      _mm512_storeu_ps(&gy_[i], _mm512_add_ps(fy, _mm512_maskz_loadu_ps(m, ps.y + w)));
+      _mm512_storeu_ps(&gu_[i], _mm512_maskz_loadu_ps(m, ps.u + w));
+      _mm512_storeu_ps(&gv_[i], _mm512_maskz_loadu_ps(m, ps.v + w));
+      if (need_t_) _mm512_storeu_ps(&gt_[i], _mm512_maskz_loadu_ps(m, ps.t + w));
+      _mm512_storeu_si512(&bpx_[i], vpx);
+      _mm512_storeu_si512(&bpy_[i], vpy);
+      _mm512_storeu_si512(&bs_[i], _mm512_add_epi32(iota, _mm512_set1_epi32(w)));
+    }
+#else
+    gather_pixel(static_cast<float>(px), static_cast<float>(py), ps, spp, i0);
+    for (int s = 0; s < spp; ++s) bpx_[i0 + s] = px, bpy_[i0 + s] = py, bs_[i0 + s] = s;
+#endif
+    if (stride_)
+      for (int s = 0; s < spp; ++s) bl_[i0 + s] = ps.lens_index[s];
+    n_ += spp;
   }
 
   static void mask_flags(int n, const std::uint8_t* __restrict sel, std::uint8_t* __restrict flags) {
     for (int i = 0; i < n; ++i) flags[i] = static_cast<std::uint8_t>(flags[i] * (sel[i] != 0));
   }
 
-  void gather_xy(float fx, float fy, const PixelSamples& ps, int spp) {
-    float* __restrict gx = gx_.data();
-    float* __restrict gy = gy_.data();
+  void gather_xy(float fx, float fy, const PixelSamples& ps, int spp, int at) {
+    float* __restrict gx = gx_.data() + at;
+    float* __restrict gy = gy_.data() + at;
     const float* __restrict x = ps.x;
     const float* __restrict y = ps.y;
     for (int s = 0; s < spp; ++s) gx[s] = fx + x[s], gy[s] = fy + y[s];
@@ -485,20 +525,30 @@ class SamplePipeline {
     float* __restrict gu = gu_.data() + i0;
     float* __restrict gv = gv_.data() + i0;
     float* __restrict gt = gt_.data() + i0;
+    const float* __restrict x = ps.x;
+    const float* __restrict y = ps.y;
+    const float* __restrict u = ps.u;
+    const float* __restrict v = ps.v;
+    const float* __restrict t = ps.t;
     for (int s = 0; s < spp; ++s) {
-      gx[s] = fx + ps.x[s], gy[s] = fy + ps.y[s];
-      gu[s] = ps.u[s], gv[s] = ps.v[s], gt[s] = ps.t[s];
+      gx[s] = fx + x[s], gy[s] = fy + y[s];
+      gu[s] = u[s], gv[s] = v[s], gt[s] = t[s];
     }
   }
 
-  // Evaluate the pending batch (fast path). uniform: the batch is samples 0..n-1 of pixel
-  // (uniform_px_, uniform_py_).
-  void run_batch(bool uniform, const std::uint8_t* sel = nullptr, int n_sel = 0) {
+  // Evaluate n samples from region offset at (fast path): the pending batch (at 0, n_), or with
+  // uniform, samples 0..n-1 of pixel (uniform_px_, uniform_py_), of which only those flagged in sel
+  // (n_sel of them) count when sel is given.
+  void run_batch(bool uniform, int at, int n, const std::uint8_t* sel = nullptr, int n_sel = 0) {
     uniform_ = uniform;
+    at_ = at;
+    const bool masked = sel != nullptr;
     const TriSetup& tri = *tri_;
-    const int n = n_;
-    float* e = be_.data();
-    float* d = bdet_.data();
+    float* e = be_.data() + 3 * static_cast<std::size_t>(at);
+    float* d = bdet_.data() + at;
+    std::uint8_t* flags = flags_.data() + at;
+    float* gx = gx_.data() + at;
+    float* gy = gy_.data() + at;
     std::uint64_t inside_cost;
     bool have_flags = false;  // the kernel computed the flags too
     const float* bu = uniform ? uniform_ps_->u : gu_.data();
@@ -513,26 +563,26 @@ class SamplePipeline {
                        tri.dW[0], tri.dW[1], tri.dW[2], fc.kx,     fc.neg_kx_f, fc.ky, fc.neg_ky_f};
       const bool bfc = f_.p.backface_cull;
       switch (cls) {  // 4D and 5D: edges and flags in one explicit-SIMD pass (sampletest/simd_batch.h)
-        case 0: batch_edges_2d(n, T, gx_.data(), gy_.data(), e, e + n, e + 2 * n, d); break;
+        case 0: batch_edges_2d(n, T, gx, gy, e, e + n, e + 2 * n, d); break;
         case 2:
           if (f_.p.simd) {
-            simd::batch_test_4d(n, T, gx_.data(), gy_.data(), bu, bv, e, e + n, e + 2 * n, d, bfc, flags_.data());
+            simd::batch_test_4d(n, T, gx, gy, bu, bv, e, e + n, e + 2 * n, d, bfc, flags);
             have_flags = true;
           } else {
-            batch_edges_4d(n, T, gx_.data(), gy_.data(), bu, bv, e, e + n, e + 2 * n, d);
+            batch_edges_4d(n, T, gx, gy, bu, bv, e, e + n, e + 2 * n, d);
           }
           break;
-        case 1: batch_edges_3d(n, T, gx_.data(), gy_.data(), bt, e, e + n, e + 2 * n, d); break;
+        case 1: batch_edges_3d(n, T, gx, gy, bt, e, e + n, e + 2 * n, d); break;
         default:
           if (f_.p.simd) {
-            simd::batch_test_5d(n, T, gx_.data(), gy_.data(), bu, bv, bt, e, e + n, e + 2 * n, d, bfc, flags_.data());
+            simd::batch_test_5d(n, T, gx, gy, bu, bv, bt, e, e + n, e + 2 * n, d, bfc, flags);
             have_flags = true;
           } else {
-            batch_edges_5d(n, T, gx_.data(), gy_.data(), bu, bv, bt, e, e + n, e + 2 * n, d);
+            batch_edges_5d(n, T, gx, gy, bu, bv, bt, e, e + n, e + 2 * n, d);
           }
           break;
       }
-      c_[kTestedByClass[cls]] += static_cast<std::uint64_t>(sel ? n_sel : n);
+      c_[kTestedByClass[cls]] += static_cast<std::uint64_t>(masked ? n_sel : n);
       inside_cost = sample_test_cost(model_, tri.cls);
     } else {
       const float W[3] = {tri.W[0], tri.W[1], tri.W[2]};
@@ -540,26 +590,26 @@ class SamplePipeline {
         BatchTri T{};
         T.X0 = xs_[0], T.X1 = xs_[1], T.X2 = xs_[2], T.Y0 = ys_[0], T.Y1 = ys_[1], T.Y2 = ys_[2];
         T.W0 = W[0], T.W1 = W[1], T.W2 = W[2];
-        batch_edges_2d(n, T, gx_.data(), gy_.data(), e, e + n, e + 2 * n, d);
+        batch_edges_2d(n, T, gx, gy, e, e + n, e + 2 * n, d);
       } else {
         for (int i = 0; i < n; ++i) {
-          const int off = stride_ * bl_[i];
+          const int off = stride_ * bl_[at + i];
           edge_functions_s(xs_[off], xs_[off + 1], xs_[off + 2], ys_[off], ys_[off + 1], ys_[off + 2], W[0], W[1],
-                           W[2], gx_[i], gy_[i], e[i], e[n + i], e[2 * n + i], d[i]);
+                           W[2], gx[i], gy[i], e[i], e[n + i], e[2 * n + i], d[i]);
         }
       }
-      c_[Counter::raster_samples_tested_2d] += static_cast<std::uint64_t>(sel ? n_sel : n);
+      c_[Counter::raster_samples_tested_2d] += static_cast<std::uint64_t>(masked ? n_sel : n);
       inside_cost = sample_test_cost(model_, DimClass::k2D);
     }
     // Flags: 1 = covered, 2 = an e_i is exactly zero (scalar top-left path). Then skip 8 flags at a
     // time (most batches are mostly misses).
-    if (!have_flags) batch_flags(n, e, e + n, e + 2 * n, d, f_.p.backface_cull, flags_.data());
-    if (sel) mask_flags(n, sel, flags_.data());
-    const int tested = sel ? n_sel : n;
+    if (!have_flags) batch_flags(n, e, e + n, e + 2 * n, d, f_.p.backface_cull, flags);
+    if (sel) mask_flags(n, sel, flags);
+    const int tested = masked ? n_sel : n;
     c_[Counter::raster_samples_tested] += static_cast<std::uint64_t>(tested);
     c_[Counter::ops_sample_inside] += inside_cost * static_cast<std::uint64_t>(tested);
     auto settle = [&](int i) {
-      const std::uint8_t fl = flags_[i];
+      const std::uint8_t fl = flags[i];
       const int px = uniform ? uniform_px_ : bpx_[i], py = uniform ? uniform_py_ : bpy_[i];
       const int smp = uniform ? i : bs_[i];
       if (fl & 1) {
@@ -573,17 +623,17 @@ class SamplePipeline {
     // The nonzero flags, 64 at a time, as a bit mask walked lowest first: the same samples in the
     // same order as the byte walk below, without a branch per flag.
     for (int w = 0; w < n; w += 64) {
-      const std::uint64_t lanes = n - w >= 64 ? ~std::uint64_t(0) : ((std::uint64_t(1) << (n - w)) - 1);
-      const __m512i f = _mm512_maskz_loadu_epi8(lanes, &flags_[w]);
+      const std::uint64_t live = n - w >= 64 ? ~std::uint64_t(0) : ((std::uint64_t(1) << (n - w)) - 1);
+      const __m512i f = _mm512_maskz_loadu_epi8(live, flags + w);
       for (std::uint64_t m = _mm512_test_epi8_mask(f, f); m; m &= m - 1) settle(w + __builtin_ctzll(m));
     }
 #else
     for (int w = 0; w < n; w += 8) {
       std::uint64_t word;
-      std::memcpy(&word, &flags_[w], 8);
+      std::memcpy(&word, flags + w, 8);
       if (!word) continue;
       for (int i = w; i < std::min(n, w + 8); ++i)
-        if (flags_[i]) settle(i);
+        if (flags[i]) settle(i);
     }
 #endif
   }
@@ -593,14 +643,15 @@ class SamplePipeline {
     float X[3], Y[3], W[3], e[3], det;
     int n_ties;
     bool covered;
+    const int k = at_ + i;  // in the region being evaluated
     if (sheared_) {
-      const int off = stride_ ? stride_ * bl_[i] : 0;
+      const int off = stride_ ? stride_ * bl_[k] : 0;
       for (int j = 0; j < 3; ++j) X[j] = xs_[off + j], Y[j] = ys_[off + j], W[j] = tri.W[j];
-      covered = inside_from_vertices(X, Y, W, gx_[i], gy_[i], f_.p.backface_cull, e, det, n_ties);
+      covered = inside_from_vertices(X, Y, W, gx_[k], gy_[k], f_.p.backface_cull, e, det, n_ties);
     } else {
       const bool u = uniform_;
-      covered = inside_test(tri, tri.cls, f_.fc, gx_[i], gy_[i], u ? uniform_ps_->u[i] : gu_[i],
-                            u ? uniform_ps_->v[i] : gv_[i], u ? uniform_ps_->t[i] : gt_[i], f_.p.backface_cull, X,
+      covered = inside_test(tri, tri.cls, f_.fc, gx_[k], gy_[k], u ? uniform_ps_->u[i] : gu_[k],
+                            u ? uniform_ps_->v[i] : gv_[k], u ? uniform_ps_->t[i] : gt_[k], f_.p.backface_cull, X,
                             Y, W, e, det, n_ties);
     }
     c_[Counter::ops_sample_inside] +=
@@ -667,11 +718,13 @@ class SamplePipeline {
   const PixelSamples* cur_ps_ = nullptr;    // the samples of the pixel under test (precise_ only)
   int uniform_px_ = 0, uniform_py_ = 0;
   bool uniform_ = false;
+  int at_ = 0;                // region offset of the batch being evaluated (run_batch())
+  bool need_t_ = true;        // the triangle's sample test reads t (3D, 5D): else the batch's t lanes are not stored
+  bool free_order_ = false;   // order_free() for the current triangle (set by begin())
   const PixelSamples* uniform_ps_ = nullptr;
   std::vector<float> gx_, gy_, gu_, gv_, gt_, be_, bdet_;
   std::vector<int> bpx_, bpy_, bs_, bl_;
   std::vector<int> sel_index_;  // push_flagged() without SIMD compression
-  std::vector<std::uint8_t> sel_bytes_;  // push_selected(): one pixel's flags, when they are needed
   std::vector<std::uint8_t> flags_;
   PixelCursor* cur_;
 };

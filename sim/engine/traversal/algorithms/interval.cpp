@@ -113,8 +113,7 @@ class Interval final : public Traversal {
         charge<A>(setup_ops, bounds_cost);
         x0 = cx0[ci], x1 = cx1[ci], y0 = cy0[cj], y1 = cy1[cj];
       }
-      ++passes;
-      pipe_.end_visit();  // a visit = one lens-cell pass (records nothing here: order_free)
+      ++passes;  // a visit = one lens-cell pass: end_visit() records nothing when order_free()
       rx0[c] = x0, rx1[c] = x1, ry0[c] = y0, ry1[c] = y1;
       if (x0 >= x1 || y0 >= y1) continue;
       cells |= std::uint64_t(1) << c;
@@ -123,28 +122,38 @@ class Interval final : public Traversal {
     if (!cells) return;
     // Per column (row) the cells whose rectangle spans it: cells start at x0 and end at x1.
     const int W = ux1 - ux0, H = uy1 - uy0;
-    col_.assign(static_cast<std::size_t>(W + 1), 0);
-    row_.assign(static_cast<std::size_t>(H + 1), 0);
-    end_.assign(static_cast<std::size_t>(std::max(W, H) + 1), 0);
-    auto spans = [&](std::vector<std::uint64_t>& out, const int* lo, const int* hi, int origin, int len) {
-      std::fill(end_.begin(), end_.begin() + len + 1, 0);
+    const std::size_t need = static_cast<std::size_t>(W + 1 + H + 1 + std::max(W, H) + 1);
+    if (spans_.size() < need) spans_.resize(std::max(need, 2 * spans_.size()));
+    std::uint64_t* const col = spans_.data();
+    std::uint64_t* const row = col + (W + 1);
+    std::uint64_t* const end = row + (H + 1);
+    std::fill(col, col + need, 0);
+    auto spans = [&](std::uint64_t* out, const int* lo, const int* hi, int origin, int len) {
+      std::fill(end, end + len + 1, 0);
       for (std::uint64_t m = cells; m; m &= m - 1) {
         const int c = __builtin_ctzll(m);
-        out[static_cast<std::size_t>(lo[c] - origin)] |= std::uint64_t(1) << c;
-        end_[static_cast<std::size_t>(hi[c] - origin)] |= std::uint64_t(1) << c;
+        out[lo[c] - origin] |= std::uint64_t(1) << c;
+        end[hi[c] - origin] |= std::uint64_t(1) << c;
       }
       std::uint64_t cur = 0;
-      for (int k = 0; k < len; ++k) cur = (cur & ~end_[static_cast<std::size_t>(k)]) | out[static_cast<std::size_t>(k)], out[static_cast<std::size_t>(k)] = cur;
+      for (int k = 0; k < len; ++k) cur = (cur & ~end[k]) | out[k], out[k] = cur;
     };
-    spans(col_, rx0, rx1, ux0, W);
-    spans(row_, ry0, ry1, uy0, H);
+    spans(col, rx0, rx1, ux0, W);
+    spans(row, ry0, ry1, uy0, H);
+    // A pixel in every cell's rectangle (every cell of the grid active) tests all its samples: the
+    // whole-pixel push, without the selection.
+    const std::uint64_t every = G * G == 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << (G * G)) - 1;
     tiletest::SelectBounds sb;
     for (int py = uy0; py < uy1; ++py) {
-      const std::uint64_t row = row_[static_cast<std::size_t>(py - uy0)];
-      if (!row) continue;
+      const std::uint64_t r = row[py - uy0];
+      if (!r) continue;
       for (int px = ux0; px < ux1; ++px) {
-        const std::uint64_t act = row & col_[static_cast<std::size_t>(px - ux0)];
+        const std::uint64_t act = r & col[px - ux0];
         if (!act) continue;
+        if (act == every) {
+          pipe_.push_pixel(px, py, f_.table.pixel(px, py));
+          continue;
+        }
         sb.set_cells(act);
         pipe_.push_selected(px, py, f_.table.pixel(px, py), sb);
       }
@@ -160,7 +169,7 @@ class Interval final : public Traversal {
   const bool fused_ = SamplePipeline<A>::kFusedSelect && f_.p.simd && f_.table.spp() <= 64 &&
                       f_.p.lens_grid * f_.p.lens_grid <= 64 && f_.p.precision_sample.kind == PrecisionKind::kFloat32 &&
                       f_.p.precision_tile.kind == PrecisionKind::kFloat64;
-  std::vector<std::uint64_t> col_, row_, end_;  // fused_passes(): per pixel column / row, the cells spanning it
+  std::vector<std::uint64_t> spans_;  // fused_passes(): per pixel column and row, the cells spanning it
 };
 
 }  // namespace
