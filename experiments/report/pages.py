@@ -237,11 +237,25 @@ def main(only=None, workers=None, scheduler=None, force=False, quick=False, conf
     failures = 0
     counts = {"rendered": 0, "cached": 0}
     t_all = time.perf_counter()
+
+    def source(p: Path) -> str:
+        return str(p.relative_to(REPO) if p.is_relative_to(REPO) else p)
+
+    # One pool over every config's missing points, largest first (experiments/run/schedule.py); the
+    # sweeps below then read them from the store. Dask-run configs and workers=0 (in-process) skip it.
+    pooled = {"computed": 0, "complete": False}
+    if scheduler is None and (workers is None or workers > 0):
+        from ..run.schedule import run_all
+
+        pooled = run_all([(c, source(p), lines) for p, c, _, lines in loaded if c.executor.kind != "dask"],
+                         workers=workers or os.cpu_count() or 1, keep_records=keep_records,
+                         force=chosen if force else frozenset(), retry_failed=retry_failed)
     for p, config, overrides, lines in loaded:
         t0 = time.perf_counter()
-        df = run_sweep(config, source=str(p.relative_to(REPO) if p.is_relative_to(REPO) else p), workers=workers,
-                       scheduler=scheduler, force=force and config.name in chosen, lines=lines,
-                       retry_failed=retry_failed, keep_records=keep_records)
+        df = run_sweep(config, source=source(p), workers=workers, scheduler=scheduler,
+                       force=force and config.name in chosen and not (pooled["complete"] and
+                                                                      config.executor.kind != "dask"),
+                       lines=lines, retry_failed=retry_failed, keep_records=keep_records)
         failures += int((df["status"] != "ok").sum()) if "status" in df.columns else 0
         for k in counts:
             counts[k] += df.attrs.get("summary", {}).get(k, 0)
@@ -261,7 +275,10 @@ def main(only=None, workers=None, scheduler=None, force=False, quick=False, conf
         for _, _, md, _ in parts:
             text += md
         (page_dir / f"{page}.md").write_text("\n".join(text) + "\n")
-        print(f"wrote {(page_dir / f'{page}.md').relative_to(out_root.parent if quick else REPORTS.parent)}")
+        written, base = page_dir / f"{page}.md", out_root.parent if quick else REPORTS.parent
+        print(f"wrote {written.relative_to(base) if written.is_relative_to(base) else written}")
+    counts["rendered"] += pooled["computed"]
+    counts["cached"] = max(0, counts["cached"] - pooled["computed"])
     # The index lists the pages on disk, so a partial run that wrote a paper page refreshes it too.
     if not only or any(folder == "paper" for folder, _ in sections):
         write_index(out_root, out_root / "paper", quick, time.perf_counter() - t_all, counts)
