@@ -234,7 +234,7 @@ def main(only=None, workers=None, scheduler=None, force=False, quick=False, conf
         chosen = {c.name for _, c, _, _ in loaded}
     keep_records = _retimed_renders(loaded)
     sections: dict[tuple[str, str], list] = defaultdict(list)
-    counts = {"rendered": 0, "cached": 0, "failures": 0}
+    counts = {"rendered": 0, "cached": 0, "failures": 0, "rows": 0}
     t_all = time.perf_counter()
 
     def source(p: Path) -> str:
@@ -261,7 +261,8 @@ def main(only=None, workers=None, scheduler=None, force=False, quick=False, conf
     if pool is not None:
         pool.join()
         counts["rendered"] += pool.computed
-        counts["cached"] = max(0, counts["cached"] - pool.computed)
+    # every row not computed in this run came from the store (a point shared by two configs counts once)
+    counts["cached"] = max(0, counts.pop("rows") - counts["rendered"])
     failures = counts.pop("failures")
     for (folder, page), parts in sections.items():
         page_dir = out_root / folder
@@ -291,8 +292,8 @@ def _sweeps_and_sections(loaded, pool, chosen, sections, counts, out_root, quick
                        force=force and config.name in chosen and not pooled, lines=lines,
                        retry_failed=retry_failed, keep_records=keep_records)
         counts["failures"] += int((df["status"] != "ok").sum()) if "status" in df.columns else 0
-        for k in ("rendered", "cached"):
-            counts[k] += df.attrs.get("summary", {}).get(k, 0)
+        counts["rendered"] += df.attrs.get("summary", {}).get("rendered", 0)
+        counts["rows"] += len(df)
         page = config.outputs.page or config.name
         page_dir = out_root / config.outputs.folder
         page_dir.mkdir(parents=True, exist_ok=True)
