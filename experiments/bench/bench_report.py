@@ -115,6 +115,8 @@ def main(argv=None) -> int:
     ap.add_argument("--json", default=None, help="also write the raw records here")
     ap.add_argument("--label", default="", help="a line saying what was measured (code revision, state)")
     ap.add_argument("--keep", action="store_true", help="keep the temporary store and pages")
+    ap.add_argument("--compare", default=None,
+                    help="the --json of an earlier run (another code revision): a per-config table of both")
     args = ap.parse_args(argv)
 
     tmp = Path(tempfile.mkdtemp(prefix="rast5d_bench_report_"))
@@ -143,6 +145,8 @@ def main(argv=None) -> int:
         Path(args.json).write_text(json.dumps({"configs": log, "jobs": jobs, "cpu": cpu, "wall": wall,
                                                "loads": loads, "rc": rc}, indent=1))
     lines = _page(log, jobs, cpu, wall, loads, args, started, rc)
+    if args.compare:
+        lines += compare(json.loads(Path(args.compare).read_text()), {"configs": log, "jobs": jobs, "cpu": cpu})
     from experiments.bench import write_page
 
     out = Path(args.out) if args.out else REPO / "reports" / "bench" / "bench_report.md"
@@ -214,6 +218,34 @@ def _page(log, jobs, cpu, wall, loads, args, started, rc) -> list[str]:
     out += md_table(["page", "CPU [s]"], [[p, f"{v:.1f}"] for p, v in sorted(pages_cpu.items(),
                                                                              key=lambda t: -t[1])])
     return out
+
+
+def _job_cpu(run) -> dict:
+    out = defaultdict(float)
+    for j in run["jobs"]:
+        out[j["name"]] += j["cpu"]
+    return out
+
+
+def compare(before: dict, after: dict) -> list[str]:
+    """Per config: the CPU seconds of its points and references in an earlier run and in this one."""
+    from experiments.report.tables import md_table
+
+    b, a = _job_cpu(before), _job_cpu(after)
+    pages = {c["config"]: c["page"] for c in after["configs"]}
+    rows = []
+    for name in sorted(set(a) | set(b), key=lambda n: -max(a.get(n, 0.0), b.get(n, 0.0))):
+        rows.append([name, pages.get(name, ""), f"{b[name]:.1f}" if name in b else "not measured",
+                     f"{a[name]:.1f}" if name in a else "", f"{a.get(name, 0.0) / b[name]:.2f}"
+                     if b.get(name) else ""])
+    both = [n for n in a if n in b]
+    sb, sa = sum(b[n] for n in both), sum(a[n] for n in both)
+    return ["", "## Against an earlier run", "", before.get("label", ""), "",
+            f"Configs measured in both: {len(both)}; their points and references: {sb:.0f} CPU-s before, "
+            f"{sa:.0f} after ({sa / sb:.2f}x). Whole earlier run: {before.get('cpu', float('nan')):.0f} CPU-s "
+            f"(RUSAGE) for {len(b)} configs, {before.get('cpu', 0.0) - sum(b.values()):.0f} of them outside "
+            "the points (worker start-up per sweep, pages, configs).", ""] + md_table(
+        ["config", "page", "before: points CPU [s]", "after [s]", "after / before"], rows)
 
 
 if __name__ == "__main__":
