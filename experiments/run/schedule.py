@@ -164,7 +164,7 @@ class PoolRun:
         """Ctrl-C: terminate our own workers (by object) and give up the claims."""
         self._stop = True
         if self._pool is not None:
-            for proc in list(getattr(self._pool, "_processes", {}).values()):
+            for proc in list((getattr(self._pool, "_processes", None) or {}).values()):
                 proc.terminate()
             self._pool.shutdown(wait=False, cancel_futures=True)
         self._release_all()
