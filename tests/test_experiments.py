@@ -487,6 +487,36 @@ def test_report_quick_writes_pages_figures_and_index(tmp_path, store):
     assert "## Second" in again and "## Tiny: samples tested against CoC" in again
 
 
+
+def test_report_pool_computes_each_point_once_and_writes_the_pages_of_the_sequential_path(tmp_path, monkeypatch,
+                                                                                          capsys):
+    """rast5d report's one pool over all configs (experiments/run/schedule.py): a point shared by two
+    configs and the renders a retime section re-times are computed once, and the page equals the one the
+    in-process path (workers=0: one sweep after the other, no pool) writes into a store of its own."""
+    cdir = tmp_path / "configs"
+    cdir.mkdir()
+    write(cdir, "a.yaml", PAGE.replace("text: \"What and how.\"", "text: \"What and how; timing.cycles.\""))
+    # b shares a's tile points (same scene, camera, table, pipeline, timing read) and adds one
+    write(cdir, "b.yaml", "extends: a.yaml\nname: b\nsweep: {camera.coc_px: [0, 6, 9], pipeline.algorithm: [tile]}\n"
+                          "outputs: {page: tiny, title: Second, order: 1}\n")
+    write(cdir, "c.yaml", "extends: a.yaml\nname: c\npoint: {kind: retime, hardware: {cores: 2}}\n"
+                          "outputs: {page: tiny, title: Retimed, order: 2, plots: [{kind: table, x: camera.coc_px, "
+                          "y: timing.cycles, hue: pipeline.algorithm}]}\n")
+    pages_out = {}
+    for workers in (2, 0):
+        monkeypatch.setenv("RAST5D_RESULTS", str(tmp_path / f"results{workers}"))
+        assert pages.main(configs_dir=cdir, reports_dir=tmp_path / f"reports{workers}", workers=workers) == 0
+        captured = capsys.readouterr()
+        out = captured.out + captured.err
+        pages_out[workers] = [line for line in (tmp_path / f"reports{workers}" / "paper" / "tiny.md").read_text()
+                              .splitlines() if not line.startswith("Made by")]
+        if workers:
+            # 4 points of a + 1 of b (its other 2 are a's) + 4 retimes, each computed once, by the pool
+            assert "report (all configs)" in out and "b: 3/3 points (0 rendered" in out
+        assert "(9 points rendered, 2 from the result store)" in out
+    assert pages_out[2] == pages_out[0]
+
+
 def test_rast5d_run_writes_the_config_page(tmp_path, store):
     p = write(tmp_path, "tiny.yaml", PAGE)
     r = subprocess.run([sys.executable, "-m", "experiments.cli", "run", str(p), "--workers", "0",

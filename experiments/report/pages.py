@@ -234,23 +234,36 @@ def main(only=None, workers=None, scheduler=None, force=False, quick=False, conf
         chosen = {c.name for _, c, _, _ in loaded}
     keep_records = _retimed_renders(loaded)
     sections: dict[tuple[str, str], list] = defaultdict(list)
-    failures = 0
-    counts = {"rendered": 0, "cached": 0}
+    counts = {"rendered": 0, "cached": 0, "failures": 0, "rows": 0}
     t_all = time.perf_counter()
-    for p, config, overrides, lines in loaded:
-        t0 = time.perf_counter()
-        df = run_sweep(config, source=str(p.relative_to(REPO) if p.is_relative_to(REPO) else p), workers=workers,
-                       scheduler=scheduler, force=force and config.name in chosen, lines=lines,
-                       retry_failed=retry_failed, keep_records=keep_records)
-        failures += int((df["status"] != "ok").sum()) if "status" in df.columns else 0
-        for k in counts:
-            counts[k] += df.attrs.get("summary", {}).get(k, 0)
-        page = config.outputs.page or config.name
-        page_dir = out_root / config.outputs.folder
-        page_dir.mkdir(parents=True, exist_ok=True)
-        md = section_markdown(config, p, df, page_dir, _command(config.name, quick), overrides,
-                              time.perf_counter() - t0, volatile=False)
-        sections[config.outputs.folder, page].append((config.outputs.order, config.name, md, config))
+
+    def source(p: Path) -> str:
+        return str(p.relative_to(REPO) if p.is_relative_to(REPO) else p)
+
+    # One pool over every config's missing points, largest first (experiments/run/schedule.py), in a
+    # thread: the sweeps below wait for their points' rows (the pool holds their store locks) and each
+    # page section is written as soon as its rows are in, while the pool works on. Dask-run configs and
+    # workers=0 (in-process) skip it.
+    pool = None
+    if scheduler is None and (workers is None or workers > 0):
+        from ..run.schedule import run_all
+
+        pool = run_all([(c, source(p), lines) for p, c, _, lines in loaded if c.executor.kind != "dask"],
+                       workers=workers or os.cpu_count() or 1, keep_records=keep_records,
+                       force=chosen if force else frozenset(), retry_failed=retry_failed, background=True)
+    try:
+        _sweeps_and_sections(loaded, pool, chosen, sections, counts, out_root, quick, workers, scheduler, force,
+                             retry_failed, keep_records, source)
+    except BaseException:
+        if pool is not None:
+            pool.stop()
+        raise
+    if pool is not None:
+        pool.join()
+        counts["rendered"] += pool.computed
+    # every row not computed in this run came from the store (a point shared by two configs counts once)
+    counts["cached"] = max(0, counts.pop("rows") - counts["rendered"])
+    failures = counts.pop("failures")
     for (folder, page), parts in sections.items():
         page_dir = out_root / folder
         parts.sort(key=lambda t: (t[0], t[1]))
@@ -261,11 +274,32 @@ def main(only=None, workers=None, scheduler=None, force=False, quick=False, conf
         for _, _, md, _ in parts:
             text += md
         (page_dir / f"{page}.md").write_text("\n".join(text) + "\n")
-        print(f"wrote {(page_dir / f'{page}.md').relative_to(out_root.parent if quick else REPORTS.parent)}")
+        written, base = page_dir / f"{page}.md", out_root.parent if quick else REPORTS.parent
+        print(f"wrote {written.relative_to(base) if written.is_relative_to(base) else written}")
     # The index lists the pages on disk, so a partial run that wrote a paper page refreshes it too.
     if not only or any(folder == "paper" for folder, _ in sections):
         write_index(out_root, out_root / "paper", quick, time.perf_counter() - t_all, counts)
     return 1 if failures else 0
+
+
+def _sweeps_and_sections(loaded, pool, chosen, sections, counts, out_root, quick, workers, scheduler, force,
+                         retry_failed, keep_records, source):
+    """Each config's sweep (from the store, or waiting for the pool's rows) and its page section."""
+    for p, config, overrides, lines in loaded:
+        t0 = time.perf_counter()
+        pooled = pool is not None and config.executor.kind != "dask"
+        df = run_sweep(config, source=source(p), workers=workers, scheduler=scheduler,
+                       force=force and config.name in chosen and not pooled, lines=lines,
+                       retry_failed=retry_failed, keep_records=keep_records)
+        counts["failures"] += int((df["status"] != "ok").sum()) if "status" in df.columns else 0
+        counts["rendered"] += df.attrs.get("summary", {}).get("rendered", 0)
+        counts["rows"] += len(df)
+        page = config.outputs.page or config.name
+        page_dir = out_root / config.outputs.folder
+        page_dir.mkdir(parents=True, exist_ok=True)
+        md = section_markdown(config, p, df, page_dir, _command(config.name, quick), overrides,
+                              time.perf_counter() - t0, volatile=False)
+        sections[config.outputs.folder, page].append((config.outputs.order, config.name, md, config))
 
 
 def write_index(out_root: Path, page_dir: Path, quick: bool, elapsed: float, counts: dict):

@@ -65,10 +65,11 @@ def _rendered(config, row: dict, threads, options: dict | None = None):
     import sim
 
     scene, camera, table, pipeline = _build(config, row, threads)
-    # Sweep points of pages that never read timing skip the model; a render observed from the command
-    # line (progress, pixel statistics: `rast5d render`) keeps every figure.
+    # Sweep points of pages that never read timing skip the model, and so do their pixel-statistics
+    # re-renders for a page's heatmaps; a render from the command line (`rast5d render`, with progress)
+    # keeps every figure.
     result = sim.render(scene, camera, table, pipeline, hardware=config.hardware_config(),
-                        timing=timing_needed(config) or bool(options), **(options or {}))
+                        timing=timing_needed(config) or "progress" in (options or {}), **(options or {}))
     row["resolved.lens_grid"] = result.config.get("lens_grid")
     row.update(result.flat_stats)
     if result.ci95 is not None:  # sampled simulation: 95% half-widths beside the estimates

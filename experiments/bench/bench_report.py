@@ -1,0 +1,252 @@
+"""The whole `rast5d report`'s cost: run it into an empty temporary result store and record, per
+config, the CPU seconds of the points it computed and its wall time, and for the whole run the CPU
+seconds (RUSAGE_SELF + RUSAGE_CHILDREN), the wall time, the load average meanwhile and the ideal wall
+time on N idle cores (max of total CPU / N and the longest single job). Writes
+reports/bench/bench_report.md (or --out).
+
+    python -m experiments.bench.bench_report [--workers 2] [--only CONFIG_OR_PAGE ...] [--out PAGE]
+
+On a shared machine the wall time depends on the load; the CPU seconds and the ideal wall do not
+(much). The pages are written into a temporary folder, never over reports/.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import shutil
+import sys
+import tempfile
+import threading
+import time
+from collections import defaultdict
+from pathlib import Path
+
+_POINT_LOG = "RAST5D_BENCH_POINT_LOG"
+
+
+def _cpu(kind) -> float:
+    r = resource.getrusage(kind)
+    return r.ru_utime + r.ru_stime
+
+
+def _timed_run_point(config_json, *args, **kwargs):
+    """run_point in a worker, logging the point's CPU and wall seconds (one JSON line per point)."""
+    from experiments.run import points
+
+    c0, t0 = time.process_time(), time.perf_counter()
+    row = points.run_point(config_json, *args, **kwargs)
+    cpu, wall = time.process_time() - c0, time.perf_counter() - t0
+    path = os.environ.get(_POINT_LOG)
+    if path:
+        rec = {"name": json.loads(config_json).get("name"), "hash": row.get("config_hash"), "cpu": cpu,
+               "wall": wall, "status": row.get("status"), "kind": "point"}
+        with open(path, "a") as f:
+            f.write(json.dumps(rec) + "\n")
+    return row
+
+
+def _instrument(log: list, point_log: Path):
+    """Wrap the report's sweep runner, the pool's point function and the reference renderer."""
+    from experiments.report import pages
+    from experiments.run import executors, references
+
+    from experiments.bench import bench_report  # by its module name (not __main__), for the pool's pickling
+
+    executors.run_point = bench_report._timed_run_point  # the forked workers inherit the wrapper
+    try:
+        from experiments.run import schedule
+
+        schedule.run_point = bench_report._timed_run_point
+    except ImportError:  # a tree without the one-pool pass
+        pass
+    orig_sweep, orig_ref = pages.run_sweep, references.reference_image
+
+    def sweep(config, **kw):
+        c0 = _cpu(resource.RUSAGE_SELF) + _cpu(resource.RUSAGE_CHILDREN)
+        t0 = time.perf_counter()
+        df = orig_sweep(config, **kw)
+        log.append({"config": config.name, "page": config.outputs.page or config.name, "points": len(df),
+                    "summary": df.attrs.get("summary", {}), "wall": time.perf_counter() - t0,
+                    "cpu_rusage": _cpu(resource.RUSAGE_SELF) + _cpu(resource.RUSAGE_CHILDREN) - c0,
+                    "load": os.getloadavg()[0]})
+        return df
+
+    def reference(config, threads=None):
+        c0, t0 = time.process_time(), time.perf_counter()
+        path = references._reference_path(references.reference_config(config))
+        existed = path.exists()
+        image = orig_ref(config, threads)
+        if not existed:
+            with open(point_log, "a") as f:
+                f.write(json.dumps({"name": config.name, "hash": path.name, "cpu": time.process_time() - c0,
+                                    "wall": time.perf_counter() - t0, "kind": "reference",
+                                    "spp": config.outputs.metrics.reference_spp,
+                                    "threads": threads}) + "\n")
+        return image
+
+    orig_section = pages.section_markdown
+
+    def section(config, *a, **kw):
+        c0 = _cpu(resource.RUSAGE_SELF)
+        out = orig_section(config, *a, **kw)
+        for c in log[::-1]:
+            if c["config"] == config.name:
+                c["page_cpu"] = _cpu(resource.RUSAGE_SELF) - c0
+                break
+        return out
+
+    pages.run_sweep = sweep
+    pages.section_markdown = section
+    references.reference_image = reference
+
+
+def _load_sampler(samples: list, stop: threading.Event, every: float = 10.0):
+    while not stop.wait(every):
+        samples.append(os.getloadavg()[0])
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--only", nargs="*", default=None, help="configs or pages (default: the whole report)")
+    ap.add_argument("--out", default=None, help="the page to write (default reports/bench/bench_report.md)")
+    ap.add_argument("--json", default=None, help="also write the raw records here")
+    ap.add_argument("--label", default="", help="a line saying what was measured (code revision, state)")
+    ap.add_argument("--keep", action="store_true", help="keep the temporary store and pages")
+    ap.add_argument("--compare", default=None,
+                    help="the --json of an earlier run (another code revision): a per-config table of both")
+    args = ap.parse_args(argv)
+
+    tmp = Path(tempfile.mkdtemp(prefix="rast5d_bench_report_"))
+    os.environ["RAST5D_RESULTS"] = str(tmp / "results")
+    point_log = tmp / "points.jsonl"
+    os.environ[_POINT_LOG] = str(point_log)
+    from experiments.config import REPO
+    from experiments.report import pages
+
+    log: list = []
+    _instrument(log, point_log)
+    loads: list = [os.getloadavg()[0]]
+    stop = threading.Event()
+    sampler = threading.Thread(target=_load_sampler, args=(loads, stop), daemon=True)
+    sampler.start()
+    c0 = _cpu(resource.RUSAGE_SELF) + _cpu(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    started = time.strftime("%Y-%m-%d %H:%M:%S")
+    rc = pages.main(only=args.only, workers=args.workers, reports_dir=tmp / "reports")
+    wall = time.perf_counter() - t0
+    cpu = _cpu(resource.RUSAGE_SELF) + _cpu(resource.RUSAGE_CHILDREN) - c0
+    stop.set()
+    loads.append(os.getloadavg()[0])
+    jobs = [json.loads(line) for line in point_log.read_text().splitlines()] if point_log.exists() else []
+    if args.json:
+        Path(args.json).write_text(json.dumps({"configs": log, "jobs": jobs, "cpu": cpu, "wall": wall,
+                                               "loads": loads, "rc": rc}, indent=1))
+    lines = _page(log, jobs, cpu, wall, loads, args, started, rc)
+    if args.compare:
+        lines += compare(json.loads(Path(args.compare).read_text()), {"configs": log, "jobs": jobs, "cpu": cpu})
+    from experiments.bench import write_page
+
+    out = Path(args.out) if args.out else REPO / "reports" / "bench" / "bench_report.md"
+    write_page(out.parent, out.name, lines)
+    if args.keep:
+        print(f"kept {tmp}")
+    else:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return rc
+
+
+def _page(log, jobs, cpu, wall, loads, args, started, rc) -> list[str]:
+    from experiments.report.tables import md_table
+
+    n = args.workers
+    by_cfg = defaultdict(lambda: {"cpu": 0.0, "n": 0, "max": 0.0, "refs": 0.0, "n_refs": 0})
+    for j in jobs:
+        d = by_cfg[j["name"]]
+        if j["kind"] == "reference":
+            d["refs"] += j["cpu"]
+            d["n_refs"] += 1
+        else:
+            d["cpu"] += j["cpu"]
+            d["n"] += 1
+            d["max"] = max(d["max"], j["cpu"])
+    rows, pages_cpu, page_cpu = [], defaultdict(float), 0.0
+    seen = set()
+    for c in log:
+        d = by_cfg.get(c["config"], {"cpu": 0.0, "n": 0, "max": 0.0, "refs": 0.0, "n_refs": 0})
+        seen.add(c["config"])
+        s = c["summary"]
+        pages_cpu[c["page"]] += d["cpu"] + d["refs"]
+        rows.append([c["config"], c["page"], c["points"], d["n"], f"{d['cpu']:.1f}",
+                     f"{d['refs']:.1f} ({d['n_refs']})" if d["n_refs"] else "", f"{d['max']:.1f}",
+                     f"{c['cpu_rusage']:.1f}", f"{c['wall']:.1f}", f"{c.get('page_cpu', 0.0):.1f}",
+                     f"{c['load']:.1f}"])
+        page_cpu += c.get("page_cpu", 0.0)
+    for name, d in by_cfg.items():  # jobs computed outside any config's sweep (a shared phase)
+        if name not in seen:
+            rows.append([name, "", "", d["n"], f"{d['cpu']:.1f}", f"{d['refs']:.1f} ({d['n_refs']})"
+                         if d["n_refs"] else "", f"{d['max']:.1f}", "", "", "", ""])
+    job_cpu = sum(j["cpu"] for j in jobs)
+    longest = max(jobs, key=lambda j: j["cpu"]) if jobs else None
+    ideal = max(cpu / n, longest["cpu"] if longest else 0.0)
+    out = ["# The whole report's time", "",
+           "Generated by `python -m experiments.bench.bench_report"
+           + (f" --only {' '.join(args.only)}" if args.only else "") + f" --workers {n}`: "
+           "`rast5d report` run into an empty temporary result store (pages into a temporary folder), "
+           f"started {started}." + (f" {args.label}" if args.label else ""), "",
+           f"- CPU, whole run (RUSAGE_SELF + RUSAGE_CHILDREN): **{cpu:.0f} s**; of it in computed points and "
+           f"reference images (per job, in the process that ran it): {job_cpu:.0f} s over {len(jobs)} jobs",
+           f"- of the rest, writing the pages (figures, tables; the parent process): {page_cpu:.0f} s; "
+           f"loading configs, hashing points, starting workers: {cpu - job_cpu - page_cpu:.0f} s",
+           f"- ideal wall on {n} idle cores, max(CPU / {n}, longest job): **{ideal:.0f} s** "
+           f"({ideal / 60:.1f} min)" + (f"; longest job: {longest['cpu']:.1f} CPU-s ({longest['kind']} of "
+                                        f"`{longest['name']}`)" if longest else ""),
+           f"- real wall: {wall:.0f} s ({wall / 60:.1f} min) at load average {min(loads):.1f}-{max(loads):.1f} "
+           f"(mean {sum(loads) / len(loads):.1f}; 1-minute load sampled every 10 s, machine has "
+           f"{os.cpu_count()} cores); exit code {rc}", "",
+           "Per config, in the order the report runs them. *points CPU*: CPU seconds of the points this "
+           "config computed (a point shared with an earlier config is computed once, by the first); "
+           "*references*: CPU seconds of the reference images rendered for its image metrics (count); "
+           "*longest*: its most expensive point; *sweep CPU / wall*: RUSAGE_SELF + CHILDREN and wall "
+           "seconds around its sweep (with one pool over all configs, most work happens before the "
+           "sweeps, which then read the store); *page CPU*: writing its section (figures, tables).", ""]
+    out += md_table(["config", "page", "points", "computed", "points CPU [s]", "references CPU [s]",
+                     "longest [s]", "sweep CPU [s]", "sweep wall [s]", "page CPU [s]", "load"], rows)
+    out += ["", "Per page (points + references CPU):", ""]
+    out += md_table(["page", "CPU [s]"], [[p, f"{v:.1f}"] for p, v in sorted(pages_cpu.items(),
+                                                                             key=lambda t: -t[1])])
+    return out
+
+
+def _job_cpu(run) -> dict:
+    out = defaultdict(float)
+    for j in run["jobs"]:
+        out[j["name"]] += j["cpu"]
+    return out
+
+
+def compare(before: dict, after: dict) -> list[str]:
+    """Per config: the CPU seconds of its points and references in an earlier run and in this one."""
+    from experiments.report.tables import md_table
+
+    b, a = _job_cpu(before), _job_cpu(after)
+    pages = {c["config"]: c["page"] for c in after["configs"]}
+    rows = []
+    for name in sorted(set(a) | set(b), key=lambda n: -max(a.get(n, 0.0), b.get(n, 0.0))):
+        rows.append([name, pages.get(name, ""), f"{b[name]:.1f}" if name in b else "not measured",
+                     f"{a[name]:.1f}" if name in a else "", f"{a.get(name, 0.0) / b[name]:.2f}"
+                     if b.get(name) else ""])
+    both = [n for n in a if n in b]
+    sb, sa = sum(b[n] for n in both), sum(a[n] for n in both)
+    return ["", "## Against an earlier run", "", before.get("label", ""), "",
+            f"Configs measured in both: {len(both)}; their points and references: {sb:.0f} CPU-s before, "
+            f"{sa:.0f} after ({sa / sb:.2f}x). Whole earlier run: {before.get('cpu', float('nan')):.0f} CPU-s "
+            f"(RUSAGE) for {len(b)} configs, {before.get('cpu', 0.0) - sum(b.values()):.0f} of them outside "
+            "the points (worker start-up per sweep, pages, configs).", ""] + md_table(
+        ["config", "page", "before: points CPU [s]", "after [s]", "after / before"], rows)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,213 @@
+"""One local process pool over the points of many sweeps (``rast5d report``): every missing point of
+every config, each distinct point once (points shared between configs hash alike), and the reference
+images their image metrics need, run largest first, so that no core idles at the tail of each sweep
+while the next waits. Rows go to the result store as they finish; the sweeps then read them from it
+(run_sweep), so pages and tables are built exactly as without this pass.
+
+Order: reference images first (their points wait for them), then points by an estimate of their work
+(pixels x samples per pixel x the blur and the algorithm's weight; estimate_cost). Only the order
+depends on the estimate, never a result. Retime points run after the render whose records they re-time
+(kept for them: ``keep_records``). A pool broken by a crashing point stops this pass; the sweeps then
+compute what is left, isolating the crash as they do.
+"""
+from __future__ import annotations
+
+import heapq
+import itertools
+
+from ..config import RenderConfig, config_hash, expand_sweep
+from .executors import worker_init
+from .points import render_config, run_point
+from .store import cached_row, claim, images_dir as store_images_dir, records_path, release, store_point
+
+# Relative work per sample of an algorithm (estimate_cost); only the order of the pool uses it.
+_ALGORITHM_WEIGHT = {"bruteforce": 2.0, "interleave": 3.0, "hinterleave": 3.0, "tile_interleaved": 3.0,
+                     "accumulation": 3.0, "lines": 2.0}
+
+
+def estimate_cost(config: RenderConfig, spp: int | None = None) -> float:
+    """A rough, relative estimate of a point's CPU time, for ordering the pool (largest first)."""
+    cam, params = config.camera, (config.scene.params or {})
+    w = cam.width or params.get("width") or 640
+    h = cam.height or params.get("height") or round(w * 9 / 16)
+    spp = spp or config.samples.spp or 1
+    if config.samples.kind == "lines":
+        spp = 4 * (config.samples.n_lines or 4)
+    coc = cam.coc_px or 0.0
+    alg = config.pipeline.algorithm or "tile"
+    weight = 1.0 if alg.startswith("gpu_") else _ALGORITHM_WEIGHT.get(alg, 1.0)
+    return float(w) * float(h) * spp * (1.0 + coc / 10.0) * weight
+
+
+def reference_job(config_json: str) -> None:
+    """Render (and cache) the reference image of a point's metrics in a pool worker."""
+    from . import references
+
+    references.reference_image(RenderConfig.model_validate_json(config_json), threads=1)
+
+
+def run_all(sweeps, *, workers: int, keep_records=frozenset(), force=frozenset(), retry_failed: bool = False,
+            progress: bool = True, background: bool = False) -> "PoolRun":
+    """Compute every missing point of ``sweeps`` [(config, source, lines)] on one pool of ``workers``
+    processes, largest first; configs named in ``force`` are recomputed. Every job's point is claimed
+    (locked in the store) before this returns, so a sweep run meanwhile waits for its rows instead of
+    computing them. ``background``: the pool runs in a thread (PoolRun.join waits for it)."""
+    from .references import _reference_path, reference_config
+
+    jobs, seen, waits = [], set(), {}
+    refs: dict = {}
+    claimed: set[str] = set()
+    rendering: set[str] = set()  # render points of this pool (their hashes)
+    retimes = []
+    for config, source, lines in sweeps:
+        img_dir = store_images_dir(config.name) if config.outputs.images else None
+        for _, cfg in expand_sweep(config, source, lines):
+            h = config_hash(cfg)
+            if h in seen:
+                continue
+            seen.add(h)
+            if config.name not in force:
+                cached = cached_row(h, retry_failed=retry_failed)
+                if cached is not None and (img_dir is None or cached.get("status") != "ok"
+                                           or (img_dir / f"{h}.png").exists()):
+                    continue
+            if not claim(h):  # another run is computing it; the sweep waits for its row
+                continue
+            claimed.add(h)
+            if config.point.kind == "retime":
+                retimes.append((h, cfg))
+                continue
+            image = str(img_dir / f"{h}.png") if img_dir is not None else None
+            args = (cfg.model_dump_json(), image, 1) + ((h,) if h in keep_records else ())
+            job = ("point", h, args, estimate_cost(cfg), h)
+            rendering.add(h)
+            if cfg.outputs.metrics is not None:
+                ref = reference_config(cfg)
+                path = _reference_path(ref)
+                if not path.exists():
+                    if path not in refs:
+                        refs[path] = ("reference", path, (cfg.model_dump_json(),),
+                                      estimate_cost(ref, cfg.outputs.metrics.reference_spp), path)
+                    waits.setdefault(path, []).append(job)
+                    continue
+            jobs.append(job)
+    # Retime points re-time their render's stored records: after that render (a point of this pool, or
+    # the first retime point of the render, which renders and stores it).
+    leads: set[str] = set()
+    for h, cfg in retimes:
+        rh = config_hash(render_config(cfg))
+        if rh in rendering or rh in leads:
+            waits.setdefault(rh, []).append(("point", h, (cfg.model_dump_json(), None, 1), 1.0, None))
+        elif records_path(rh).exists():
+            jobs.append(("point", h, (cfg.model_dump_json(), None, 1), 1.0, None))
+        else:
+            leads.add(rh)
+            jobs.append(("point", h, (cfg.model_dump_json(), None, 1), estimate_cost(cfg), rh))
+    total = len(jobs) + len(refs) + sum(len(v) for v in waits.values())
+    run = PoolRun(refs, jobs, waits, claimed, workers, progress, total)
+    if background:
+        run.start()
+    else:
+        run.loop()
+    return run
+
+
+class PoolRun:
+    """The pool of run_all; ``start()`` runs it in a thread (the caller writes pages meanwhile and waits
+    for the rows through the store's point locks), ``loop()`` in the caller. ``computed``: points
+    stored; ``complete``: every job ran (after a broken pool the sweeps compute what is left)."""
+
+    def __init__(self, refs, jobs, waits, claimed, workers, progress, total):
+        self.waits, self.claimed, self.workers = waits, claimed, max(1, workers)
+        self.computed, self.complete, self.total = 0, True, total
+        self._order = itertools.count()
+        self._ready: list = []
+        for job in refs.values():
+            self._push(job, first=True)
+        for job in jobs:
+            self._push(job)
+        self._thread = None
+        self._stop = False
+        self._bar = None
+        if progress and total:
+            from tqdm import tqdm
+
+            self._bar = tqdm(total=total, desc="report (all configs)", unit="job", dynamic_ncols=True)
+        self._pool = None
+        self._running: dict = {}
+        if total:
+            from concurrent.futures import ProcessPoolExecutor
+
+            self._pool = ProcessPoolExecutor(max_workers=self.workers, initializer=worker_init)
+            self._fill()  # forks the workers now, before the caller's thread does anything else
+
+    def _push(self, job, first: bool = False):
+        heapq.heappush(self._ready, (0 if first else 1, -job[3], next(self._order), job))
+
+    def _fill(self):
+        while self._ready and len(self._running) < self.workers and not self._stop:
+            job = heapq.heappop(self._ready)[3]
+            fn = reference_job if job[0] == "reference" else run_point
+            self._running[self._pool.submit(fn, *job[2])] = job
+
+    def start(self):
+        import threading
+
+        self._thread = threading.Thread(target=self.loop, name="rast5d-report-pool", daemon=True)
+        self._thread.start()
+
+    def join(self):
+        if self._thread is not None:
+            self._thread.join()
+
+    def stop(self):
+        """Ctrl-C: terminate our own workers (by object) and give up the claims."""
+        self._stop = True
+        if self._pool is not None:
+            for proc in list((getattr(self._pool, "_processes", None) or {}).values()):
+                proc.terminate()
+            self._pool.shutdown(wait=False, cancel_futures=True)
+        self._release_all()
+
+    def _release_all(self):
+        for h in list(self.claimed):
+            release(h)
+        self.claimed.clear()
+
+    def loop(self):
+        from concurrent.futures import FIRST_COMPLETED, wait
+        from concurrent.futures.process import BrokenProcessPool
+
+        try:
+            while (self._ready or self._running) and not self._stop:
+                self._fill()
+                done, _ = wait(list(self._running), return_when=FIRST_COMPLETED)
+                for fut in done:
+                    job = self._running.pop(fut)
+                    try:
+                        result = fut.result()
+                    except BrokenProcessPool:
+                        raise
+                    except Exception:  # noqa: BLE001 - a failed reference: its points render it themselves
+                        result = None
+                    for waiting in self.waits.pop(job[4], []) if job[4] is not None else ():
+                        self._push(waiting)
+                    if job[0] == "point" and result is not None:
+                        store_point(result)
+                        release(job[1])
+                        self.claimed.discard(job[1])
+                        self.computed += 1
+                    if self._bar is not None:
+                        self._bar.update(1)
+        except BrokenProcessPool:
+            self.complete = False
+        except Exception:  # noqa: BLE001 - the sweeps compute whatever is left
+            self.complete = False
+        finally:
+            if self._stop:
+                self.complete = False
+            self._release_all()
+            if self._bar is not None:
+                self._bar.close()
+            if self._pool is not None:
+                self._pool.shutdown(wait=not self._stop)
