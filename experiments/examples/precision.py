@@ -592,24 +592,13 @@ def study():
                             cpu_s=time.process_time() - t0)
         ROWS.parent.mkdir(exist_ok=True)
         ROWS.write_text(json.dumps(data))
-    for V in VIEWPORTS:
-        if "rows_box" not in data[str(V)]:
-            t0 = time.process_time()
-            data[str(V)]["rows_box"] = rows_box(V)
-            data[str(V)]["cpu_s"] += time.process_time() - t0
-            ROWS.write_text(json.dumps(data))
-    for V in VIEWPORTS:
-        if "rows_5d" not in data[str(V)]:
-            t0 = time.process_time()
-            data[str(V)]["rows_5d"] = rows_5d(V)
-            data[str(V)]["cpu_s"] += time.process_time() - t0
-            ROWS.write_text(json.dumps(data))
-    for V in VIEWPORTS:
-        if "rows_4d" not in data[str(V)]:
-            t0 = time.process_time()
-            data[str(V)]["rows_4d"] = rows_4d(V)
-            data[str(V)]["cpu_s"] += time.process_time() - t0
-            ROWS.write_text(json.dumps(data))
+    for key, rows in (("rows_box", rows_box), ("rows_5d", rows_5d), ("rows_4d", rows_4d)):
+        for V in VIEWPORTS:  # row kinds missing from a cached study are computed and added
+            if key not in data[str(V)]:
+                t0 = time.process_time()
+                data[str(V)][key] = rows(V)
+                data[str(V)]["cpu_s"] += time.process_time() - t0
+                ROWS.write_text(json.dumps(data))
     if "renders" in data and "motion" not in data["renders"]:
         t0 = time.process_time()
         data["renders"]["motion"] = render_motion_rows()
