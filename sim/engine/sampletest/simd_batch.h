@@ -117,8 +117,8 @@ inline void flags_tail(__mmask16 k, V a, V b, V c, V d, bool bfc, std::uint8_t* 
 }
 #endif
 
-// 4D (static, defocused): e, det and flags of n samples; the tail (n mod the vector width) and
-// builds without AVX2 use the scalar kernels.
+// 4D (static, defocused): e, det and flags of n samples; with AVX-512 VL the tail (n mod the vector
+// width) is one masked vector, otherwise it and builds without AVX2 use the scalar kernels.
 inline void batch_test_4d(int n, const BatchTri& T, const float* __restrict bx, const float* __restrict by,
                           const float* __restrict bu, const float* __restrict bv, float* __restrict e0,
                           float* __restrict e1, float* __restrict e2, float* __restrict dt, bool bfc,
@@ -129,11 +129,14 @@ inline void batch_test_4d(int n, const BatchTri& T, const float* __restrict bx, 
   const V W0 = set1(T.W0), W1 = set1(T.W1), W2 = set1(T.W2);
   const V cx0 = set1(T.cx0), cx1 = set1(T.cx1), cx2 = set1(T.cx2), cy0 = set1(T.cy0), cy1 = set1(T.cy1),
           cy2 = set1(T.cy2);
-  for (; i + kW <= n; i += kW) {
-    const V u = load(bu + i), v = load(bv + i);
-    V a, b, c, d;
+  // one vector of samples at lens (u, v) and pixel (x, y): e0..e2 and det (full vectors and the masked tail)
+  auto lanes = [&](V u, V v, V x, V y, V& a, V& b, V& c, V& d) {
     edges(vmadd(u, cx0, X0), vmadd(u, cx1, X1), vmadd(u, cx2, X2), vmadd(v, cy0, Y0), vmadd(v, cy1, Y1),
-          vmadd(v, cy2, Y2), W0, W1, W2, load(bx + i), load(by + i), a, b, c, d);
+          vmadd(v, cy2, Y2), W0, W1, W2, x, y, a, b, c, d);
+  };
+  for (; i + kW <= n; i += kW) {
+    V a, b, c, d;
+    lanes(load(bu + i), load(bv + i), load(bx + i), load(by + i), a, b, c, d);
     store(e0 + i, a), store(e1 + i, b), store(e2 + i, c), store(dt + i, d);
     flags_of(a, b, c, d, bfc, flags + i);
   }
@@ -141,10 +144,8 @@ inline void batch_test_4d(int n, const BatchTri& T, const float* __restrict bx, 
 #if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512VL__)
   if (i < n) {
     const __mmask16 k = tail_mask(n - i);
-    const V u = load_tail(k, bu + i), v = load_tail(k, bv + i);
     V a, b, c, d;
-    edges(vmadd(u, cx0, X0), vmadd(u, cx1, X1), vmadd(u, cx2, X2), vmadd(v, cy0, Y0), vmadd(v, cy1, Y1),
-          vmadd(v, cy2, Y2), W0, W1, W2, load_tail(k, bx + i), load_tail(k, by + i), a, b, c, d);
+    lanes(load_tail(k, bu + i), load_tail(k, bv + i), load_tail(k, bx + i), load_tail(k, by + i), a, b, c, d);
     store_tail(k, e0 + i, a), store_tail(k, e1 + i, b), store_tail(k, e2 + i, c), store_tail(k, dt + i, d);
     flags_tail(k, a, b, c, d, bfc, flags + i);
     return;
@@ -169,15 +170,19 @@ inline void batch_test_5d(int n, const BatchTri& T, const float* __restrict bx, 
           dY2 = set1(T.dY2);
   const V dW0 = set1(T.dW0), dW1 = set1(T.dW1), dW2 = set1(T.dW2);
   const V kx = set1(T.kx), nkx = set1(T.nkx), ky = set1(T.ky), nky = set1(T.nky);
-  for (; i + kW <= n; i += kW) {
-    const V t = load(bt + i), u = load(bu + i), v = load(bv + i);
+  // one vector of samples at time t, lens (u, v) and pixel (x, y): e0..e2 and det (full vectors and the
+  // masked tail)
+  auto lanes = [&](V t, V u, V v, V x, V y, V& a, V& b, V& c, V& d) {
     const V xt0 = vmadd(t, dX0, X0), yt0 = vmadd(t, dY0, Y0), wt0 = vmadd(t, dW0, W0);
     const V xt1 = vmadd(t, dX1, X1), yt1 = vmadd(t, dY1, Y1), wt1 = vmadd(t, dW1, W1);
     const V xt2 = vmadd(t, dX2, X2), yt2 = vmadd(t, dY2, Y2), wt2 = vmadd(t, dW2, W2);
-    V a, b, c, d;
     edges(vmadd(u, vmadd(wt0, kx, nkx), xt0), vmadd(u, vmadd(wt1, kx, nkx), xt1), vmadd(u, vmadd(wt2, kx, nkx), xt2),
           vmadd(v, vmadd(wt0, ky, nky), yt0), vmadd(v, vmadd(wt1, ky, nky), yt1), vmadd(v, vmadd(wt2, ky, nky), yt2),
-          wt0, wt1, wt2, load(bx + i), load(by + i), a, b, c, d);
+          wt0, wt1, wt2, x, y, a, b, c, d);
+  };
+  for (; i + kW <= n; i += kW) {
+    V a, b, c, d;
+    lanes(load(bt + i), load(bu + i), load(bv + i), load(bx + i), load(by + i), a, b, c, d);
     store(e0 + i, a), store(e1 + i, b), store(e2 + i, c), store(dt + i, d);
     flags_of(a, b, c, d, bfc, flags + i);
   }
@@ -185,14 +190,9 @@ inline void batch_test_5d(int n, const BatchTri& T, const float* __restrict bx, 
 #if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512VL__)
   if (i < n) {
     const __mmask16 k = tail_mask(n - i);
-    const V t = load_tail(k, bt + i), u = load_tail(k, bu + i), v = load_tail(k, bv + i);
-    const V xt0 = vmadd(t, dX0, X0), yt0 = vmadd(t, dY0, Y0), wt0 = vmadd(t, dW0, W0);
-    const V xt1 = vmadd(t, dX1, X1), yt1 = vmadd(t, dY1, Y1), wt1 = vmadd(t, dW1, W1);
-    const V xt2 = vmadd(t, dX2, X2), yt2 = vmadd(t, dY2, Y2), wt2 = vmadd(t, dW2, W2);
     V a, b, c, d;
-    edges(vmadd(u, vmadd(wt0, kx, nkx), xt0), vmadd(u, vmadd(wt1, kx, nkx), xt1), vmadd(u, vmadd(wt2, kx, nkx), xt2),
-          vmadd(v, vmadd(wt0, ky, nky), yt0), vmadd(v, vmadd(wt1, ky, nky), yt1), vmadd(v, vmadd(wt2, ky, nky), yt2),
-          wt0, wt1, wt2, load_tail(k, bx + i), load_tail(k, by + i), a, b, c, d);
+    lanes(load_tail(k, bt + i), load_tail(k, bu + i), load_tail(k, bv + i), load_tail(k, bx + i),
+          load_tail(k, by + i), a, b, c, d);
     store_tail(k, e0 + i, a), store_tail(k, e1 + i, b), store_tail(k, e2 + i, c), store_tail(k, dt + i, d);
     flags_tail(k, a, b, c, d, bfc, flags + i);
     return;
