@@ -232,6 +232,27 @@ def _hard_cameras(V):
             yield name, sim.Camera(**{**cam_kw, "width": V, "height": V, "coc_px": coc}), p0, p1
 
 
+def _static_4d_cases(V):
+    """(camera, triangle p0, engine vertices, lens vertices, in band) of each static defocused (4D) triangle
+    of the hard cases at viewport V, as the render's 4D tile test sees it (lens grid GRID_4D); in band: the
+    lens vertices lie within a guard band of one viewport (what a clipping datapath sees)."""
+    from tests import reference as ref
+
+    for _name, cam, p0, _p1 in _hard_cameras(V):
+        if cam.coc_px == 0.0:
+            continue
+        for i in range(p0.shape[0]):
+            v0, _ = cam.engine_vertices(p0[i][None], p0[i][None])
+            params = ref.engine_params(cam)
+            params.lens_grid = GRID_4D
+            probe = _core.precision_probe_4d(params, v0[0], np.zeros((0, 4)))
+            if probe["dim_class"] != 2:  # static defocused (4D) only
+                continue
+            lv = np.asarray(probe["lens_vertices"])
+            band = bool((np.abs(lv[:, :2] - V / 2) <= 1.5 * V).all() and (np.abs(lv[:, 2:]) <= V).all())
+            yield cam, p0[i], v0[0], lv, band
+
+
 CLASSES = ("2D", "3D", "4D", "5D")
 N_PROBE = 600
 
@@ -338,20 +359,7 @@ def rows_4d(V, seed=5):
     rng = np.random.default_rng(seed)
     precisions = [("float32", None)] + [("fixed", F) for F in FRAC_4D]
     acc = {}
-    cases = []
-    for name, cam, p0, _p1 in _hard_cameras(V):
-        if cam.coc_px == 0.0:
-            continue
-        for i in range(p0.shape[0]):
-            v0, _ = cam.engine_vertices(p0[i][None], p0[i][None])
-            params = ref.engine_params(cam)
-            params.lens_grid = GRID_4D
-            probe = _core.precision_probe_4d(params, v0[0], np.zeros((0, 4)))
-            if probe["dim_class"] != 2:  # static defocused (4D) only
-                continue
-            lv = np.asarray(probe["lens_vertices"])
-            band = bool((np.abs(lv[:, :2] - V / 2) <= 1.5 * V).all() and (np.abs(lv[:, 2:]) <= V).all())
-            cases.append((cam, p0[i], v0[0], _tiles_near(lv, V, rng), band))
+    cases = [(cam, p0, v0, _tiles_near(lv, V, rng), band) for cam, p0, v0, lv, band in _static_4d_cases(V)]
     for kind, F in precisions:
         a = acc.setdefault((kind, F), dict(tiles=0, culled64=0, culled=0, lost=0, hits=0, checked=0, max_all=0.0,
                                            max_band=0.0, sigma_lost=0))
@@ -407,25 +415,14 @@ def rows_box(V, seed=11):
     cells = np.array([[-1 + i * step, -1 + (i + 1) * step, -1 + j * step, -1 + (j + 1) * step]
                       for j in range(GRID_4D) for i in range(GRID_4D)])
     cases = []
-    for name, cam, p0, _p1 in _hard_cameras(V):
-        if cam.coc_px == 0.0:
-            continue
-        for i in range(p0.shape[0]):
-            v0, _ = cam.engine_vertices(p0[i][None], p0[i][None])
-            params = ref.engine_params(cam)
-            params.lens_grid = GRID_4D
-            r = _core.precision_probe_4d(params, v0[0], np.zeros((0, 4)))
-            if r["dim_class"] != 2:
-                continue
-            lv = np.asarray(r["lens_vertices"])
-            band = bool((np.abs(lv[:, :2] - V / 2) <= 1.5 * V).all() and (np.abs(lv[:, 2:]) <= V).all())
-            pts = ref.sample_points(rng, cam, p0[i], p0[i], N_POINTS_BOX).astype(np.float64)
-            pts[:, 4] = 0.0
-            rc = ref.ray_cast(cam, p0[i], p0[i], pts)
-            hit = rc.hit & (ref.near_rel_distance(cam, rc.w) > 1e-3)
-            ci = np.clip(np.floor((pts[:, 2] + 1) / step), 0, GRID_4D - 1).astype(int)
-            cj = np.clip(np.floor((pts[:, 3] + 1) / step), 0, GRID_4D - 1).astype(int)
-            cases.append((cam, v0[0], pts[hit], (cj * GRID_4D + ci)[hit], band))
+    for cam, p0, v0, _lv, band in _static_4d_cases(V):
+        pts = ref.sample_points(rng, cam, p0, p0, N_POINTS_BOX).astype(np.float64)
+        pts[:, 4] = 0.0
+        rc = ref.ray_cast(cam, p0, p0, pts)
+        hit = rc.hit & (ref.near_rel_distance(cam, rc.w) > 1e-3)
+        ci = np.clip(np.floor((pts[:, 2] + 1) / step), 0, GRID_4D - 1).astype(int)
+        cj = np.clip(np.floor((pts[:, 3] + 1) / step), 0, GRID_4D - 1).astype(int)
+        cases.append((cam, v0, pts[hit], (cj * GRID_4D + ci)[hit], band))
     rows = []
     for kind, F in [("float32", None)] + [("fixed", F) for F in FRAC_4D]:
         prec = kind if F is None else {"fixed": {"int_bits": PROBE_BITS, "frac_bits": F}}
