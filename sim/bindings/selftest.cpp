@@ -5,6 +5,7 @@
 #include <pybind11/stl.h>
 
 #include <algorithm>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
@@ -23,6 +24,21 @@
 #include "selftest/probe.h"
 
 namespace rast5d::bindings {
+
+namespace {
+
+using DArr = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+// Every value of a within +-bound (NaN and, for a finite bound, infinities never are);
+// std::invalid_argument "name: expected <expected>, got <value>" otherwise.
+void require_within(const DArr& a, double bound, const char* name, const char* expected) {
+  for (py::ssize_t i = 0; i < a.size(); ++i)
+    if (!(std::fabs(a.data()[i]) <= bound))
+      throw std::invalid_argument(std::string(name) + ": expected " + expected + ", got " +
+                                  std::to_string(a.data()[i]));
+}
+
+}  // namespace
 
 void register_selftest(py::module_& m) {
   m.def(
@@ -209,7 +225,6 @@ void register_selftest(py::module_& m) {
       "fixed point overflow (M,) and max_abs (M,), the largest register magnitude (the fewest int_bits n "
       "satisfy max_abs < 2^n).");
 
-  using DArr = py::array_t<double, py::array::c_style | py::array::forcecast>;
   m.def(
       "precision_probe_2d",
       [](const DArr& tri, const DArr& points, const DArr& tiles, int int_bits, int frac_bits, const std::string& kind) {
@@ -288,14 +303,10 @@ void register_selftest(py::module_& m) {
         require_shape(v0, {3, 3}, "v0");
         require_shape(tiles, {-1, 4}, "tiles");
         require_shape(boxes, {-1, 4}, "boxes");
-        for (py::ssize_t i = 0; i < boxes.size(); ++i)
-          if (!std::isfinite(boxes.data()[i]))
-            throw std::invalid_argument("boxes: expected finite lens coordinates, got " + std::to_string(boxes.data()[i]));
+        require_within(boxes, std::numeric_limits<double>::max(), "boxes", "finite lens coordinates");
         validate_domains(p);  // lens_grid sizes the (tiles, G * G) outputs
-        for (py::ssize_t i = 0; i < tiles.size(); ++i)
-          if (!(std::fabs(tiles.data()[i]) <= 0x1p24))  // lens-cell indices are ints: finite, screen-sized tiles
-            throw std::invalid_argument("tiles: expected finite pixel coordinates within +-2^24, got " +
-                                        std::to_string(tiles.data()[i]));
+        // lens-cell indices are ints: finite, screen-sized tiles
+        require_within(tiles, 0x1p24, "tiles", "finite pixel coordinates within +-2^24");
         const FrameConst fc = make_frame_const(p);
         const float col[9] = {1, 1, 1, 1, 1, 1, 1, 1, 1};
         TriSetup tri;
@@ -418,14 +429,8 @@ void register_selftest(py::module_& m) {
         validate_domains(p);  // time_splits sizes the sub-intervals, lens_grid the cells
         require_finite(v0, "v0");
         require_finite(v1, "v1");
-        for (py::ssize_t i = 0; i < tiles.size(); ++i)
-          if (!(std::fabs(tiles.data()[i]) <= 0x1p24))
-            throw std::invalid_argument("tiles: expected finite pixel coordinates within +-2^24, got " +
-                                        std::to_string(tiles.data()[i]));
-        for (py::ssize_t i = 0; i < points.size(); ++i)
-          if (!(std::fabs(points.data()[i]) <= 0x1p24))
-            throw std::invalid_argument("points: expected finite coordinates within +-2^24, got " +
-                                        std::to_string(points.data()[i]));
+        require_within(tiles, 0x1p24, "tiles", "finite pixel coordinates within +-2^24");
+        require_within(points, 0x1p24, "points", "finite coordinates within +-2^24");
         const FrameConst fc = make_frame_const(p);
         const float col[9] = {1, 1, 1, 1, 1, 1, 1, 1, 1};
         TriSetup tri;
