@@ -305,6 +305,7 @@ void register_selftest(py::module_& m) {
         require_shape(boxes, {-1, 4}, "boxes");
         require_within(boxes, std::numeric_limits<double>::max(), "boxes", "finite lens coordinates");
         validate_domains(p);  // lens_grid sizes the (tiles, G * G) outputs
+        require_finite(v0, "v0");
         // lens-cell indices are ints: finite, screen-sized tiles
         require_within(tiles, 0x1p24, "tiles", "finite pixel coordinates within +-2^24");
         const FrameConst fc = make_frame_const(p);
@@ -329,8 +330,7 @@ void register_selftest(py::module_& m) {
         }
         const int sigma = lens_orientation<double>(tri, fc);
         const Precision prec = p.precision_tile;
-        const double saved = tiletest::t_snap_margin_px;
-        tiletest::t_snap_margin_px = snap_margin_px(p.precision_sample, prec);
+        const tiletest::ScopedSnapMargin snap_margin(snap_margin_px(p.precision_sample, prec));
         tiletest::Tile4DPrecision p4;
         if (prec.kind != PrecisionKind::kFloat64) p4.setup(prec, lv, n, active, true);
         py::array_t<bool> culled64({k_tiles, G * G}), culled({k_tiles, G * G}), overflow(k_tiles);
@@ -394,7 +394,6 @@ void register_selftest(py::module_& m) {
         out["box"] = boxf;
         out["box_overflow"] = box_overflow;
         out["max_abs_box"] = prec.kind == PrecisionKind::kFixed ? arb.max_abs : 0.0;
-        tiletest::t_snap_margin_px = saved;
         py::array_t<double> lens_vertices({n, 4});
         for (int j = 0; j < n; ++j) {
           double* d = lens_vertices.mutable_data() + 4 * j;
@@ -450,8 +449,7 @@ void register_selftest(py::module_& m) {
         const bool with_h5 = p.halfspace_H5;
         const Precision prec = p.precision_tile;
         const iv::ClipBox clip = iv::clip_box(p);
-        const double saved = tiletest::t_snap_margin_px;
-        tiletest::t_snap_margin_px = snap_margin_px(p.precision_sample, prec);
+        const tiletest::ScopedSnapMargin snap_margin(snap_margin_px(p.precision_sample, prec));
         tiletest::Motion5DPrecision p5;
         if (prec.kind != PrecisionKind::kFloat64) p5.setup(prec, ms, 0.5 * fc.near_d, with_h5 ? &h5 : nullptr);
         py::array_t<bool> kept64(n), kept(n), overflow(n);
@@ -502,7 +500,6 @@ void register_selftest(py::module_& m) {
           kept.mutable_data()[r] = pass(any, pt);
           overflow.mutable_data()[r] = o1 || o2;
         }
-        tiletest::t_snap_margin_px = saved;
         int usable = 0;
         for (int k = 0; k < S; ++k) usable += h5.sub[k].usable;
         out["kept64"] = kept64;

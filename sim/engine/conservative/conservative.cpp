@@ -45,11 +45,7 @@ ConservativeResult conservative_raster(const RenderParams& p, const SceneArrays&
   // pipeline.precision.tile (not float64): the tile tests decided in the format (tiletest/precision_4d.h,
   // precision_5d.h), tiles widened by the fixed-point snapping as in a render (restored on return)
   const bool prec = p.precision_tile.kind != PrecisionKind::kFloat64;
-  struct MarginGuard {
-    double saved = tiletest::t_snap_margin_px;
-    ~MarginGuard() { tiletest::t_snap_margin_px = saved; }
-  } margin_guard;
-  tiletest::t_snap_margin_px = snap_margin_px(p.precision_sample, p.precision_tile);
+  const tiletest::ScopedSnapMargin snap_margin(snap_margin_px(p.precision_sample, p.precision_tile));
   tiletest::Tile4DPrecision p4;
   tiletest::Motion5DPrecision p5;
   const double lens_lo = -1.0, lens_hi = 1.0;  // in focus / no blur: every lens point

@@ -55,6 +55,18 @@ using CellMask = std::bitset<256>;
 // by each render worker thread, 0 otherwise.
 inline thread_local double t_snap_margin_px = 0.0;
 
+// Sets t_snap_margin_px for a scope and restores the previous value on leaving it (also on a throw).
+class ScopedSnapMargin {
+ public:
+  explicit ScopedSnapMargin(double px) : saved_(t_snap_margin_px) { t_snap_margin_px = px; }
+  ~ScopedSnapMargin() { t_snap_margin_px = saved_; }
+  ScopedSnapMargin(const ScopedSnapMargin&) = delete;
+  ScopedSnapMargin& operator=(const ScopedSnapMargin&) = delete;
+
+ private:
+  double saved_;
+};
+
 inline double expand_lo(double x) { return x - (kMarginAbs + t_snap_margin_px + kMarginRel * std::fabs(x)); }
 inline double expand_hi(double x) { return x + (kMarginAbs + t_snap_margin_px + kMarginRel * std::fabs(x)); }
 
