@@ -4,6 +4,15 @@ from __future__ import annotations
 from pathlib import Path
 
 
+def scene_camera(scene, w: int, h: int, coc: float):
+    """A w x h camera at the scene's camera hint (field of view, focus distance) with CoC coc px."""
+    import sim
+
+    hint = scene.camera_hint
+    return sim.Camera(width=w, height=h, fov_y_deg=hint.get("fov_y_deg", 45.0),
+                      focus_distance=hint["focus_distance"], coc_px=coc)
+
+
 def write_page(out, name: str, lines: list[str]) -> Path:
     """Write a benchmark page (markdown lines) as out/name, creating out, and say where."""
     page = Path(out) / name

@@ -24,20 +24,12 @@ import platform
 import time
 from pathlib import Path
 
-from experiments.bench import write_page
+from experiments.bench import scene_camera as _camera, write_page
 
 REPO = Path(__file__).resolve().parents[2]
 FRACTIONS = (1.0, 0.5, 0.2, 0.1, 0.05, 0.04, 0.03, 0.025, 0.02, 0.01)
 FIGURES = ("ops.total", "raster.samples_tested", "raster.samples_hit")
 UNITS = ("setup", "tile_test", "sample_test", "depth", "shader", "texture", "memory")
-
-
-def _camera(scene, w, h, coc):
-    import sim
-
-    hint = scene.camera_hint
-    return sim.Camera(width=w, height=h, fov_y_deg=hint.get("fov_y_deg", 45.0),
-                      focus_distance=hint["focus_distance"], coc_px=coc)
 
 
 def _cases(quick: bool):

@@ -21,7 +21,7 @@ import sys
 import time
 from pathlib import Path
 
-from experiments.bench import write_page
+from experiments.bench import scene_camera as _camera, write_page
 
 REPO = Path(__file__).resolve().parents[2]
 ALGORITHMS = (("bruteforce", {}), ("tile", {}), ("tile+optimal", {"count_optimal": True}), ("interval", {}))
@@ -40,14 +40,6 @@ def _scenes(hall_scale: float, quick: bool):
     if not quick and (hw, hh) != (1920, 1080):  # the large interior at 1080p (modern_hall stands in)
         scenes.append(("modern_hall", hall, 1920, 1080, 10.0))
     return scenes
-
-
-def _camera(scene, w, h, coc):
-    import sim
-
-    hint = scene.camera_hint
-    return sim.Camera(width=w, height=h, fov_y_deg=hint.get("fov_y_deg", 45.0),
-                      focus_distance=hint["focus_distance"], coc_px=coc)
 
 
 def wall_table(hall_scale: float, threads, repeats: int, spp: int, quick: bool):
