@@ -232,6 +232,14 @@ def _hard_cameras(V):
             yield name, sim.Camera(**{**cam_kw, "width": V, "height": V, "coc_px": coc}), p0, p1
 
 
+def _probe_4d(ref, cam, v0, tiles, cells=None, prec="float64"):
+    """sim._core.precision_probe_4d of a triangle at camera cam on the GRID_4D lens grid, tile test in prec."""
+    params = ref.engine_params(cam)
+    params.lens_grid = GRID_4D
+    params.precision_tile = prec
+    return _core.precision_probe_4d(params, v0, tiles) if cells is None else _core.precision_probe_4d(params, v0, tiles, cells)
+
+
 def _static_4d_cases(V):
     """(camera, triangle p0, engine vertices, lens vertices, in band) of each static defocused (4D) triangle
     of the hard cases at viewport V, as the render's 4D tile test sees it (lens grid GRID_4D); in band: the
@@ -243,9 +251,7 @@ def _static_4d_cases(V):
             continue
         for i in range(p0.shape[0]):
             v0, _ = cam.engine_vertices(p0[i][None], p0[i][None])
-            params = ref.engine_params(cam)
-            params.lens_grid = GRID_4D
-            probe = _core.precision_probe_4d(params, v0[0], np.zeros((0, 4)))
+            probe = _probe_4d(ref, cam, v0[0], np.zeros((0, 4)))
             if probe["dim_class"] != 2:  # static defocused (4D) only
                 continue
             lv = np.asarray(probe["lens_vertices"])
@@ -364,10 +370,7 @@ def rows_4d(V, seed=5):
         a = acc.setdefault((kind, F), dict(tiles=0, culled64=0, culled=0, lost=0, hits=0, checked=0, max_all=0.0,
                                            max_band=0.0, sigma_lost=0))
         for cam, p0, v0, tiles, band in cases:
-            params = ref.engine_params(cam)
-            params.lens_grid = GRID_4D
-            params.precision_tile = kind if F is None else {"fixed": {"int_bits": PROBE_BITS, "frac_bits": F}}
-            r = _core.precision_probe_4d(params, v0, tiles)
+            r = _probe_4d(ref, cam, v0, tiles, prec=kind if F is None else {"fixed": {"int_bits": PROBE_BITS, "frac_bits": F}})
             c, c64 = np.asarray(r["culled"]), np.asarray(r["culled64"])
             a["tiles"] += len(tiles)
             a["culled64"] += int(c64.sum())
@@ -385,10 +388,8 @@ def rows_4d(V, seed=5):
             ib = int_bits_for(a["max_all"])
             a["int_bits_all"], a["int_bits_band"], a["below"] = ib, int_bits_for(a["max_band"]), 0
             for cam, p0, v0, tiles, band in cases:
-                params = ref.engine_params(cam)
-                params.lens_grid = GRID_4D
-                params.precision_tile = {"fixed": {"int_bits": max(ib - 1, 1), "frac_bits": F}}
-                a["below"] += int(np.asarray(_core.precision_probe_4d(params, v0, tiles)["overflow"]).sum())
+                prec = {"fixed": {"int_bits": max(ib - 1, 1), "frac_bits": F}}
+                a["below"] += int(np.asarray(_probe_4d(ref, cam, v0, tiles, prec=prec)["overflow"]).sum())
     rows = [dict(viewport=V, kind=kind, frac_bits=F, triangles=len(cases), **a) for (kind, F), a in acc.items()]
     print(rows, flush=True)
     return rows
@@ -429,10 +430,7 @@ def rows_box(V, seed=11):
         a = dict(triangles=len(cases), boxes=0, hits=0, outside=0, outside64=0, grow_sum=0.0, grow_max=0.0,
                  max_all=0.0, max_band=0.0)
         for cam, v0, hp, hc, band in cases:
-            params = ref.engine_params(cam)
-            params.lens_grid = GRID_4D
-            params.precision_tile = prec
-            r = _core.precision_probe_4d(params, v0, np.zeros((0, 4)), cells)
+            r = _probe_4d(ref, cam, v0, np.zeros((0, 4)), cells, prec)
             b, b64 = np.asarray(r["box"]), np.asarray(r["box64"])
             grow = np.concatenate([b64[:, 0] - b[:, 0], b[:, 1] - b64[:, 1], b64[:, 2] - b[:, 2], b[:, 3] - b64[:, 3]])
             grow = grow[np.isfinite(grow)]
@@ -457,10 +455,8 @@ def rows_box(V, seed=11):
             ib = int_bits_for(a["max_all"])
             a["int_bits_all"], a["int_bits_band"], a["below"] = ib, int_bits_for(a["max_band"]), 0
             for cam, v0, *_ in cases:
-                params = ref.engine_params(cam)
-                params.lens_grid = GRID_4D
-                params.precision_tile = {"fixed": {"int_bits": max(ib - 1, 1), "frac_bits": F}}
-                a["below"] += int(np.asarray(_core.precision_probe_4d(params, v0, np.zeros((0, 4)), cells)["box_overflow"]).sum())
+                prec = {"fixed": {"int_bits": max(ib - 1, 1), "frac_bits": F}}
+                a["below"] += int(np.asarray(_probe_4d(ref, cam, v0, np.zeros((0, 4)), cells, prec)["box_overflow"]).sum())
         rows.append(dict(viewport=V, kind=kind, frac_bits=F, **a))
     print(rows, flush=True)
     return rows
