@@ -20,6 +20,7 @@
 #include "tiletest/edges_2d.h"
 #include "tiletest/precision_4d.h"
 #include "tiletest/precision_5d.h"
+#include "traversal/algorithms/tile/hj_cells.h"
 #include "selftest/kernel_costs.h"
 #include "selftest/probe.h"
 
@@ -320,15 +321,17 @@ void register_selftest(py::module_& m) {
         // polygon, H_j edges (all active: no oracle), the orientation over the lens
         const int n = tri.poly_n, G = p.lens_grid, k_tiles = static_cast<int>(tiles.shape(0));
         tiletest::LensVertex lv[6];
-        tiletest::EdgeH edges[6];
+        Footprint fp;  // H_j edges only: hj_culled_cells with one orientation over the lens (sigma != 0)
         bool active[6] = {false, false, false, false, false, false};
         for (int j = 0; j < n; ++j)
           lv[j] = tiletest::lens_vertex(tri.poly[j][0], tri.poly[j][1], tri.poly[j][2], -fc.focus_d, fc.kx_d, fc.ky_d);
+        fp.n_edges = n;
         for (int j = 0; j < n; ++j) {
-          edges[j] = tiletest::edge_setup(tri.poly[j], tri.poly[(j + 1) % n], fc.focus_d, fc.kx_d, fc.ky_d);
-          active[j] = edges[j].active;
+          fp.edges[j] = tiletest::edge_setup(tri.poly[j], tri.poly[(j + 1) % n], fc.focus_d, fc.kx_d, fc.ky_d);
+          active[j] = fp.edges[j].active;
         }
         const int sigma = lens_orientation<double>(tri, fc);
+        fp.sigma = sigma;
         const Precision prec = p.precision_tile;
         const tiletest::ScopedSnapMargin snap_margin(snap_margin_px(p.precision_sample, prec));
         tiletest::Tile4DPrecision p4;
@@ -348,18 +351,11 @@ void register_selftest(py::module_& m) {
           tiletest::AxisSet sx, sy;
           std::uint64_t ops = 0;
           const bool keep64 = tiletest::tile_h_sets<FastArith>(lv, n, x0, x1, y0, y1, sx, sy, ops);
-          tiletest::CellMask H64;  // hj_culled_cells with one orientation over the lens (sigma != 0)
-          for (int k = 0; k < n && sigma != 0; ++k) {
-            if (!edges[k].active) continue;
-            int m1, m2;
-            if (!tiletest::tangent_corners<double>(edges[k], x0, x1, y0, y1, m1, m2)) continue;
-            tiletest::CellMask e;
-            e.set();
-            for (const int corner : {m1, m2})
-              e &= tiletest::line_cells<double>(
-                  tiletest::line_at_corner<double>(edges[k], (corner & 1) ? x1 : x0, (corner & 2) ? y1 : y0, sigma), G,
-                  0, G - 1, 0, G - 1);
-            H64 |= e;
+          tiletest::CellMask H64;
+          if (sigma != 0) {
+            Counters hc;
+            bool any_line;
+            H64 = hj_culled_cells<FastArith>(fp, x0, x1, y0, y1, G, 0, G - 1, 0, G - 1, hc, any_line);
           }
           cells(sx, sy, keep64, H64, culled64.mutable_data() + static_cast<std::size_t>(t) * G * G);
           if (prec.kind == PrecisionKind::kFloat64) {
