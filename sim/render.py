@@ -373,7 +373,13 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     alpha = _scene_alpha(scene, p0.shape[0])
     t0 = time.perf_counter()
     try:
-        out = _core.render(params, v0, v1, col32, samples, lens_index, lens_uv, export_samples,
+        engine_index = getattr(table, "engine_index", None)
+        if engine_index is not None:  # the table's samples and (lens cell, time stratum) index, built once
+            samples_in = engine_index(camera.lens, grid, params.time_strata)
+            lens_index, lens_uv = np.zeros((0,), np.int32), np.zeros((0, 2), np.float32)
+        else:
+            samples_in = samples
+        out = _core.render(params, v0, v1, col32, samples_in, lens_index, lens_uv, export_samples,
                            uvs=uvs, tex_slots=slots, textures=textures, alpha=alpha, pixel_stats=map_names,
                            trace_pixel=_trace, progress=progress)
     except ValueError as e:  # invalid_argument from the engine: name it as a config error

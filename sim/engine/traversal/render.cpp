@@ -243,6 +243,9 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
       result.bin_work[b] = w * table.spp();
     }
     bin_covariates(setups, bin_lists, bins_x, B, p.width, p.height, table.spp(), result.bin_aux);
+    result.bin_aux_total.assign(kBinAux, 0.0);  // every bin's auxiliaries computed: their sums
+    for (int b = 0; b < n_bins; ++b)
+      for (int j = 0; j < kBinAux; ++j) result.bin_aux_total[j] += result.bin_aux[kBinAux * b + j];
   }
   if (!bins && p.sample_fraction < 1.0) {
     BinSample s = stratify_bins(result.bin_work, p.sample_fraction, static_cast<std::uint64_t>(p.sample_seed));
@@ -253,13 +256,7 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
   }
   if (bins) {
     result.sampled_bins = *bins;
-    std::vector<char> seen(static_cast<std::size_t>(n_bins), 0);
-    for (int b : *bins) {
-      if (b < 0 || b >= n_bins || seen[b])
-        throw std::invalid_argument("bins: expected distinct bin indices in 0.." + std::to_string(n_bins - 1) +
-                                    ", got " + std::to_string(b));
-      seen[b] = 1;
-    }
+    require_bin_list(*bins, n_bins);
     result.bin_counters.assign(bins->size() * static_cast<std::size_t>(kNumCounters), 0);
   }
   const int n_work = bins ? static_cast<int>(bins->size()) : n_bins;

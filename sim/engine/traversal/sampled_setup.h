@@ -32,6 +32,17 @@
 
 namespace rast5d {
 
+// A bin list's entries are distinct bin indices in 0 .. n_bins - 1; std::invalid_argument otherwise.
+inline void require_bin_list(const std::vector<int>& bins, int n_bins) {
+  std::vector<char> seen(static_cast<std::size_t>(n_bins), 0);
+  for (int b : bins) {
+    if (b < 0 || b >= n_bins || seen[b])
+      throw std::invalid_argument("bins: expected distinct bin indices in 0.." + std::to_string(n_bins - 1) +
+                                  ", got " + std::to_string(b));
+    seen[b] = 1;
+  }
+}
+
 // Fills setups/alive for the set-up triangles, frame_setup with the frame's setup counters (those
 // of the home bins included), homed[k] with the setup counters of the triangles homed in drawn bin k,
 // drawn with the bins to traverse (the list, or the stratified draw), and result's bin_work,
@@ -40,16 +51,11 @@ inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const Sce
                           const std::vector<int>* list, std::vector<TriSetup>& setups, std::vector<char>& alive,
                           Counters& frame_setup, std::vector<Counters>& homed, std::vector<int>& drawn,
                           RenderResult& result) {
-  using bin_covariates_detail::clipped_area;
   const int B = p.bin_size;
   const int bins_x = (p.width + B - 1) / B, bins_y = (p.height + B - 1) / B;
   const int n_bins = bins_x * bins_y;
   const std::size_t n = static_cast<std::size_t>(scene.n);
-  if (list)
-    for (int b : *list)
-      if (b < 0 || b >= n_bins)
-        throw std::invalid_argument("bins: expected distinct bin indices in 0.." + std::to_string(n_bins - 1) +
-                                    ", got " + std::to_string(b));
+  if (list) require_bin_list(*list, n_bins);
 
   // ---- 1. bounds pre-pass: per-bin work, auxiliary totals ----
   struct Pre {
@@ -70,17 +76,11 @@ inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const Sce
       for (int bx = t.bx0 / B; bx <= (t.bx1 - 1) / B; ++bx)
         result.bin_work[by * bins_x + bx] += dy * (std::min(t.bx1, (bx + 1) * B) - std::max(t.bx0, bx * B));
     }
-    // The triangle's auxiliaries summed over its bins (bin_covariates' per-bin terms: shares of the
-    // bounds sum to 1; clipped areas sum to the area inside the union of its bins).
-    const TriangleCovariates c = triangle_covariates(t, B);
-    if (!c.clip) {
-      total_cover += c.area, total_foot += c.foot;
-      continue;
-    }
+    // The triangle's auxiliaries summed over its bins: bin_covariate_terms over the union of its bins
+    // (its bounds lie inside, so the share is 1; clipped areas add up over the bins).
     const double x0 = (t.bx0 / B) * B, y0 = (t.by0 / B) * B;
     const double x1 = std::min(p.width, ((t.bx1 - 1) / B + 1) * B), y1 = std::min(p.height, ((t.by1 - 1) / B + 1) * B);
-    total_cover += clipped_area(c.p, 3, x0, y0, x1, y1);
-    total_foot += c.o_ok ? clipped_area(c.o, 3, x0, y0, x1, y1) : c.bounds;
+    bin_covariate_terms(t, triangle_covariates(t, B), x0, y0, x1, y1, total_cover, total_foot);
   }
   for (auto& w : result.bin_work) w *= spp;
   result.bin_aux_total = {total_cover * spp, total_foot * spp};
@@ -95,12 +95,7 @@ inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const Sce
     result.strata_sizes = std::move(s.sizes);
   }
   std::vector<int> k_of(static_cast<std::size_t>(n_bins), -1);
-  for (std::size_t k = 0; k < drawn.size(); ++k) {
-    if (k_of[drawn[k]] >= 0)
-      throw std::invalid_argument("bins: expected distinct bin indices in 0.." + std::to_string(n_bins - 1) +
-                                  ", got " + std::to_string(drawn[k]));
-    k_of[drawn[k]] = static_cast<int>(k);
-  }
+  for (std::size_t k = 0; k < drawn.size(); ++k) k_of[drawn[k]] = static_cast<int>(k);  // distinct: checked
   // Summed-area table of the drawn bins: does a triangle's bin rectangle hold one?
   const int sx = bins_x + 1;
   std::vector<int> sat(static_cast<std::size_t>(sx) * (bins_y + 1), 0);
