@@ -100,7 +100,7 @@ def coverage_table(spp: int, quick: bool, bin_size: int, draws: int, fractions=F
     import numpy as np
 
     import sim
-    from sim import _core, sampling
+    from sim import sampling
     from sim.stats import DERIVED
 
     table = sim.SampleTable.stratified(spp=spp, seed=1)
@@ -108,20 +108,9 @@ def coverage_table(spp: int, quick: bool, bin_size: int, draws: int, fractions=F
     for name, scene, w, h in _cases(quick):
         cam = _camera(scene, w, h, 10.0)
         n_bins = (-(-w // bin_size)) * (-(-h // bin_size))
-        captured = {}
-        render = _core.render
-
-        def listing(params, *a, **kw):  # the same call sim.render makes, with every bin listed
-            kw["bins"] = np.arange(n_bins, dtype=np.int32)
-            captured["out"] = render(params, *a, **kw)
-            return captured["out"]
-
-        _core.render = listing
-        try:
-            full = sim.render(scene, cam, table, sim.PipelineConfig(algorithm="tile", bin_size=bin_size), timing=False)
-        finally:
-            _core.render = render
-        out = captured["out"]
+        full = sim.render(scene, cam, table, sim.PipelineConfig(algorithm="tile", bin_size=bin_size), timing=False,
+                          _bins=np.arange(n_bins))  # every bin listed: each bin's own counters
+        out = full.config["bins"]
         names = list(out["counters"])
         rows_all = np.asarray(out["bin_counters"])
         work, aux = np.asarray(out["bin_work"]), np.asarray(out["bin_aux"])
