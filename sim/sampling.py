@@ -15,10 +15,11 @@ screen are the frame's exactly; every other triangle's setup counters belong to 
 of the top-left corner of its bounds, where traversals charge their per-triangle setup too) and are
 estimated with that bin's counters.
 
-Every counter a bin owns is estimated by the stratified regression (GREG) estimator on three auxiliary
+Every counter a bin owns is estimated by the stratified regression (GREG) estimator on four auxiliary
 variables whose frame totals the engine knows before traversing any bin (traversal/bin_covariates.h):
-brute-force work x1, the triangles' lens-centre coverage x2 and their lens-swept footprint x3 (the
-bins' own x2, x3 are computed for the drawn bins only):
+brute-force work x1, the triangles' lens-centre coverage x2, their lens-swept footprint x3 and their
+lens-centre perimeter x4 spread over their bounds (edge) (the bins' own x2 ... x4 are computed for the
+drawn bins only):
 
     T = T_y + (X - T_x) b,    Var(T) = sum_h N_h^2 (1 - n_h / N_h) s_h^2(g e) / n_h
 
@@ -26,9 +27,10 @@ T_y, T_x the stratified expansion estimates (T = sum_h N_h * mean_h), X the fram
 the auxiliaries, b the design-weighted least-squares fit of y on x over the drawn bins, and s_h^2(g e)
 the within-stratum variance of the residuals e = y - x b weighted by the g-weights
 g = 1 + (X - T_x)' A^-1 x (A the weighted cross-product of x; N_h bins in stratum h, n_h = 2 drawn).
-The residual variance is scaled by n / (n - 3) for the fit's three coefficients (n bins drawn from
-sampled strata), and the 95% half-width is t_{0.975, H - 2} * sqrt(Var) (H sampled strata less the
-two coefficients the fit adds to a ratio estimator's one as degrees of freedom). A counter that
+The residual variance is scaled by n / (n - p) for the fit's p coefficients (p = 4; n bins drawn from
+sampled strata), and the 95% half-width is t_{0.975, H - (p - 1)} * sqrt(Var) (H sampled strata less
+the coefficients the fit adds to a ratio estimator's one as degrees of freedom). An auxiliary whose
+frame total is 0 is left out of the fit and of p. A counter that
 follows the auxiliaries (tile tests with the footprint, hits with the coverage) is estimated far more
 tightly than by expansion alone; one that does not is no worse than the stratified estimator, and the
 interval comes from the residuals either way. Derived figures (ratios, sums) are evaluated on the

@@ -168,7 +168,7 @@ void register_render(py::module_& m) {
           out["bin_work"] = py::array_t<std::int64_t>(static_cast<py::ssize_t>(res.bin_work.size()),
                                                       res.bin_work.data());
           out["bin_aux"] = py::array_t<double>({static_cast<py::ssize_t>(res.bin_work.size()), py::ssize_t{kBinAux}},
-                                               res.bin_aux.data());  // (bins, [coverage, footprint])
+                                               res.bin_aux.data());  // (bins, [coverage, footprint, edge])
           out["bin_aux_total"] = py::array_t<double>(kBinAux, res.bin_aux_total.data());
         }
         if (p.record_timing) {
