@@ -242,8 +242,10 @@ def run(threads: int = 2, seeds: int = 5, draws: int = 200, spp: int = 64, bin_s
              "traversed, including the take-all stratum). Per render, a bounds pre-pass runs over every triangle "
              "(setup's bounds and culls, nothing charged: each bin's work and the auxiliaries' totals); triangle "
              "setup, binning and the drawn bins' auxiliaries run only for the triangles that reach the drawn bins. "
-             "What every fraction still pays: the projection of every vertex and the rest of sim.render in Python, the "
-             "sample table's (lens cell, time stratum) index, the pre-pass, and the take-all stratum's bins.", "",
+             "The sample table's (lens cell, time stratum) index is built once per table (SampleTable.engine_index) "
+             "and reused by every render here, the whole frame's included. What every fraction still pays: the "
+             "projection of every vertex and the rest of sim.render in Python (the estimator's fit included), the "
+             "pre-pass, and the take-all stratum's bins.", "",
              "| scene | size | bins | fraction | drawn | speed-up wall | speed-up CPU | |err| ops.total | ±95% ops.total | "
              "|err| samples_tested | ±95% samples_tested | |err| samples_hit | ±95% samples_hit |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
