@@ -164,12 +164,12 @@ def stratified_total(sample: BinSample, y: np.ndarray) -> tuple[np.ndarray, np.n
     if y.ndim == 1:
         y = y[:, None]
     Nh, nh = _design(sample)
-    H = len(Nh)
-    onehot = np.zeros((H, len(sample.stratum)))
-    onehot[sample.stratum, np.arange(len(sample.stratum))] = 1.0
-    means = (onehot @ y) / nh[:, None]
+    # Per-stratum sums in draw order (every stratum has drawn bins): reduceat over the bins sorted by stratum.
+    order = np.argsort(sample.stratum, kind="stable")
+    starts = np.searchsorted(sample.stratum[order], np.arange(len(Nh)))
+    means = np.add.reduceat(y[order], starts, axis=0) / nh[:, None]
     dev = y - means[sample.stratum]
-    ss = onehot @ (dev * dev)
+    ss = np.add.reduceat((dev * dev)[order], starts, axis=0)
     full = nh >= Nh  # a take-all stratum: every bin traversed, no sampling variance
     s2 = np.where(full[:, None], 0.0, ss / np.maximum(nh - 1, 1)[:, None])
     total = (Nh[:, None] * means).sum(axis=0)
