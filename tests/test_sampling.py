@@ -326,3 +326,19 @@ def test_an_auxiliary_with_zero_total_leaves_the_fit_and_the_degrees_of_freedom(
     assert ci[names[0]] == pytest.approx(sampling.t_quantile_975(H - 1) * math.sqrt(var[0]), rel=1e-12)
     full = sampling.Estimator(sampling.choose_bins(work, 0.1, 3, np.column_stack([cover, cover])))
     assert full.coefficients == 3 and full.extra_coefficients == 2
+
+
+@pytest.mark.parametrize("moving", [False, True])
+def test_auxiliary_totals_are_the_sums_over_every_bin(moving):
+    """The pre-pass sums each triangle's auxiliaries over the union of its bins (traversal/sampled_setup.h);
+    the drawn bins' values are computed per bin (shares of the bounds, areas clipped to the bin). With
+    every bin listed, the per-bin values (coverage, footprint, edge) add up to the pre-pass's totals,
+    on triangles larger than a bin, moving, near-clipped and culled."""
+    scene = _hard_scene(moving)
+    camera = sim.Camera(width=96, height=80, fov_y_deg=60.0, focus_distance=4.0, coc_px=6.0)
+    table = sim.SampleTable.stratified(spp=8, seed=2)
+    cfg = sim.PipelineConfig(algorithm="tile", bin_size=16, threads=2)
+    out = sim.render(scene, camera, table, cfg, timing=False, _bins=np.arange(6 * 5)).config["bins"]
+    aux, total = np.asarray(out["bin_aux"]), np.asarray(out["bin_aux_total"])
+    assert aux.shape == (30, 3) and total.shape == (3,) and np.all(total > 0)
+    assert np.allclose(aux.sum(axis=0), total, rtol=1e-9, atol=0), (aux.sum(axis=0), total)
