@@ -396,6 +396,12 @@ class SampleTable:
             self._grid_cache[key] = (_readonly(order), _readonly(counts), _readonly(offsets))
         return self._grid_cache[key]
 
+    def __getstate__(self) -> dict:
+        """Pickling and copying leave out the engine indexes (engine objects); engine_index rebuilds them."""
+        state = dict(self.__dict__)
+        state["_index_cache"] = {}
+        return state
+
     def engine_index(self, lens: str, grid: int, time_strata: int):
         """The engine's copy of samples(lens) with its (lens cell, time stratum) index for lens grid
         ``grid`` and ``time_strata`` strata (sim._core.SampleTableIndex), built once per key and cached:

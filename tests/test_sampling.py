@@ -299,6 +299,13 @@ def test_table_index_renders_what_the_samples_array_renders():
         b = _core.render(p, v0, v1, col, index, np.zeros(0, np.int32), np.zeros((0, 2), np.float32))
         assert a["counters"] == b["counters"] and a["counters"]["raster.samples_tested"] > 0
         assert np.array_equal(a["image"], b["image"])
+        import copy
+        import pickle
+
+        for twin in (pickle.loads(pickle.dumps(table)), copy.deepcopy(table)):  # the index is rebuilt, not copied
+            c = _core.render(p, v0, v1, col, twin.engine_index(camera.lens, p.lens_grid, p.time_strata),
+                             np.zeros(0, np.int32), np.zeros((0, 2), np.float32))
+            assert c["counters"] == a["counters"] and np.array_equal(c["image"], a["image"])
         with pytest.raises(ValueError, match="samples: the SampleTableIndex has lens_grid"):
             _core.render(p, v0, v1, col, table.engine_index(camera.lens, p.lens_grid, 2 * p.time_strata),
                          np.zeros(0, np.int32), np.zeros((0, 2), np.float32))
