@@ -62,10 +62,11 @@ struct UnconstructedSetups {
 };
 
 // Constructs and fills setups[i] and alive[i] for the set-up triangles (setups: n unconstructed slots,
-// UnconstructedSetups; only the set-up triangles' slots are read afterwards), frame_setup with the frame's setup counters (those
-// of the home bins included), homed[k] with the setup counters of the triangles homed in drawn bin k,
-// drawn with the bins to traverse (the list, or the stratified draw), and result's bin_work,
-// bin_aux (NaN for the bins not drawn), bin_aux_total, sampled_stratum and strata_sizes.
+// UnconstructedSetups; only the set-up triangles' slots are read afterwards), frame_setup with the
+// frame's setup counters (those of the home bins included), homed[k] with the setup counters of the
+// triangles homed in drawn bin k, drawn with the bins to traverse (the list, or the stratified draw),
+// and result's bin_work, bin_aux (NaN for the bins not drawn), bin_aux_total, sampled_stratum and
+// strata_sizes.
 inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const SceneArrays& scene, int spp,
                           const std::vector<int>* list, TriSetup* setups, std::vector<char>& alive,
                           Counters& frame_setup, std::vector<Counters>& homed, std::vector<int>& drawn,
