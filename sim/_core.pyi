@@ -100,13 +100,30 @@ def choices() -> dict[str, list[tuple[str, str]]]:
     [(name, description)], 'shading_modes': ..., 'query_modes': ..., ...}."""
 
 # ---- render.cpp: the render, the sample-table buckets and the registries of the engine ----
+class SampleTableIndex:
+    """The engine's sample table with its (lens cell, time stratum) index, built once (immutable; it holds
+    its own copy of the samples): pass it to render() as samples, with empty lens_index and lens_uv.
+    sim.SampleTable.engine_index builds and caches one per (lens, grid, time_strata)."""
+    def __init__(self, samples: npt.NDArray[np.float32], grid: int, time_strata: int,
+                 lens_index: npt.NDArray[np.int32], lens_uv: npt.NDArray[np.float32]) -> None: ...
+    @property
+    def period(self) -> int: ...
+    @property
+    def spp(self) -> int: ...
+    @property
+    def grid(self) -> int: ...
+    @property
+    def time_strata(self) -> int: ...
+    @property
+    def n_lens(self) -> int: ...
+
 def render(
     params: RenderParams,
     v0: npt.NDArray[np.float32],  # (N, 3, 3) pixel-homogeneous vertices at t = 0
     v1: npt.NDArray[np.float32],  # (N, 3, 3) at t = 1
     colors: npt.NDArray[np.float32],  # (N, 3, 3) linear RGB
-    samples: npt.NDArray[np.float32],  # (P, P, spp, 5): x, y, u, v, t
-    lens_index: npt.NDArray[np.int32],  # (P, P, spp) or empty
+    samples: npt.NDArray[np.float32] | SampleTableIndex,  # (P, P, spp, 5): x, y, u, v, t; or its index
+    lens_index: npt.NDArray[np.int32],  # (P, P, spp) or empty (always empty with a SampleTableIndex)
     lens_uv: npt.NDArray[np.float32],  # (N_lens, 2) or empty
     export_samples: bool = False,
     uvs: npt.NDArray[np.float32] | None = None,  # (N, 3, 2) texture coordinates

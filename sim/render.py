@@ -282,7 +282,7 @@ def _interval_params(params, config: PipelineConfig) -> None:
 def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *,
            export_samples: bool = False, hardware: HardwareConfig | None = None, timing: bool = True,
            query: tuple[int, str] | None = None, pixel_stats=False, progress=None,
-           _trace: tuple[int, int] | None = None) -> Result:
+           _trace: tuple[int, int] | None = None, _bins: np.ndarray | None = None) -> Result:
     """Render ``scene`` through ``camera`` with sample ``table``. Raises ConfigError/SceneInputError
     (ValueErrors naming the field and value) for bad input; KeyboardInterrupt on Ctrl-C.
     ``hardware`` (default HardwareConfig()) supplies the texture-cache geometry and feeds the timing
@@ -373,9 +373,16 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     alpha = _scene_alpha(scene, p0.shape[0])
     t0 = time.perf_counter()
     try:
-        out = _core.render(params, v0, v1, col32, samples, lens_index, lens_uv, export_samples,
+        engine_index = getattr(table, "engine_index", None)
+        if engine_index is not None:  # the table's samples and (lens cell, time stratum) index, built once
+            samples_in = engine_index(camera.lens, grid, params.time_strata)
+            lens_index, lens_uv = np.zeros((0,), np.int32), np.zeros((0, 2), np.float32)
+        else:
+            samples_in = samples
+        out = _core.render(params, v0, v1, col32, samples_in, lens_index, lens_uv, export_samples,
                            uvs=uvs, tex_slots=slots, textures=textures, alpha=alpha, pixel_stats=map_names,
-                           trace_pixel=_trace, progress=progress)
+                           trace_pixel=_trace, progress=progress,
+                           bins=None if _bins is None else np.ascontiguousarray(_bins, dtype=np.int32))
     except ValueError as e:  # invalid_argument from the engine: name it as a config error
         msg = str(e)
         raise ConfigError(f"PipelineConfig.{msg}" if msg.startswith("sample_fraction:") else msg) from None
@@ -413,6 +420,9 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
                     timing_records=records, ci95=ci95, pixel_stats=maps)
     if _trace is not None:
         result.config["trace"] = (out["trace_events"], out["trace_samples"])
+    if _bins is not None:  # the listed bins' own counters and every bin's auxiliaries (sim.sampling)
+        result.config["bins"] = {k: out[k] for k in ("counters", "bin_counters", "bins", "bin_work", "bin_aux",
+                                                     "bin_aux_total")}
     return result
 
 

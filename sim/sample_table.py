@@ -87,6 +87,7 @@ class SampleTable:
         self._samples_cache: dict[str, np.ndarray] = {}
         self._positions_cache: dict[str, np.ndarray] = {}
         self._grid_cache: dict[tuple[int, str], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        self._index_cache: dict[tuple[str, int, int], object] = {}
 
     # ---------------------------------------------------------------- registry
 
@@ -394,6 +395,31 @@ class SampleTable:
             order, counts, offsets = _core.lens_grid_buckets(self.samples(lens), grid)
             self._grid_cache[key] = (_readonly(order), _readonly(counts), _readonly(offsets))
         return self._grid_cache[key]
+
+    def __getstate__(self) -> dict:
+        """Pickling and copying leave out the engine indexes (engine objects); engine_index rebuilds them."""
+        state = dict(self.__dict__)
+        state["_index_cache"] = {}
+        return state
+
+    def engine_index(self, lens: str, grid: int, time_strata: int):
+        """The engine's copy of samples(lens) with its (lens cell, time stratum) index for lens grid
+        ``grid`` and ``time_strata`` strata (sim._core.SampleTableIndex), built once per key and cached:
+        sim.render passes it instead of the samples array. The engine object holds its own copy of
+        the samples and has no mutator; the table's arrays are read-only, so the two cannot diverge."""
+        key = (check_shape(lens), int(grid), int(time_strata))
+        index = self._index_cache.get(key)
+        if index is None:
+            from . import _core
+
+            if self.n_lens:
+                lens_index = np.ascontiguousarray(self.lens_index, dtype=np.int32)
+                lens_uv = np.ascontiguousarray(self.lens_positions(lens), dtype=np.float32)
+            else:
+                lens_index, lens_uv = np.zeros((0,), np.int32), np.zeros((0, 2), np.float32)
+            index = _core.SampleTableIndex(self.samples(lens), key[1], key[2], lens_index, lens_uv)
+            self._index_cache[key] = index
+        return index
 
     def pixel_samples(self, px: int, py: int, lens: str = "disk") -> np.ndarray:
         """The (spp, 5) samples of screen pixel (px, py): samples(lens)[py mod P, px mod P]."""

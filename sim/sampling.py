@@ -15,10 +15,11 @@ screen are the frame's exactly; every other triangle's setup counters belong to 
 of the top-left corner of its bounds, where traversals charge their per-triangle setup too) and are
 estimated with that bin's counters.
 
-Every counter a bin owns is estimated by the stratified regression (GREG) estimator on three auxiliary
+Every counter a bin owns is estimated by the stratified regression (GREG) estimator on four auxiliary
 variables whose frame totals the engine knows before traversing any bin (traversal/bin_covariates.h):
-brute-force work x1, the triangles' lens-centre coverage x2 and their lens-swept footprint x3 (the
-bins' own x2, x3 are computed for the drawn bins only):
+brute-force work x1, the triangles' lens-centre coverage x2, their lens-swept footprint x3 and their
+lens-centre perimeter x4 spread over their bounds (edge) (the bins' own x2 ... x4 are computed for the
+drawn bins only):
 
     T = T_y + (X - T_x) b,    Var(T) = sum_h N_h^2 (1 - n_h / N_h) s_h^2(g e) / n_h
 
@@ -26,9 +27,10 @@ T_y, T_x the stratified expansion estimates (T = sum_h N_h * mean_h), X the fram
 the auxiliaries, b the design-weighted least-squares fit of y on x over the drawn bins, and s_h^2(g e)
 the within-stratum variance of the residuals e = y - x b weighted by the g-weights
 g = 1 + (X - T_x)' A^-1 x (A the weighted cross-product of x; N_h bins in stratum h, n_h = 2 drawn).
-The residual variance is scaled by n / (n - 3) for the fit's three coefficients (n bins drawn from
-sampled strata), and the 95% half-width is t_{0.975, H - 2} * sqrt(Var) (H sampled strata less the
-two coefficients the fit adds to a ratio estimator's one as degrees of freedom). A counter that
+The residual variance is scaled by n / (n - p) for the fit's p coefficients (p = 4; n bins drawn from
+sampled strata), and the 95% half-width is t_{0.975, H - (p - 1)} * sqrt(Var) (H sampled strata less
+the coefficients the fit adds to a ratio estimator's one as degrees of freedom). An auxiliary whose
+frame total is 0 is left out of the fit and of p. A counter that
 follows the auxiliaries (tile tests with the footprint, hits with the coverage) is estimated far more
 tightly than by expansion alone; one that does not is no worse than the stratified estimator, and the
 interval comes from the residuals either way. Derived figures (ratios, sums) are evaluated on the
@@ -149,21 +151,25 @@ def from_engine(out: dict) -> BinSample:
                      None if total is None else np.asarray(total, np.float64))
 
 
+def _design(sample: BinSample) -> tuple[np.ndarray, np.ndarray]:
+    """(N_h, n_h) per stratum: bins in the stratum, bins drawn from it."""
+    H = len(sample.sizes)
+    return sample.sizes.astype(np.float64), np.bincount(sample.stratum, minlength=H).astype(np.float64)
+
+
 def stratified_total(sample: BinSample, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(estimated frame totals, variances) of per-bin values y (rows: the sampled bins; columns:
     figures), by the stratified expansion estimator with 2 bins per stratum."""
     y = np.asarray(y, dtype=np.float64)
     if y.ndim == 1:
         y = y[:, None]
-    H = len(sample.sizes)
-    Nh = sample.sizes.astype(np.float64)
-    sums = np.zeros((H, y.shape[1]))
-    np.add.at(sums, sample.stratum, y)
-    nh = np.bincount(sample.stratum, minlength=H).astype(np.float64)
-    means = sums / nh[:, None]
+    Nh, nh = _design(sample)
+    # Per-stratum sums in draw order (every stratum has drawn bins): reduceat over the bins sorted by stratum.
+    order = np.argsort(sample.stratum, kind="stable")
+    starts = np.searchsorted(sample.stratum[order], np.arange(len(Nh)))
+    means = np.add.reduceat(y[order], starts, axis=0) / nh[:, None]
     dev = y - means[sample.stratum]
-    ss = np.zeros((H, y.shape[1]))
-    np.add.at(ss, sample.stratum, dev * dev)
+    ss = np.add.reduceat((dev * dev)[order], starts, axis=0)
     full = nh >= Nh  # a take-all stratum: every bin traversed, no sampling variance
     s2 = np.where(full[:, None], 0.0, ss / np.maximum(nh - 1, 1)[:, None])
     total = (Nh[:, None] * means).sum(axis=0)
@@ -171,55 +177,86 @@ def stratified_total(sample: BinSample, y: np.ndarray) -> tuple[np.ndarray, np.n
     return total, var.sum(axis=0)
 
 
+class Estimator:
+    """The estimator of one draw, fitted once and applied to any per-bin values (the counters, and the
+    derived figures' linearised contributions):
+
+    - with brute-force work and the auxiliaries ``aux``: the stratified regression (GREG) estimator,
+      T = T_y + (X - T_x) b, b the least-squares fit of y on x weighted by the design weights
+      N_h / n_h, and the variance of the stratified estimator applied to the residuals y - x b
+      weighted by the g-weights, scaled by n / (n - p) for the p coefficients of the fit;
+    - with work only: the combined ratio estimator T = X T_y / T_x;
+    - with neither: the stratified expansion estimator.
+
+    An auxiliary whose frame total is 0 (no bin has any) is left out of the fit, and ``coefficients``
+    counts the auxiliaries the fit uses (the degrees of freedom of the interval lose all but one)."""
+
+    def __init__(self, sample: BinSample):
+        self.sample = sample
+        self.coefficients = 0
+        if sample.work is None:
+            return
+        work = np.asarray(sample.work, np.float64)
+        if sample.aux is None:
+            self._x = work[sample.bins][:, None]
+            self._X = np.array([work.sum()])
+            self._tx = stratified_total(sample, self._x)[0]
+            self.coefficients = 1
+            self._ratio = True
+            return
+        self._ratio = False
+        aux = np.asarray(sample.aux, np.float64)
+        total = np.nansum(aux, axis=0) if sample.aux_total is None else np.asarray(sample.aux_total, np.float64)
+        X = np.concatenate([[work.sum()], total])  # the frame's totals
+        x = np.column_stack([work[sample.bins], aux[sample.bins]])
+        keep = X > 0
+        x = x[:, keep] / X[keep]  # columns whose totals are 1: a well-conditioned fit
+        self._x, self._X = x, np.ones(x.shape[1])
+        self.coefficients = x.shape[1]
+        Nh, nh = _design(sample)
+        w = (Nh / nh)[sample.stratum]
+        self._xw = x * w[:, None]
+        self._A = x.T @ self._xw
+        self._tx = stratified_total(sample, x)[0]
+        # The residuals weighted by the g-weights (the estimator is sum_i w_i g_i y_i with
+        # g_i = 1 + (X - T_x)' A^-1 x_i): a draw far from the known totals gets the wider interval it needs.
+        self._g = 1.0 + x @ np.linalg.lstsq(self._A, self._X - self._tx, rcond=1e-10)[0]
+        # Residuals of a fit understate the errors by the coefficients it spent: n / (n - p) over the n
+        # bins drawn from sampled strata (the take-all stratum has no variance).
+        n = int(nh[nh < Nh].sum())
+        p = self.coefficients
+        self._scale = n / (n - p) if n > p else float("inf")
+
+    @property
+    def extra_coefficients(self) -> int:
+        """Coefficients beyond a ratio estimator's one: the degrees of freedom the fit takes."""
+        return max(0, self.coefficients - 1)
+
+    def total(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(estimated frame totals, variances) of per-bin values y (rows: the drawn bins; columns: figures)."""
+        y = np.asarray(y, dtype=np.float64)
+        y = y[:, None] if y.ndim == 1 else y
+        if self.sample.work is None:
+            return stratified_total(self.sample, y)
+        ty, _ = stratified_total(self.sample, y)
+        x = self._x
+        if self._ratio:
+            r = ty / self._tx[0]
+            _, var = stratified_total(self.sample, y - x * r[None, :])
+            return self._X[0] * r, var
+        b = np.linalg.lstsq(self._A, self._xw.T @ y, rcond=1e-10)[0]
+        _, var = stratified_total(self.sample, (y - x @ b) * self._g[:, None])
+        return ty + (self._X - self._tx) @ b, var * self._scale
+
+
 def ratio_total(sample: BinSample, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(estimated totals, variances) by the combined ratio estimator on brute-force work x, known for
-    every bin: T = X * T_y / T_x with T_y, T_x the stratified estimates, and the variance of the
-    stratified estimator applied to the residuals y - (T_y / T_x) x. Without work: stratified_total."""
-    if sample.work is None:
-        return stratified_total(sample, y)
-    y = np.asarray(y, dtype=np.float64)
-    y = y[:, None] if y.ndim == 1 else y
-    x = np.asarray(sample.work, dtype=np.float64)[sample.bins]
-    X = float(np.asarray(sample.work, dtype=np.float64).sum())
-    ty, _ = stratified_total(sample, y)
-    tx, _ = stratified_total(sample, x)
-    r = ty / tx[0]
-    _, var = stratified_total(sample, y - x[:, None] * r[None, :])
-    return X * r, var
+    """(estimated totals, variances) by the combined ratio estimator on brute-force work (Estimator)."""
+    return Estimator(BinSample(sample.bins, sample.stratum, sample.sizes, sample.candidates, sample.work)).total(y)
 
 
 def regression_total(sample: BinSample, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(estimated totals, variances) by the stratified regression (GREG) estimator on the auxiliaries
-    known for every bin (brute-force work and ``aux``): T = T_y + (X - T_x) b, b the least-squares
-    fit of y on x weighted by the design weights N_h / n_h, and the variance of the stratified
-    estimator applied to the residuals y - x b. Without auxiliaries: ratio_total."""
-    if sample.work is None or sample.aux is None:
-        return ratio_total(sample, y)
-    y = np.asarray(y, dtype=np.float64)
-    y = y[:, None] if y.ndim == 1 else y
-    work = np.asarray(sample.work, np.float64)
-    aux = np.asarray(sample.aux, np.float64)
-    total = np.nansum(aux, axis=0) if sample.aux_total is None else np.asarray(sample.aux_total, np.float64)
-    X = np.concatenate([[work.sum()], total])  # the frame's totals
-    x = np.column_stack([work[sample.bins], aux[sample.bins]])
-    keep = X > 0
-    x, X = x[:, keep] / X[keep], np.ones(int(keep.sum()))  # columns whose totals are 1: a well-conditioned fit
-    H = len(sample.sizes)
-    nh = np.bincount(sample.stratum, minlength=H).astype(np.float64)
-    w = (sample.sizes / nh)[sample.stratum]
-    A = x.T @ (x * w[:, None])
-    b = np.linalg.lstsq(A, (x * w[:, None]).T @ y, rcond=1e-10)[0]
-    ty, _ = stratified_total(sample, y)
-    tx, _ = stratified_total(sample, x)
-    # The residuals weighted by the g-weights (the estimator is sum_i w_i g_i y_i with
-    # g_i = 1 + (X - T_x)' A^-1 x_i): a draw far from the known totals gets the wider interval it needs.
-    g = 1.0 + x @ np.linalg.lstsq(A, X - tx, rcond=1e-10)[0]
-    _, var = stratified_total(sample, (y - x @ b) * g[:, None])
-    # Residuals of a fit understate the errors by the coefficients it spent: n / (n - p) over the n
-    # bins drawn from sampled strata (p coefficients; the take-all stratum has no variance).
-    n = int(nh[nh < sample.sizes].sum())
-    p = x.shape[1]
-    return ty + (X - tx) @ b, var * (n / (n - p) if n > p else float("inf"))
+    """(estimated totals, variances) by the sample's Estimator (GREG with the auxiliaries)."""
+    return Estimator(sample).total(y)
 
 
 def sampled_strata(sample: BinSample) -> int:
@@ -242,10 +279,10 @@ def estimate(sample: BinSample, counters: dict, bin_counters: np.ndarray, derive
     if sample.exact:  # every bin with triangles traversed: the totals are the frame's
         est, var, tq = bc.sum(axis=0), np.zeros(len(names)), 0.0
     else:
-        est, var = regression_total(sample, bc)
+        fit = Estimator(sample)
+        est, var = fit.total(bc)
         # degrees of freedom: the sampled strata less the regression's coefficients beyond the first
-        extra = 0 if sample.aux is None or sample.work is None else np.asarray(sample.aux).shape[1]
-        tq = t_quantile_975(max(1, sampled_strata(sample) - extra))
+        tq = t_quantile_975(max(1, sampled_strata(sample) - fit.extra_coefficients))
     raw = exact_part + est
     half = tq * np.sqrt(var)
     flat, ci = {}, {}
@@ -265,7 +302,7 @@ def estimate(sample: BinSample, counters: dict, bin_counters: np.ndarray, derive
         minus = evaluate(derived, {n: flat[n] - step * bc[:, i] for i, n in enumerate(names)})
         z = np.column_stack([np.broadcast_to((np.asarray(plus[d], np.float64) - np.asarray(minus[d], np.float64))
                                              / (2 * step), (len(bc),)) for d in dnames]) if dnames else np.zeros((len(bc), 0))
-    dvar = np.zeros(len(dnames)) if sample.exact else regression_total(sample, np.nan_to_num(z, nan=0.0))[1]
+    dvar = np.zeros(len(dnames)) if sample.exact else fit.total(np.nan_to_num(z, nan=0.0))[1]
     for j, d in enumerate(dnames):
         flat[d] = base[d]
         bad = not np.isfinite(base[d]) or not np.all(np.isfinite(z[:, j]))

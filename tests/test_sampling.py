@@ -39,23 +39,11 @@ def full(setup):
 
 
 def _engine_bins(setup, bins):
-    """sim._core.render of the frame with an explicit bin list (the call sim.render makes)."""
+    """The engine's output of the frame rendered with an explicit bin list (sim.render's _bins), with
+    the image."""
     scene, camera, table = setup
-    from sim import params as P
-    from sim.render import _camera_params
-
-    cfg = config()
-    p = _camera_params(camera)
-    P.set_layer(p, "pipeline", cfg)
-    samples = table.samples(camera.lens)
-    p.lens_grid = cfg.resolved_lens_grid(samples.shape[2])
-    p.table_has_lens, p.table_has_time, p.record_timing = True, bool(np.any(samples[..., 4] != 0)), False
-    P.set_layer(p, "hardware", sim.HardwareConfig().describe())
-    p1 = scene.positions if getattr(scene, "positions_t1", None) is None else scene.positions_t1
-    v0, v1 = camera.engine_vertices(np.asarray(scene.positions, np.float64), np.asarray(p1, np.float64))
-    col = np.full((len(scene.positions), 3, 3), 0.8, np.float32)
-    return sim._core.render(p, v0, v1, col, samples, np.zeros(0, np.int32), np.zeros((0, 2), np.float32),
-                            bins=np.asarray(bins, np.int32))
+    r = sim.render(scene, camera, table, config(), timing=False, _bins=np.asarray(bins))
+    return {**r.config["bins"], "image": r.image}
 
 
 def test_bin_counters_sum_to_the_frame(setup, full):
@@ -243,7 +231,7 @@ def _hard_scene(moving: bool):
 
 @pytest.mark.parametrize("moving, op_count, backface", [(False, "documented", True), (True, "documented", False),
                                                         (True, "exact", True)])
-def test_every_bin_listed_equals_the_whole_frame_on_every_setup_path(moving, op_count, backface, monkeypatch):
+def test_every_bin_listed_equals_the_whole_frame_on_every_setup_path(moving, op_count, backface):
     """Setup restricted to the drawn bins after a bounds pre-pass (traversal/sampled_setup.h): with every
     bin listed, the counters and the image equal the whole frame's, on triangles culled behind the near
     plane, off screen, degenerate and back-facing, near-clipped, moving and crossing the near plane
@@ -259,22 +247,12 @@ def test_every_bin_listed_equals_the_whole_frame_on_every_setup_path(moving, op_
         assert full.flat_stats["setup.bbox_fallback"] > 0 and full.flat_stats["setup.class_5d"] > 0
     if backface:
         assert full.flat_stats["setup.culled_backface"] > 0
-    render = sim._core.render
-    captured = {}
-
-    def listing(params, *a, **kw):
-        kw["bins"] = np.arange(6 * 5, dtype=np.int32)
-        captured["out"] = render(params, *a, **kw)
-        return captured["out"]
-
-    monkeypatch.setattr(sim._core, "render", listing)
-    listed = sim.render(scene, camera, table, cfg, timing=False)
-    monkeypatch.setattr(sim._core, "render", render)
+    listed = sim.render(scene, camera, table, cfg, timing=False, _bins=np.arange(6 * 5))
     for name, value in full.flat_stats.items():
         if not name.startswith(("time.", "timing.", "energy.")):
             assert listed.flat_stats[name] == value or (math.isnan(value) and math.isnan(listed.flat_stats[name])), name
     assert np.array_equal(listed.image, full.image)
-    out = captured["out"]
+    out = listed.config["bins"]
     names = list(out["counters"])
     rows = np.asarray(out["bin_counters"])
     # The frame part (total minus the rows): every submitted triangle and every cull (exact under
@@ -284,3 +262,90 @@ def test_every_bin_listed_equals_the_whole_frame_on_every_setup_path(moving, op_
     for key in ("near", "offscreen", "degenerate", "backface"):
         assert frame[f"setup.culled_{key}"] == full.flat_stats[f"setup.culled_{key}"], key
     assert frame["setup.class_4d"] == frame["setup.class_5d"] == 0
+
+
+def test_table_index_renders_what_the_samples_array_renders():
+    """sim.SampleTable.engine_index (the (lens cell, time stratum) index built once, sim._core.SampleTableIndex):
+    the engine renders the same image and counters from it as from the samples array, on a moving scene
+    and an interleaved table (its own lens_index); sim.render reuses one index per (lens, grid, strata);
+    a mismatched index is refused naming the field."""
+    from sim import _core, params as P
+    from sim.render import _camera_params
+
+    scene = _hard_scene(True)
+    camera = sim.Camera(width=96, height=80, fov_y_deg=60.0, focus_distance=4.0, coc_px=6.0)
+    p1 = np.asarray(scene.positions_t1, np.float64)
+    v0, v1 = camera.engine_vertices(np.asarray(scene.positions, np.float64), p1)
+    col = np.full(v0.shape, 0.5, np.float32)
+    for table, algorithm in ((sim.SampleTable.stratified(spp=8, seed=2), "tile"),
+                             (sim.SampleTable.create("interleaved", spp=16, seed=1), "interleave")):
+        cfg = sim.PipelineConfig(algorithm=algorithm, bin_size=16, threads=2)
+        p = _camera_params(camera)
+        P.set_layer(p, "pipeline", cfg)
+        samples = table.samples(camera.lens)
+        p.lens_grid = cfg.resolved_lens_grid(samples.shape[2])
+        p.table_has_lens = p.table_has_time = True
+        p.record_timing = False
+        if table.n_lens:
+            li = np.ascontiguousarray(table.lens_index, np.int32)
+            luv = np.ascontiguousarray(table.lens_positions(camera.lens), np.float32)
+        else:
+            li, luv = np.zeros(0, np.int32), np.zeros((0, 2), np.float32)
+        a = _core.render(p, v0, v1, col, samples, li, luv)
+        index = table.engine_index(camera.lens, p.lens_grid, p.time_strata)
+        assert index is table.engine_index(camera.lens, p.lens_grid, p.time_strata)  # built once
+        assert (index.grid, index.time_strata, index.spp, index.n_lens) == (p.lens_grid, p.time_strata,
+                                                                            samples.shape[2], table.n_lens)
+        b = _core.render(p, v0, v1, col, index, np.zeros(0, np.int32), np.zeros((0, 2), np.float32))
+        assert a["counters"] == b["counters"] and a["counters"]["raster.samples_tested"] > 0
+        assert np.array_equal(a["image"], b["image"])
+        import copy
+        import pickle
+
+        for twin in (pickle.loads(pickle.dumps(table)), copy.deepcopy(table)):  # the index is rebuilt, not copied
+            c = _core.render(p, v0, v1, col, twin.engine_index(camera.lens, p.lens_grid, p.time_strata),
+                             np.zeros(0, np.int32), np.zeros((0, 2), np.float32))
+            assert c["counters"] == a["counters"] and np.array_equal(c["image"], a["image"])
+        with pytest.raises(ValueError, match="samples: the SampleTableIndex has lens_grid"):
+            _core.render(p, v0, v1, col, table.engine_index(camera.lens, p.lens_grid, 2 * p.time_strata),
+                         np.zeros(0, np.int32), np.zeros((0, 2), np.float32))
+        with pytest.raises(ValueError, match="lens_index"):
+            _core.render(p, v0, v1, col, index, np.zeros(1, np.int32), np.zeros((0, 2), np.float32))
+
+
+def test_an_auxiliary_with_zero_total_leaves_the_fit_and_the_degrees_of_freedom():
+    """sim.sampling.Estimator: an auxiliary no bin has (frame total 0) is not a coefficient of the fit,
+    and the interval's degrees of freedom count only the coefficients used: the half-width is
+    t_{0.975, H - (p - 1)} times the square root of the variance, p the coefficients used."""
+    rng = np.random.default_rng(5)
+    K = 200
+    work = rng.integers(50, 500, K)
+    cover = work * rng.uniform(0.4, 0.6, K)
+    aux = np.column_stack([cover, np.zeros(K)])  # no bin has the second auxiliary
+    s = sampling.choose_bins(work, 0.1, 3, aux)
+    fit = sampling.Estimator(s)
+    assert fit.coefficients == 2 and fit.extra_coefficients == 1
+    y = (3 * work + cover + rng.normal(0, 20, K))[s.bins]
+    names = ["raster.samples_tested"]
+    flat, ci = sampling.estimate(s, {names[0]: int(y.sum())}, y[:, None].astype(np.uint64), [], names)
+    _, var = fit.total(y[:, None].astype(np.uint64).astype(np.float64))
+    H = sampling.sampled_strata(s)
+    assert ci[names[0]] == pytest.approx(sampling.t_quantile_975(H - 1) * math.sqrt(var[0]), rel=1e-12)
+    full = sampling.Estimator(sampling.choose_bins(work, 0.1, 3, np.column_stack([cover, cover])))
+    assert full.coefficients == 3 and full.extra_coefficients == 2
+
+
+@pytest.mark.parametrize("moving", [False, True])
+def test_auxiliary_totals_are_the_sums_over_every_bin(moving):
+    """The pre-pass sums each triangle's auxiliaries over the union of its bins (traversal/sampled_setup.h);
+    the drawn bins' values are computed per bin (shares of the bounds, areas clipped to the bin). With
+    every bin listed, the per-bin values (coverage, footprint, edge) add up to the pre-pass's totals,
+    on triangles larger than a bin, moving, near-clipped and culled."""
+    scene = _hard_scene(moving)
+    camera = sim.Camera(width=96, height=80, fov_y_deg=60.0, focus_distance=4.0, coc_px=6.0)
+    table = sim.SampleTable.stratified(spp=8, seed=2)
+    cfg = sim.PipelineConfig(algorithm="tile", bin_size=16, threads=2)
+    out = sim.render(scene, camera, table, cfg, timing=False, _bins=np.arange(6 * 5)).config["bins"]
+    aux, total = np.asarray(out["bin_aux"]), np.asarray(out["bin_aux_total"])
+    assert aux.shape == (30, 3) and total.shape == (3,) and np.all(total > 0)
+    assert np.allclose(aux.sum(axis=0), total, rtol=1e-9, atol=0), (aux.sum(axis=0), total)

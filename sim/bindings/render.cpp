@@ -5,7 +5,9 @@
 #include <pybind11/functional.h>
 #include <pybind11/stl.h>
 
+#include <memory>
 #include <optional>
+#include <variant>
 #include <vector>
 
 #include "backend/shading.h"
@@ -17,9 +19,29 @@
 namespace rast5d::bindings {
 
 void register_render(py::module_& m) {
+  // A sample table with its (lens cell, time stratum) index, built once and shared by every render
+  // that passes it instead of the samples array. It holds its own copy of the samples and has no
+  // mutator, so it cannot go stale; render() checks its lens grid and strata against the params.
+  py::class_<SampleTable, std::shared_ptr<SampleTable>>(
+      m, "SampleTableIndex",
+      "The engine's sample table with its (lens cell, time stratum) index, built once: pass it to render() "
+      "as samples (with empty lens_index and lens_uv) to skip rebuilding the index per render. Immutable.")
+      .def(py::init([](const FArr& samples, int grid, int time_strata, const IArr& lens_index, const FArr& lens_uv) {
+             auto t = std::make_shared<SampleTable>(make_table(samples, grid, lens_index, lens_uv));
+             t->set_time_strata(time_strata);
+             return t;
+           }),
+           py::arg("samples"), py::arg("grid"), py::arg("time_strata"), py::arg("lens_index"), py::arg("lens_uv"))
+      .def_property_readonly("period", &SampleTable::period)
+      .def_property_readonly("spp", &SampleTable::spp)
+      .def_property_readonly("grid", &SampleTable::grid)
+      .def_property_readonly("time_strata", &SampleTable::time_strata)
+      .def_property_readonly("n_lens", &SampleTable::n_lens);
+
   m.def(
       "render",
-      [](const RenderParams& p, const FArr& v0, const FArr& v1, const FArr& colors, const FArr& samples,
+      [](const RenderParams& p, const FArr& v0, const FArr& v1, const FArr& colors,
+         const std::variant<std::shared_ptr<SampleTable>, FArr>& samples,
          const IArr& lens_index, const FArr& lens_uv, bool export_samples, std::optional<FArr> uvs,
          std::optional<IArr> tex_slots, std::vector<FArr> textures, std::optional<IArr> bins,
          std::optional<FArr> alpha, std::vector<std::string> pixel_stats,
@@ -31,8 +53,25 @@ void register_render(py::module_& m) {
         require_finite(v0, "v0");
         require_finite(v1, "v1");
         require_finite(colors, "colors");
-        SampleTable table = make_table(samples, p.lens_grid, lens_index, lens_uv);
-        table.set_time_strata(p.time_strata);  // the (lens cell, time stratum) index
+        std::optional<SampleTable> built;  // from a samples array: the (lens cell, time stratum) index per render
+        const SampleTable* tp = nullptr;
+        if (const auto* idx = std::get_if<std::shared_ptr<SampleTable>>(&samples)) {
+          if (!*idx) throw std::invalid_argument("samples: expected a float array or a SampleTableIndex, got None");
+          tp = idx->get();
+          if (tp->grid() != p.lens_grid || tp->time_strata() != p.time_strata)
+            throw std::invalid_argument("samples: the SampleTableIndex has lens_grid " + std::to_string(tp->grid()) +
+                                        " and time_strata " + std::to_string(tp->time_strata()) +
+                                        ", the params ask for " + std::to_string(p.lens_grid) + " and " +
+                                        std::to_string(p.time_strata));
+          if (lens_index.size() > 0 || lens_uv.size() > 0)
+            throw std::invalid_argument("lens_index: a SampleTableIndex holds its own lens_index and lens_uv; "
+                                        "pass empty arrays with it");
+        } else {
+          built.emplace(make_table(std::get<FArr>(samples), p.lens_grid, lens_index, lens_uv));
+          built->set_time_strata(p.time_strata);
+          tp = &*built;
+        }
+        const SampleTable& table = *tp;
         SceneArrays scene{static_cast<int>(n), v0.data(), v1.data(), colors.data()};
         if (uvs && tex_slots) {  // texturing: uvs (n, 3, 2), tex_slots (n, 4), textures (H, W, C)
           require_shape(*uvs, {n, 3, 2}, "uvs");
@@ -129,14 +168,8 @@ void register_render(py::module_& m) {
           out["bin_work"] = py::array_t<std::int64_t>(static_cast<py::ssize_t>(res.bin_work.size()),
                                                       res.bin_work.data());
           out["bin_aux"] = py::array_t<double>({static_cast<py::ssize_t>(res.bin_work.size()), py::ssize_t{kBinAux}},
-                                               res.bin_aux.data());  // (bins, [coverage, footprint])
-          std::vector<double> total = res.bin_aux_total;
-          if (total.empty()) {  // every bin's auxiliaries computed: their sums
-            total.assign(kBinAux, 0.0);
-            for (std::size_t b = 0; b < res.bin_work.size(); ++b)
-              for (int j = 0; j < kBinAux; ++j) total[j] += res.bin_aux[kBinAux * b + j];
-          }
-          out["bin_aux_total"] = py::array_t<double>(kBinAux, total.data());
+                                               res.bin_aux.data());  // (bins, [coverage, footprint, edge])
+          out["bin_aux_total"] = py::array_t<double>(kBinAux, res.bin_aux_total.data());
         }
         if (p.record_timing) {
           py::array_t<TileWork> recs(static_cast<py::ssize_t>(res.timing_records.size()));
@@ -179,7 +212,8 @@ void register_render(py::module_& m) {
       py::arg("progress") = py::none(),
       "Render pixel-homogeneous triangles; returns {'image', 'counters'[, 'timing_records'][, "
       "'sample_depth', 'sample_triangle'][, 'bin_counters', 'bins', 'bin_stratum', 'strata_sizes', "
-      "'bin_work', 'bin_aux', 'bin_aux_total'][, 'pixel_stats' (k, H, W)][, 'trace_events', 'trace_samples']}. bins (or params.sample_fraction < 1: a stratified draw): render only these screen bins "
+      "'bin_work', 'bin_aux', 'bin_aux_total'][, 'pixel_stats' (k, H, W)][, 'trace_events', 'trace_samples']}. samples: "
+      "the (P, P, spp, 5) table, or a SampleTableIndex built once for it (then lens_index and lens_uv empty). bins (or params.sample_fraction < 1: a stratified draw): render only these screen bins "
       "(row-major) and return their counters, one row per bin in counter_docs() order. The GIL is "
       "released; Ctrl-C interrupts; progress(done_bins, total_bins) is called while it runs.");
 

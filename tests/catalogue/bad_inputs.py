@@ -504,6 +504,16 @@ def core_lens_index(d):
     _core_render(samples=s, lens_index=li, lens_uv=np.zeros((4, 2), np.float32))
 
 
+@case("bindings", "_core.render with a SampleTableIndex built for 16 time strata, the params asking for 8", "ValueError",
+      r"samples: the SampleTableIndex has lens_grid \d+ and time_strata 16, the params ask for \d+ and \d+",
+      "the argument, the index's lens grid and strata and the params'")
+def core_table_index_strata(d):
+    sim = _sim()
+    p, _ = _params()
+    index = sim.SampleTable.create("stratified", spp=4, seed=1).engine_index("disk", p.lens_grid, 2 * p.time_strata)
+    _core_render(samples=index, params=p)
+
+
 @case("bindings", "_core.render with tex_slots naming texture 5 of 1", "ValueError",
       r"tex_slots: triangle 0 uses texture 5, expected -1\.\.0", "the triangle, the id and the range")
 def core_tex_slots(d):

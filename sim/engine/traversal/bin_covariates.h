@@ -7,11 +7,15 @@
 //             sample test hits, before depth);
 //   footprint: the area of the triangle swept over the lens inside the bin, times spp (what a
 //             conservative traversal has to consider): the Steiner area of the triangle
-//             dilated by its vertices' mean circle-of-confusion radius (area + perimeter r + pi r^2).
+//             dilated by its vertices' mean circle-of-confusion radius (area + perimeter r + pi r^2);
+//   edge:     the perimeter of the triangle at the lens centre, times spp, spread over its bins in
+//             proportion to the share of its bounds each holds (the tiles and lens cells a traversal
+//             tests but the triangle does not cover lie along its edges).
 // A triangle whose lens-centre extent is larger than a bin is clipped to each bin exactly (its
 // footprint as the triangle with every edge pushed out by the largest CoC radius); a smaller one
 // is spread over its bins in proportion to the share of its bounds each bin holds. Moving,
-// near-clipped and full-bounds triangles use their bounds' area for both. The values only steer
+// near-clipped and full-bounds triangles use their bounds' area for both and their bounds' perimeter
+// for the edge. The values only steer
 // the estimator's efficiency: any function of the frame known for every bin keeps it consistent,
 // and the confidence interval comes from the residuals, so an approximation here widens the
 // interval, it never biases it.
@@ -71,6 +75,7 @@ inline double clipped_area(const Pt* p, int n, double x0, double y0, double x1, 
 struct TriangleCovariates {
   double bounds = 0;          // pixels of its bounds
   double area = 0, foot = 0;  // lens-centre area and Steiner footprint (small triangles)
+  double perim = 0;           // lens-centre perimeter
   bool clip = false;          // larger than a bin: clipped to each bin exactly
   bin_covariates_detail::Pt p[3], o[3];  // lens-centre and pushed-out triangles (clip only)
   bool o_ok = false;
@@ -82,6 +87,7 @@ inline TriangleCovariates triangle_covariates(const TriSetup& t, double B) {
   c.bounds = static_cast<double>(t.bx1 - t.bx0) * (t.by1 - t.by0);
   if (t.moving || t.near_clipped || t.full_bounds || c.bounds <= 0) {
     c.area = c.foot = c.bounds;
+    c.perim = 2.0 * ((t.bx1 - t.bx0) + (t.by1 - t.by0));
     return c;
   }
   double r[3];
@@ -100,6 +106,7 @@ inline TriangleCovariates triangle_covariates(const TriSetup& t, double B) {
     const double dx = p[(j + 1) % 3].x - p[j].x, dy = p[(j + 1) % 3].y - p[j].y;
     len[j] = std::sqrt(dx * dx + dy * dy);
   }
+  c.perim = len[0] + len[1] + len[2];
   const double rm = (r[0] + r[1] + r[2]) / 3.0;
   c.foot = c.area + (len[0] + len[1] + len[2]) * rm + 3.141592653589793 * rm * rm;
   if ((ext_x > B || ext_y > B) && cross != 0) {
@@ -124,23 +131,35 @@ inline TriangleCovariates triangle_covariates(const TriSetup& t, double B) {
   return c;
 }
 
-// Adds triangle t's terms (c = triangle_covariates(t, bin size)) to the coverage and footprint of the
-// bin [x0, x1) x [y0, y1) (pixels; before the factor spp).
+// Auxiliaries per bin: coverage, footprint and edge (samples).
+constexpr int kBinAux = 3;
+
+// One bin's auxiliaries (pixels; before the factor spp).
+struct BinAux {
+  double cover = 0, foot = 0, edge = 0;
+  // Writes the kBinAux values of bin b, times spp.
+  void store(std::vector<double>& out, std::size_t b, int spp) const {
+    out[kBinAux * b] = cover * spp;
+    out[kBinAux * b + 1] = foot * spp;
+    out[kBinAux * b + 2] = edge * spp;
+  }
+};
+
+// Adds triangle t's terms (c = triangle_covariates(t, bin size)) to the auxiliaries of the bin
+// [x0, x1) x [y0, y1).
 inline void bin_covariate_terms(const TriSetup& t, const TriangleCovariates& c, double x0, double y0, double x1,
-                                double y1, double& cover, double& foot) {
+                                double y1, BinAux& a) {
   using bin_covariates_detail::clipped_area;
   const double share = (std::min<double>(t.bx1, x1) - std::max<double>(t.bx0, x0)) *
                        (std::min<double>(t.by1, y1) - std::max<double>(t.by0, y0)) / c.bounds;
+  a.edge += share * c.perim;
   if (!c.clip) {
-    cover += share * c.area, foot += share * c.foot;
+    a.cover += share * c.area, a.foot += share * c.foot;
     return;
   }
-  cover += clipped_area(c.p, 3, x0, y0, x1, y1);
-  foot += c.o_ok ? clipped_area(c.o, 3, x0, y0, x1, y1) : share * c.bounds;
+  a.cover += clipped_area(c.p, 3, x0, y0, x1, y1);
+  a.foot += c.o_ok ? clipped_area(c.o, 3, x0, y0, x1, y1) : share * c.bounds;
 }
-
-// Auxiliaries per bin: coverage and footprint (samples).
-constexpr int kBinAux = 2;
 
 // out: kBinAux values per bin, row-major bins.
 inline void bin_covariates(const std::vector<TriSetup>& setups, const std::vector<std::vector<std::uint32_t>>& bin_lists,
@@ -156,10 +175,9 @@ inline void bin_covariates(const std::vector<TriSetup>& setups, const std::vecto
   for (int b = 0; b < n_bins; ++b) {
     const int bx = b % bins_x, by = b / bins_x;
     const double x0 = bx * B, y0 = by * B, x1 = std::min<double>(width, x0 + B), y1 = std::min<double>(height, y0 + B);
-    double cover = 0, foot = 0;
-    for (std::uint32_t i : bin_lists[b]) bin_covariate_terms(setups[i], tri[i], x0, y0, x1, y1, cover, foot);
-    out[kBinAux * b] = cover * spp;
-    out[kBinAux * b + 1] = foot * spp;
+    BinAux a;
+    for (std::uint32_t i : bin_lists[b]) bin_covariate_terms(setups[i], tri[i], x0, y0, x1, y1, a);
+    a.store(out, static_cast<std::size_t>(b), spp);
   }
 }
 

@@ -90,7 +90,7 @@ static inline void prefetch_setup(const TriSetup& t) {
 
 // The per-render shading constants: textures with mip chains and addresses, per-triangle texture
 // slots, uvs, analytic uv derivatives and levels of detail (backend/texture.h).
-static void build_shade_frame(const RenderParams& p, const SceneArrays& scene, const std::vector<TriSetup>& setups,
+static void build_shade_frame(const RenderParams& p, const SceneArrays& scene, const TriSetup* setups,
                               const std::vector<char>& alive, int n_bins, ShadeFrame& sf) {
   sf.mode = p.shading;
   sf.grid = p.shading_grid;
@@ -155,16 +155,19 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
 
   // ---- setup: static partition over triangles, each thread its own counters ----
   std::vector<std::uint64_t> frame_pool;  // per-pixel statistics with no pixel bounds
-  std::vector<TriSetup> setups(static_cast<std::size_t>(scene.n));
+  // Sampled simulation or a bin list: setup only for the triangles that reach the drawn bins, their
+  // setup counters in their home bins' rows (traversal/sampled_setup.h). Their set-ups are constructed
+  // in storage left unconstructed elsewhere (only the set-up triangles' pages are touched).
+  const bool restricted = (bins || p.sample_fraction < 1.0) && !pstats && !p.record_timing;
+  std::vector<TriSetup> setups(restricted ? 0 : static_cast<std::size_t>(scene.n));
+  UnconstructedSetups sparse_setups;
+  TriSetup* const S = restricted ? sparse_setups.allocate(static_cast<std::size_t>(scene.n)) : setups.data();
   std::vector<char> alive(static_cast<std::size_t>(scene.n), 0);
   std::vector<Counters> setup_counters(n_threads);
-  // Sampled simulation or a bin list: setup only for the triangles that reach the drawn bins, their
-  // setup counters in their home bins' rows (traversal/sampled_setup.h).
-  const bool restricted = (bins || p.sample_fraction < 1.0) && !pstats && !p.record_timing;
   std::vector<int> restricted_bins;
   std::vector<Counters> homed_setup;
   if (restricted) {
-    sampled_setup(p, fc, scene, table.spp(), bins, setups, alive, setup_counters[0], homed_setup, restricted_bins,
+    sampled_setup(p, fc, scene, table.spp(), bins, S, alive, setup_counters[0], homed_setup, restricted_bins,
                   result);
     bins = &restricted_bins;
   }
@@ -177,9 +180,9 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
         const float* v1 = scene.v1 + static_cast<std::size_t>(i) * 9;
         const float* col = scene.colors + static_cast<std::size_t>(i) * 9;
         alive[i] = p.op_count == OpCount::kExact
-                       ? setup_triangle<ExactArith>(v0, v1, col, i, p, fc, setups[i], setup_counters[t])
-                       : setup_triangle<FastArith>(v0, v1, col, i, p, fc, setups[i], setup_counters[t]);
-        if (scene.alpha) setups[i].alpha = scene.alpha[i];
+                       ? setup_triangle<ExactArith>(v0, v1, col, i, p, fc, S[i], setup_counters[t])
+                       : setup_triangle<FastArith>(v0, v1, col, i, p, fc, S[i], setup_counters[t]);
+        if (scene.alpha) S[i].alpha = scene.alpha[i];
       }
     };
     if (pstats) {  // per-pixel statistics: one thread, each triangle's setup charged to its bounds
@@ -190,10 +193,10 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
         const float* v1 = scene.v1 + static_cast<std::size_t>(i) * 9;
         const float* col = scene.colors + static_cast<std::size_t>(i) * 9;
         alive[i] = p.op_count == OpCount::kExact
-                       ? setup_triangle<ExactArith>(v0, v1, col, i, p, fc, setups[i], setup_counters[0])
-                       : setup_triangle<FastArith>(v0, v1, col, i, p, fc, setups[i], setup_counters[0]);
-        if (scene.alpha) setups[i].alpha = scene.alpha[i];
-        const TriSetup& t = setups[i];
+                       ? setup_triangle<ExactArith>(v0, v1, col, i, p, fc, S[i], setup_counters[0])
+                       : setup_triangle<FastArith>(v0, v1, col, i, p, fc, S[i], setup_counters[0]);
+        if (scene.alpha) S[i].alpha = scene.alpha[i];
+        const TriSetup& t = S[i];
         cur.triangle = i;
         cur.x0 = t.bx0, cur.y0 = t.by0, cur.x1 = t.bx1, cur.y1 = t.by1, cur.kind = 3;
         cur.commit(setup_counters[0], true);
@@ -219,13 +222,13 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
   const int n_bins = bins_x * bins_y;
   std::vector<std::vector<std::uint32_t>> bin_lists(n_bins);
   for (std::uint32_t i : live) {
-    const TriSetup& t = setups[i];
+    const TriSetup& t = S[i];
     for (int by = t.by0 / B; by <= (t.by1 - 1) / B; ++by)
       for (int bx = t.bx0 / B; bx <= (t.bx1 - 1) / B; ++bx) bin_lists[by * bins_x + bx].push_back(i);
   }
 
   ShadeFrame shade_frame;
-  build_shade_frame(p, scene, setups, alive, n_bins, shade_frame);
+  build_shade_frame(p, scene, S, alive, n_bins, shade_frame);
 
   // ---- the bins to render: all, or a subset (a list, or sampled simulation) ----
   std::vector<int> drawn;
@@ -236,13 +239,16 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
       const int x0 = bx * B, y0 = by * B, x1 = std::min(p.width, x0 + B), y1 = std::min(p.height, y0 + B);
       std::int64_t w = 0;
       for (std::uint32_t i : bin_lists[b]) {
-        const TriSetup& t = setups[i];
+        const TriSetup& t = S[i];
         const std::int64_t dx = std::min(t.bx1, x1) - std::max(t.bx0, x0), dy = std::min(t.by1, y1) - std::max(t.by0, y0);
         if (dx > 0 && dy > 0) w += dx * dy;
       }
       result.bin_work[b] = w * table.spp();
     }
     bin_covariates(setups, bin_lists, bins_x, B, p.width, p.height, table.spp(), result.bin_aux);
+    result.bin_aux_total.assign(kBinAux, 0.0);  // every bin's auxiliaries computed: their sums
+    for (int b = 0; b < n_bins; ++b)
+      for (int j = 0; j < kBinAux; ++j) result.bin_aux_total[j] += result.bin_aux[kBinAux * b + j];
   }
   if (!bins && p.sample_fraction < 1.0) {
     BinSample s = stratify_bins(result.bin_work, p.sample_fraction, static_cast<std::uint64_t>(p.sample_seed));
@@ -253,13 +259,7 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
   }
   if (bins) {
     result.sampled_bins = *bins;
-    std::vector<char> seen(static_cast<std::size_t>(n_bins), 0);
-    for (int b : *bins) {
-      if (b < 0 || b >= n_bins || seen[b])
-        throw std::invalid_argument("bins: expected distinct bin indices in 0.." + std::to_string(n_bins - 1) +
-                                    ", got " + std::to_string(b));
-      seen[b] = 1;
-    }
+    require_bin_list(*bins, n_bins);
     result.bin_counters.assign(bins->size() * static_cast<std::size_t>(kNumCounters), 0);
   }
   const int n_work = bins ? static_cast<int>(bins->size()) : n_bins;
@@ -311,8 +311,8 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
         for (std::size_t li = 0; li < list.size(); ++li) {
           const std::uint32_t i = list[li];
           if (cancel.load(std::memory_order_relaxed)) break;  // Ctrl-C: stop within one triangle
-          if (li + 4 < list.size()) prefetch_setup(setups[list[li + 4]]);  // a later triangle's set-up
-          const TriSetup& tri = setups[i];
+          if (li + 4 < list.size()) prefetch_setup(S[list[li + 4]]);  // a later triangle's set-up
+          const TriSetup& tri = S[i];
           const bool home = (tri.by0 / B) * bins_x + (tri.bx0 / B) == b;
           const TileWork before = p.record_timing ? work_from_counters(ts.counters) : TileWork{};
           if (per_visit) {  // hardware.timing.granularity 'visit': end_visit() records (sample_pipeline.h)

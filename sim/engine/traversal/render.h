@@ -56,11 +56,11 @@ struct RenderResult {
   // every bin with triangles was traversed).
   std::vector<std::int64_t> bin_work;
   std::vector<int> sampled_bins, sampled_stratum, strata_sizes;
-  // With bin_work: kBinAux per bin, the regression estimator's auxiliary variables (coverage and
-  // footprint, samples; traversal/bin_covariates.h).
+  // With bin_work: kBinAux per bin, the regression estimator's auxiliary variables (coverage,
+  // footprint and edge, samples; traversal/bin_covariates.h).
   std::vector<double> bin_aux;
-  // Their frame totals (kBinAux; summed per triangle when only the drawn bins' auxiliaries are computed,
-  // traversal/sampled_setup.h: bin_aux is then NaN in the other bins).
+  // Their frame totals (kBinAux): summed per triangle when only the drawn bins' auxiliaries are computed
+  // (traversal/sampled_setup.h: bin_aux is then NaN in the other bins), else the sums of bin_aux.
   std::vector<double> bin_aux_total;
   // Pixel trace (PixelStats::tracing()): the events and samples of the traced pixel, in order.
   std::vector<TraceEvent> trace_events;

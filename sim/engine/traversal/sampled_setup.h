@@ -20,7 +20,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <limits>
+#include <memory>
+#include <new>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -32,24 +35,47 @@
 
 namespace rast5d {
 
-// Fills setups/alive for the set-up triangles, frame_setup with the frame's setup counters (those
-// of the home bins included), homed[k] with the setup counters of the triangles homed in drawn bin k,
-// drawn with the bins to traverse (the list, or the stratified draw), and result's bin_work,
-// bin_aux (NaN for the bins not drawn), bin_aux_total, sampled_stratum and strata_sizes.
+// A bin list's entries are distinct bin indices in 0 .. n_bins - 1; std::invalid_argument otherwise.
+inline void require_bin_list(const std::vector<int>& bins, int n_bins) {
+  std::vector<char> seen(static_cast<std::size_t>(n_bins), 0);
+  for (int b : bins) {
+    if (b < 0 || b >= n_bins || seen[b])
+      throw std::invalid_argument("bins: expected distinct bin indices in 0.." + std::to_string(n_bins - 1) +
+                                  ", got " + std::to_string(b));
+    seen[b] = 1;
+  }
+}
+
+// Storage for n set-ups, unconstructed: a restricted render constructs only those of the triangles
+// it sets up (sampled_setup), so the rest of the array costs neither writes nor page faults. TriSetup
+// is trivially destructible.
+struct UnconstructedSetups {
+  struct Free {
+    void operator()(TriSetup* q) const { std::free(q); }
+  };
+  std::unique_ptr<TriSetup, Free> data;
+  TriSetup* allocate(std::size_t n) {
+    data.reset(static_cast<TriSetup*>(std::malloc(std::max<std::size_t>(n, 1) * sizeof(TriSetup))));
+    if (!data) throw std::bad_alloc();
+    return data.get();
+  }
+};
+
+// Constructs and fills setups[i] and alive[i] for the set-up triangles (setups: n unconstructed slots,
+// UnconstructedSetups; only the set-up triangles' slots are read afterwards), frame_setup with the
+// frame's setup counters (those of the home bins included), homed[k] with the setup counters of the
+// triangles homed in drawn bin k, drawn with the bins to traverse (the list, or the stratified draw),
+// and result's bin_work, bin_aux (NaN for the bins not drawn), bin_aux_total, sampled_stratum and
+// strata_sizes.
 inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const SceneArrays& scene, int spp,
-                          const std::vector<int>* list, std::vector<TriSetup>& setups, std::vector<char>& alive,
+                          const std::vector<int>* list, TriSetup* setups, std::vector<char>& alive,
                           Counters& frame_setup, std::vector<Counters>& homed, std::vector<int>& drawn,
                           RenderResult& result) {
-  using bin_covariates_detail::clipped_area;
   const int B = p.bin_size;
   const int bins_x = (p.width + B - 1) / B, bins_y = (p.height + B - 1) / B;
   const int n_bins = bins_x * bins_y;
   const std::size_t n = static_cast<std::size_t>(scene.n);
-  if (list)
-    for (int b : *list)
-      if (b < 0 || b >= n_bins)
-        throw std::invalid_argument("bins: expected distinct bin indices in 0.." + std::to_string(n_bins - 1) +
-                                    ", got " + std::to_string(b));
+  if (list) require_bin_list(*list, n_bins);
 
   // ---- 1. bounds pre-pass: per-bin work, auxiliary totals ----
   struct Pre {
@@ -58,7 +84,7 @@ inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const Sce
   };
   std::vector<Pre> pre(n);
   result.bin_work.assign(static_cast<std::size_t>(n_bins), 0);
-  double total_cover = 0, total_foot = 0;
+  BinAux total;  // the frame's auxiliaries
   TriSetup t;
   for (std::size_t i = 0; i < n; ++i) {
     Pre& q = pre[i];
@@ -70,20 +96,15 @@ inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const Sce
       for (int bx = t.bx0 / B; bx <= (t.bx1 - 1) / B; ++bx)
         result.bin_work[by * bins_x + bx] += dy * (std::min(t.bx1, (bx + 1) * B) - std::max(t.bx0, bx * B));
     }
-    // The triangle's auxiliaries summed over its bins (bin_covariates' per-bin terms: shares of the
-    // bounds sum to 1; clipped areas sum to the area inside the union of its bins).
-    const TriangleCovariates c = triangle_covariates(t, B);
-    if (!c.clip) {
-      total_cover += c.area, total_foot += c.foot;
-      continue;
-    }
+    // The triangle's auxiliaries summed over its bins: bin_covariate_terms over the union of its bins
+    // (its bounds lie inside, so the share is 1; clipped areas add up over the bins).
     const double x0 = (t.bx0 / B) * B, y0 = (t.by0 / B) * B;
     const double x1 = std::min(p.width, ((t.bx1 - 1) / B + 1) * B), y1 = std::min(p.height, ((t.by1 - 1) / B + 1) * B);
-    total_cover += clipped_area(c.p, 3, x0, y0, x1, y1);
-    total_foot += c.o_ok ? clipped_area(c.o, 3, x0, y0, x1, y1) : c.bounds;
+    bin_covariate_terms(t, triangle_covariates(t, B), x0, y0, x1, y1, total);
   }
   for (auto& w : result.bin_work) w *= spp;
-  result.bin_aux_total = {total_cover * spp, total_foot * spp};
+  result.bin_aux_total.assign(kBinAux, 0.0);
+  total.store(result.bin_aux_total, 0, spp);
 
   // ---- 2. the drawn bins ----
   if (list) {
@@ -95,12 +116,7 @@ inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const Sce
     result.strata_sizes = std::move(s.sizes);
   }
   std::vector<int> k_of(static_cast<std::size_t>(n_bins), -1);
-  for (std::size_t k = 0; k < drawn.size(); ++k) {
-    if (k_of[drawn[k]] >= 0)
-      throw std::invalid_argument("bins: expected distinct bin indices in 0.." + std::to_string(n_bins - 1) +
-                                  ", got " + std::to_string(drawn[k]));
-    k_of[drawn[k]] = static_cast<int>(k);
-  }
+  for (std::size_t k = 0; k < drawn.size(); ++k) k_of[drawn[k]] = static_cast<int>(k);  // distinct: checked
   // Summed-area table of the drawn bins: does a triangle's bin rectangle hold one?
   const int sx = bins_x + 1;
   std::vector<int> sat(static_cast<std::size_t>(sx) * (bins_y + 1), 0);
@@ -119,6 +135,7 @@ inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const Sce
     const float* col = scene.colors + i * 9;
     const Pre& q = pre[i];
     auto run = [&](Counters& into) {
+      new (&setups[i]) TriSetup{};
       return p.op_count == OpCount::kExact
                  ? setup_triangle<ExactArith>(v0, v1, col, static_cast<std::uint32_t>(i), p, fc, setups[i], into)
                  : setup_triangle<FastArith>(v0, v1, col, static_cast<std::uint32_t>(i), p, fc, setups[i], into);
@@ -156,13 +173,12 @@ inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const Sce
     const int bx = b % bins_x, by = b / bins_x;
     const double x0 = bx * B, y0 = by * B;
     const double x1 = std::min<double>(p.width, x0 + B), y1 = std::min<double>(p.height, y0 + B);
-    double cover = 0, foot = 0;
+    BinAux a;
     for (std::uint32_t i : reach[k]) {
       if (cov_of[i] < 0) cov_of[i] = static_cast<int>(cov.size()), cov.push_back(triangle_covariates(setups[i], B));
-      bin_covariate_terms(setups[i], cov[cov_of[i]], x0, y0, x1, y1, cover, foot);
+      bin_covariate_terms(setups[i], cov[cov_of[i]], x0, y0, x1, y1, a);
     }
-    result.bin_aux[kBinAux * b] = cover * spp;
-    result.bin_aux[kBinAux * b + 1] = foot * spp;
+    a.store(result.bin_aux, static_cast<std::size_t>(b), spp);
   }
 }
 
