@@ -139,24 +139,51 @@ def write_parquet(df, path: Path):
 _CHECKSUM_KEY = b"rast5d.sha256"
 
 
-def _table_digest(table) -> str:
+def _table_digest(table, values: list | None = None) -> str:
     """sha256 of a pyarrow table's column names, types and values (not of its file bytes: the same
-    row read back gives the same digest)."""
+    row read back gives the same digest). ``values``: the columns' to_pylist(), when already made."""
     import hashlib
     import json
 
     h = hashlib.sha256()
-    for name, col in zip(table.column_names, table.columns):
-        h.update(json.dumps([name, str(col.type), col.to_pylist()], default=repr).encode())
+    for i, (name, col) in enumerate(zip(table.column_names, table.columns)):
+        h.update(json.dumps([name, str(col.type), col.to_pylist() if values is None else values[i]],
+                            default=repr).encode())
     return h.hexdigest()
 
 
+def row_table(row: dict):
+    """The one-row pyarrow table of a result row, with the column types that pandas gives it
+    (to_frame([row]) through pyarrow: float64, int64, bool, string, null for a missing value; NaN is
+    stored as missing), built column by column without a DataFrame (a row has hundreds of columns)."""
+    import pyarrow as pa
+
+    names, arrays = [], []
+    for k, v in row.items():
+        if isinstance(v, float) and math.isnan(v):
+            v = None
+        if v is not None and not isinstance(v, (bool, int, float, str, np_scalar_types())):
+            return None  # anything else takes the DataFrame path
+        names.append(k)
+        arrays.append(pa.array([v]))
+    return pa.Table.from_arrays(arrays, names=names)
+
+
+def np_scalar_types() -> tuple:
+    import numpy as np
+
+    return (np.bool_, np.integer, np.floating)
+
+
 def write_point_file(df, path: Path) -> None:
-    """One point's row with its checksum (Parquet metadata) and Parquet page checksums, atomically."""
+    """One point's row (a one-row DataFrame, or the row's dict) with its checksum (Parquet metadata)
+    and Parquet page checksums, atomically."""
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    table = pa.Table.from_pandas(df, preserve_index=False)
+    table = row_table(df) if isinstance(df, dict) else None
+    if table is None:
+        table = pa.Table.from_pandas(to_frame([df]) if isinstance(df, dict) else df, preserve_index=False)
     meta = dict(table.schema.metadata or {})
     meta[_CHECKSUM_KEY] = _table_digest(table).encode()
     table = table.replace_schema_metadata(meta)
@@ -174,11 +201,22 @@ def read_point_file(path: Path) -> dict:
     stored = (table.schema.metadata or {}).get(_CHECKSUM_KEY)
     if stored is None:
         raise ValueError("no checksum")
-    if stored.decode() != _table_digest(table):
+    values = [col.to_pylist() for col in table.columns]
+    if stored.decode() != _table_digest(table, values):
         raise ValueError("checksum mismatch (the file was modified or corrupted)")
     if table.num_rows != 1:
         raise ValueError(f"expected one row, found {table.num_rows}")
-    return table.to_pandas().iloc[0].to_dict()
+    if all(pa_numeric(t) for t in table.schema.types):  # one numeric dtype: pandas would cast it
+        return table.to_pandas().iloc[0].to_dict()
+    # A one-row table of mixed column types: DataFrame.iloc[0].to_dict() gives each value as a Python
+    # scalar, as to_pylist does, without building the DataFrame.
+    return {name: v[0] for name, v in zip(table.column_names, values)}
+
+
+def pa_numeric(t) -> bool:
+    import pyarrow as pa
+
+    return pa.types.is_integer(t) or pa.types.is_floating(t) or pa.types.is_boolean(t)
 
 
 def store_point(row: dict):
@@ -186,7 +224,7 @@ def store_point(row: dict):
     marked transient (a lost Dask worker: nothing about the point itself)."""
     if row.pop("_transient", False):
         return
-    write_point_file(to_frame([row]), point_path(row["config_hash"]))
+    write_point_file(row, point_path(row["config_hash"]))
 
 
 def cached_row(h: str, retry_failed: bool = False) -> dict | None:
