@@ -21,6 +21,10 @@
   interrupted; ``experiments.load(name)`` reads it.
 - ``results/records/<hash>-<engine version>.npz``: the timing work records and counters of a
   render, read by `retime` points (experiments/run/points.py).
+- ``results/pictures/<hash>-<engine version>.npz``: the image and per-pixel statistics maps of a
+  point that a report page pictures (``kind: image``, ``kind: heatmap`` with ``map:``), kept by the
+  render of its sweep point and read by the page (experiments/report/heatmaps.py); served only while
+  the files the point read are unchanged.
 - ``results/references/``: reference images of the image-error metrics (experiments/run/references.py).
 
 A row is the flattened resolved config (``camera.coc_px``, ``samples.kind``, ``pipeline.algorithm``,
@@ -398,3 +402,44 @@ def cached_records(h: str):
     if isinstance(files, str) and files and unchanged(json.loads(files)) is not None:
         return None
     return records, stats
+
+
+# ---- pictures: the arrays a report page draws of a point (experiments/report/heatmaps.py) -----------
+
+def pictures_path(h: str) -> Path:
+    return results_dir() / "pictures" / f"{h}-{engine_id()}.npz"
+
+
+def store_pictures(h: str, arrays: dict, inputs_files: str) -> None:
+    """The image and pixel-statistics maps of point ``h`` that a page pictures ({'image': ...,
+    'map:<counter>': ...}), with the files the point read (``inputs.files``, JSON)."""
+    import numpy as np
+
+    atomic_write(pictures_path(h), lambda tmp: np.savez(tmp, inputs=np.array(inputs_files), **arrays),
+                 suffix=".npz")
+
+
+def cached_pictures(h: str) -> dict | None:
+    """The stored picture arrays of point ``h`` (see store_pictures), or None: none stored for this
+    engine version, an input file changed since, or an unreadable file (a StoreWarning says so)."""
+    import json
+    import warnings
+
+    import numpy as np
+
+    from ..config.inputs import unchanged
+
+    p = pictures_path(h)
+    if not p.exists():
+        return None
+    try:
+        with open(p, "rb") as fh, np.load(fh) as f:  # an npz member carries a CRC-32, checked on read
+            arrays = {k: f[k] for k in f.files}
+        files = json.loads(str(arrays.pop("inputs")))
+    except Exception as e:  # noqa: BLE001 - a corrupt file is rendered again
+        warnings.warn(f"{p}: unreadable ({type(e).__name__}: {e}); the point is rendered again", StoreWarning,
+                      stacklevel=2)
+        return None
+    if files and unchanged(files) is not None:
+        return None
+    return arrays
