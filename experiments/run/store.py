@@ -169,8 +169,21 @@ def row_table(row: dict):
         if v is not None and not isinstance(v, (bool, int, float, str, np_scalar_types())):
             return None  # anything else takes the DataFrame path
         names.append(k)
-        arrays.append(pa.array([v]))
+        arrays.append(pa.array([v], type=_text_type()) if isinstance(v, str) else pa.array([v]))
     return pa.Table.from_arrays(arrays, names=names)
+
+
+_TEXT_TYPE = []
+
+
+def _text_type():
+    """The arrow type pandas gives a text column (string, or large_string with pandas' arrow strings)."""
+    if not _TEXT_TYPE:
+        import pandas as pd
+        import pyarrow as pa
+
+        _TEXT_TYPE.append(pa.Table.from_pandas(pd.DataFrame({"a": ["x"]}), preserve_index=False).schema.types[0])
+    return _TEXT_TYPE[0]
 
 
 def np_scalar_types() -> tuple:
@@ -192,6 +205,34 @@ def write_point_file(df, path: Path) -> None:
     meta[_CHECKSUM_KEY] = _table_digest(table).encode()
     table = table.replace_schema_metadata(meta)
     atomic_write(path, lambda tmp: pq.write_table(table, tmp, write_page_checksum=True))
+    _remember(path, _table_row(table, [col.to_pylist() for col in table.columns]))
+
+
+# The rows this process wrote or read, by point file and the file's identity (mtime, size, inode):
+# `rast5d report` reads back every row its pool just stored. A file replaced since (another run,
+# a rewrite) has another identity and is read again.
+_ROWS: dict = {}
+
+
+def _identity(path: Path):
+    st = os.stat(path)
+    return st.st_mtime_ns, st.st_size, st.st_ino
+
+
+def _remember(path: Path, row: dict) -> None:
+    try:
+        _ROWS[str(path)] = (_identity(path), row)
+    except OSError:
+        pass
+
+
+def _table_row(table, values: list) -> dict:
+    """The row of a one-row table (values: its columns' to_pylist())."""
+    if all(pa_numeric(t) for t in table.schema.types):  # one numeric dtype: pandas would cast it
+        return table.to_pandas().iloc[0].to_dict()
+    # A one-row table of mixed column types: DataFrame.iloc[0].to_dict() gives each value as a Python
+    # scalar, as to_pylist does, without building the DataFrame.
+    return {name: v[0] for name, v in zip(table.column_names, values)}
 
 
 def read_point_file(path: Path) -> dict:
@@ -210,11 +251,7 @@ def read_point_file(path: Path) -> dict:
         raise ValueError("checksum mismatch (the file was modified or corrupted)")
     if table.num_rows != 1:
         raise ValueError(f"expected one row, found {table.num_rows}")
-    if all(pa_numeric(t) for t in table.schema.types):  # one numeric dtype: pandas would cast it
-        return table.to_pandas().iloc[0].to_dict()
-    # A one-row table of mixed column types: DataFrame.iloc[0].to_dict() gives each value as a Python
-    # scalar, as to_pylist does, without building the DataFrame.
-    return {name: v[0] for name, v in zip(table.column_names, values)}
+    return _table_row(table, values)
 
 
 def pa_numeric(t) -> bool:
@@ -241,11 +278,19 @@ def cached_row(h: str, retry_failed: bool = False) -> dict | None:
     from ..config.inputs import unchanged
 
     p = point_path(h)
-    if not p.exists():
-        return None
     try:
-        row = read_point_file(p)
-    except FileNotFoundError:
+        ident = _identity(p)
+    except OSError:
+        return None
+    hit = _ROWS.get(str(p))
+    try:
+        if hit is not None and hit[0] == ident:
+            row = dict(hit[1])
+        else:
+            row = read_point_file(p)
+            if _identity(p) == ident:
+                _ROWS[str(p)] = (ident, dict(row))
+    except (FileNotFoundError, OSError):
         return None
     except ValueError as e:
         warnings.warn(f"{p}: {e}; the point is recomputed", StoreWarning, stacklevel=2)
