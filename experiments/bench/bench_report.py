@@ -124,19 +124,21 @@ def _instrument(log: list, point_log: Path):
     def section(config, *a, **kw):
         # page_cpu: the parent process (its engine threads re-rendering pictures included, and the
         # pool thread's store writes meanwhile); page_thread_cpu: the thread writing the section alone.
-        c0, th0, r0 = _cpu(resource.RUSAGE_SELF), time.thread_time(), _RENDER_CPU[0]
+        c0, th0, r0 = _cpu(resource.RUSAGE_SELF), time.thread_time(), bench_report._RENDER_CPU[0]
         out = orig_section(config, *a, **kw)
         for c in log[::-1]:
             if c["config"] == config.name:
                 c["page_cpu"] = _cpu(resource.RUSAGE_SELF) - c0
                 c["page_thread_cpu"] = time.thread_time() - th0
-                c["page_render_cpu"] = _RENDER_CPU[0] - r0
+                c["page_render_cpu"] = bench_report._RENDER_CPU[0] - r0
                 break
         return out
 
     pages.run_sweep = sweep
     pages.section_markdown = section
-    _count_render()  # the parent's renders (pictures drawn without a stored one); workers inherit it
+    # the parent's renders (pictures drawn without a stored one); forked workers inherit the wrapper.
+    # By the module's name: run as a script, this file is also __main__, whose counter no worker sees.
+    bench_report._count_render()
     references.reference_image = reference
 
 
