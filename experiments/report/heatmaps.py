@@ -221,7 +221,7 @@ def point_pictures(spec, config, d, out_base: Path | None) -> dict:
     from ..config.inputs import input_digests, tracking_reads
     from ..run.runner import hashed_sweep
     from ..run import render_point
-    from ..run.points import keep_pictures, picture_options
+    from ..run.points import keep_pictures
     from .figures import STYLE, _plt, _save, facet_title, grid_shape, value_label
     from .frames import PlotError, label, same, unique
 
@@ -249,7 +249,7 @@ def point_pictures(spec, config, d, out_base: Path | None) -> dict:
         res = _stored(h, name)
         if res is None:
             with tracking_reads() as reads:
-                _, res = render_point(pc, options=picture_options([name]) if spec.kind == "heatmap" else None, h=h)
+                _, res = render_point(pc, options={"pixel_stats": True} if spec.kind == "heatmap" else None, h=h)
             if pc.point.kind == "render" and getattr(res, "ci95", None) is None:
                 keep_pictures(h, res, [name], json.dumps(input_digests(reads)))
         results.append(res)

@@ -181,8 +181,16 @@ def render_point(config: RenderConfig, image_path: str | Path | None = None, thr
 
 
 def picture_options(pictures) -> dict | None:
-    """The sim.render keywords that the pictures of a point need: pixel statistics for any map."""
-    return {"pixel_stats": True} if any(n != "image" for n in pictures or ()) else None
+    """The sim.render keywords that the pictures of a point need: the pixel-statistics maps they draw
+    (the tile verdict maps for 'tile.cull_reason'), only maps of pixel_stats=True (a page asking for
+    another name renders the point itself and reports it)."""
+    from sim.pixel_stats import DEFAULT, DERIVED, TILE_VERDICTS
+
+    maps: list[str] = []
+    for name in pictures or ():
+        wanted = TILE_VERDICTS if name == "tile.cull_reason" else (name,) if name in DEFAULT or name in DERIVED else ()
+        maps += [n for n in wanted if n not in maps]
+    return {"pixel_stats": maps} if maps else None
 
 
 def run_point(config_json: str, image_path: str | None = None, threads: int | None = None,
