@@ -61,7 +61,7 @@ def cmd_render(args) -> int:
     if args.heatmaps:
         options["pixel_stats"] = True
     try:
-        row, result = render_point(config, image, options=options)
+        row, result = render_point(config, image, options=options, timing=True)  # every figure
     finally:
         bar.close()
     print(_summary(row))

@@ -435,6 +435,22 @@ def test_page_points_skip_the_timing_model_only_when_no_output_reads_it(tmp_path
     assert da["raster.samples_tested"].iloc[0] == db["raster.samples_tested"].iloc[0]
 
 
+@pytest.mark.parametrize("outputs, reads", [
+    ({"text": "The timing model is not read here; its timing.cycles neither."}, False),  # prose reads nothing
+    ({"plots": [{"kind": "table", "y": ["ops.total"], "title": "timing.cycles"}]}, False),  # a title is no column
+    ({"plots": [{"kind": "table", "y": ["ops.total"], "where": {"timing.bottleneck": "setup"}}]}, True),
+    ({"plots": [{"kind": "line", "x": "camera.coc_px", "y": "ops.total", "hue": ["timing.bottleneck"]}]}, True),
+    ({"derived": {"mc": "timing.cycles / 1e6"}}, True),
+    ({"derived": {"x": "hardware.timing.granularity == 'visit'"}}, False),  # a config column, not a figure
+    ({"text": "{{table:gpu_vs_tile}}"}, True),  # a page table that reads timing.cycles
+    ({"text": "{{table:table2_culling}}"}, False),
+])
+def test_a_page_reads_the_timing_model_when_a_column_or_table_of_it_is_named(outputs, reads):
+    from experiments.config.sweep import reads_timing
+
+    assert reads_timing(xc.OutputsSpec(page="p", **outputs)) is reads
+
+
 def test_textured_square_workload_covers_its_edge_squared(tmp_path, store):
     text = ("scene: {name: textured_square, params: {edge_px: 20, width: 64, height: 64}}\n"
             "camera: {coc_px: 0}\nsamples: {spp: 4, seed: 1}\npipeline: {algorithm: tile}\n")

@@ -75,7 +75,8 @@ def test_image_and_map_specs_validate():
         xc.PlotSpec(kind="line", x="a")
 
 
-def test_point_pictures_of_a_config(tmp_path):
+def test_point_pictures_of_a_config(tmp_path, monkeypatch):
+    monkeypatch.setenv("RAST5D_RESULTS", str(tmp_path / "results"))
     cfg = xc.validate({"name": "pics", "scene": {"name": "motion_field", "params": {"motion_px": 4}},
                        "camera": {"width": 48, "height": 40, "coc_px": 4}, "samples": {"kind": "stratified", "spp": 4},
                        "pipeline": {"algorithm": "tile"}, "sweep": {"camera.coc_px": [0, 8]}}, "pics")
@@ -113,3 +114,92 @@ def test_derived_and_combined_columns_are_labelled():
     assert figures.value_label("quad_ratio", {"quad_ratio": "shade.quad_requests / depth.passes"}) == \
         "quad_ratio = shade.quad_requests / depth.passes"
     assert figures.value_label("samples.kind / samples.n_lens") == "sample table / lens positions"
+
+
+def _pictured_config():
+    plots = [{"kind": "image", "facet": "camera.coc_px"},
+             {"kind": "heatmap", "map": "raster.samples_tested", "where": {"camera.coc_px": 8}},
+             {"kind": "heatmap", "map": "tile.cull_reason", "facet": "camera.coc_px"},
+             {"kind": "heatmap", "map": "ops.total", "where": {"big": True}},  # a derived column of a result
+             {"kind": "line", "x": "camera.coc_px", "y": "ops.total"}]
+    return xc.validate({"name": "pics", "scene": {"name": "motion_field", "params": {"motion_px": 4}},
+                        "camera": {"width": 48, "height": 40, "coc_px": 4}, "samples": {"kind": "stratified", "spp": 4},
+                        "pipeline": {"algorithm": "tile"}, "sweep": {"camera.coc_px": [0, 8]},
+                        "outputs": {"page": "pics", "derived": {"big": "ops.total > 0"}, "plots": plots}}, "pics")
+
+
+def test_stored_pictures_equal_a_fresh_render_and_a_stale_one_is_not_served(tmp_path, monkeypatch):
+    """The pictures a page draws are kept by the render of the sweep point (run_point with pictures)
+    and read back by the page: equal to sim.render of the same point (pixel_stats=True, another
+    thread count); a picture of another engine version, of a changed input or a corrupt file is not
+    served, and the page renders the point again."""
+    import numpy as np
+
+    import sim
+    from experiments.run import points, store
+    from experiments.run.runner import hashed_sweep
+
+    monkeypatch.setenv("RAST5D_RESULTS", str(tmp_path / "results"))
+    cfg = _pictured_config()
+    swept = [(h, pc) for _, pc, h in hashed_sweep(cfg)]
+    (h0, c0), (h8, c8) = swept
+    wanted = heatmaps.pictured_points(cfg, swept)
+    # the where: on a result column picks nothing before the render
+    assert wanted == {h0: {"image", "tile.cull_reason"}, h8: {"image", "tile.cull_reason", "raster.samples_tested"}}
+    for h, pc in swept:
+        row = points.run_point(pc.model_dump_json(), None, 1, None, tuple(sorted(wanted[h])))
+        assert row["status"] == "ok"
+        plain = points.run_point(pc.model_dump_json(), None, 1)  # the row does not depend on the pictures
+        assert {k: v for k, v in row.items() if k != "time.wall_s"} == \
+            {k: v for k, v in plain.items() if k != "time.wall_s"}
+    scene, camera, table, pipeline = xc.build(c8)
+    fresh = sim.render(scene, camera, table, pipeline.replace(threads=2), hardware=c8.hardware_config(),
+                       timing=False, pixel_stats=True)
+    kept = store.cached_pictures(h8)
+    assert np.array_equal(kept["image"], fresh.image)
+    names = {k[4:] for k in kept if k.startswith("map:")}
+    assert names == {"raster.samples_tested", *sim.pixel_stats.TILE_VERDICTS}
+    for n in names:
+        assert kept[f"map:{n}"].dtype == fresh.pixel_stats[n].dtype
+        assert np.array_equal(kept[f"map:{n}"], fresh.pixel_stats[n])
+    # the page reads them: no render
+    rows = pd.DataFrame([{"camera.coc_px": c, "config_hash": h, "status": "ok"} for (h, _), c in zip(swept, (0, 8))])
+    renders = []
+    real = points.render_point
+    monkeypatch.setattr(points, "render_point", lambda *a, **k: renders.append(a) or real(*a, **k))
+    import experiments.run as run_pkg
+
+    monkeypatch.setattr(run_pkg, "render_point", points.render_point)
+    specs = [xc.PlotSpec(**p) for p in cfg.outputs.model_dump()["plots"][:3]]
+    from_store = [heatmaps.point_pictures(sp, cfg, rows if sp.facet else rows[rows["camera.coc_px"] == 8],
+                                          tmp_path / f"s{i}")["markdown"] for i, sp in enumerate(specs)]
+    assert renders == []
+    # stale: another engine version serves nothing; the page renders again and gives the same tables
+    monkeypatch.setattr(store, "_ENGINE_ID", "0123456789ab")
+    assert store.cached_pictures(h8) is None
+    again = [heatmaps.point_pictures(sp, cfg, rows if sp.facet else rows[rows["camera.coc_px"] == 8],
+                                     tmp_path / f"r{i}")["markdown"] for i, sp in enumerate(specs)]
+    assert len(renders) == 5 and again == from_store
+    # a corrupt file is not served (a StoreWarning says so)
+    path = store.pictures_path(h8)
+    path.write_bytes(path.read_bytes()[:100])
+    with pytest.warns(store.StoreWarning, match="unreadable"):
+        assert store.cached_pictures(h8) is None
+
+
+def test_stored_pictures_follow_their_input_files(tmp_path, monkeypatch):
+    """A picture is served only while the files its point read are unchanged."""
+    import numpy as np
+
+    from experiments.run import store
+
+    monkeypatch.setenv("RAST5D_RESULTS", str(tmp_path / "results"))
+    mesh = tmp_path / "m.obj"
+    mesh.write_text("v 0 0 0\n")
+    from experiments.config.inputs import input_digests
+    import json
+
+    store.store_pictures("00aa", {"image": np.ones((2, 2, 3), np.float32)}, json.dumps(input_digests([mesh])))
+    assert np.array_equal(store.cached_pictures("00aa")["image"], np.ones((2, 2, 3), np.float32))
+    mesh.write_text("v 0 0 1\n")
+    assert store.cached_pictures("00aa") is None

@@ -273,3 +273,44 @@ def test_two_runs_sharing_a_store_compute_each_point_once(tmp_path, store):
     assert all(r["status"] == "ok" for r in rows)
     table = pd.read_parquet(store / "two.parquet")
     assert len(table) == 12 and (table["status"] == "ok").all()
+
+
+def test_a_row_is_stored_with_the_column_types_of_its_dataframe_and_read_back_as_pandas_reads_it(tmp_path, store):
+    """Point files are written from the row's columns (no one-row DataFrame) and read without building
+    one: the same arrow types as pyarrow's DataFrame conversion, and the values DataFrame.iloc[0] gives."""
+    import numpy as np
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    row = {"config_hash": "00ff", "status": "ok", "camera.coc_px": 10, "ops.total": 1.5e9, "flag": True,
+           "missing": None, "nan": float("nan"), "n64": np.int64(7), "u64": np.uint64(2 ** 63 + 5),
+           "f32": np.float32(0.25), "b": np.bool_(False), "list": "[1, 2]"}
+    path = tmp_path / "p.parquet"
+    result_store.write_point_file(dict(row), path)
+    got = pq.read_table(path)
+    via_pandas = pa.Table.from_pandas(result_store.to_frame([row]), preserve_index=False)
+    assert got.schema.names == via_pandas.schema.names and got.schema.types == via_pandas.schema.types
+    expect = got.to_pandas().iloc[0].to_dict()  # pandas' reading of the file
+    read = result_store.read_point_file(path)
+    assert list(read) == list(expect)
+    for k in expect:
+        assert type(read[k]) is type(expect[k]) and (read[k] == expect[k] or (read[k] is None and expect[k] is None)), k
+
+
+def test_a_row_read_again_is_served_from_memory_until_its_file_is_replaced(tmp_path, store, monkeypatch):
+    h = "00aa11bb22cc33dd"
+    result_store.store_point({"config_hash": h, "status": "ok", "x": 1.0})
+    calls = []
+    real = result_store.read_point_file
+    monkeypatch.setattr(result_store, "read_point_file", lambda p: calls.append(p) or real(p))
+    assert result_store.cached_row(h)["x"] == 1.0 and calls == []  # this process wrote it
+    # another process replaces the file: read again
+    import pyarrow as pa
+
+    table = pa.table({"config_hash": [h], "status": ["ok"], "x": [2.0]})
+    other = tmp_path / "other.parquet"
+    result_store.write_point_file({"config_hash": h, "status": "ok", "x": 2.0}, other)
+    result_store._ROWS.pop(str(other), None)
+    os.replace(other, result_store.point_path(h))
+    assert result_store.cached_row(h)["x"] == 2.0 and len(calls) == 1 and table.num_rows == 1
+    assert result_store.cached_row(h)["x"] == 2.0 and len(calls) == 1

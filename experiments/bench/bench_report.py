@@ -31,17 +31,50 @@ def _cpu(kind) -> float:
     return r.ru_utime + r.ru_stime
 
 
+_RENDER_CPU = [0.0]  # CPU seconds inside sim.render in this process (_count_render)
+_STARTED = [False]
+
+
+def _count_render():
+    """Wrap sim.render (and the name the point kinds call) to add its CPU seconds to _RENDER_CPU."""
+    import sim
+
+    from experiments.run import points  # noqa: F401 - imports sim.render's callers
+
+    if getattr(sim.render, "_bench_counted", False):
+        return
+    real = sim.render
+
+    def render(*a, **k):
+        c0 = time.process_time()
+        try:
+            return real(*a, **k)
+        finally:
+            _RENDER_CPU[0] += time.process_time() - c0
+
+    render._bench_counted = True
+    sim.render = render
+
+
 def _timed_run_point(config_json, *args, **kwargs):
-    """run_point in a worker, logging the point's CPU and wall seconds (one JSON line per point)."""
+    """run_point in a worker, logging the point's CPU and wall seconds, the CPU inside sim.render, and
+    for the first point of a worker the CPU it spent before (start-up, imports): one JSON line per point."""
     from experiments.run import points
 
+    startup = None
+    if not _STARTED[0]:
+        _STARTED[0] = True
+        startup = time.process_time()  # a forked worker's CPU clock starts at 0: its start-up
+        _count_render()
+    r0 = _RENDER_CPU[0]
     c0, t0 = time.process_time(), time.perf_counter()
     row = points.run_point(config_json, *args, **kwargs)
     cpu, wall = time.process_time() - c0, time.perf_counter() - t0
     path = os.environ.get(_POINT_LOG)
     if path:
         rec = {"name": json.loads(config_json).get("name"), "hash": row.get("config_hash"), "cpu": cpu,
-               "wall": wall, "status": row.get("status"), "kind": "point"}
+               "wall": wall, "status": row.get("status"), "kind": "point", "render_cpu": _RENDER_CPU[0] - r0,
+               "pid": os.getpid(), **({"startup_cpu": startup} if startup is not None else {})}
         with open(path, "a") as f:
             f.write(json.dumps(rec) + "\n")
     return row
@@ -65,12 +98,12 @@ def _instrument(log: list, point_log: Path):
 
     def sweep(config, **kw):
         c0 = _cpu(resource.RUSAGE_SELF) + _cpu(resource.RUSAGE_CHILDREN)
-        t0 = time.perf_counter()
+        t0, th0 = time.perf_counter(), time.thread_time()
         df = orig_sweep(config, **kw)
         log.append({"config": config.name, "page": config.outputs.page or config.name, "points": len(df),
                     "summary": df.attrs.get("summary", {}), "wall": time.perf_counter() - t0,
                     "cpu_rusage": _cpu(resource.RUSAGE_SELF) + _cpu(resource.RUSAGE_CHILDREN) - c0,
-                    "load": os.getloadavg()[0]})
+                    "sweep_thread_cpu": time.thread_time() - th0, "load": os.getloadavg()[0]})
         return df
 
     def reference(config, threads=None):
@@ -89,16 +122,23 @@ def _instrument(log: list, point_log: Path):
     orig_section = pages.section_markdown
 
     def section(config, *a, **kw):
-        c0 = _cpu(resource.RUSAGE_SELF)
+        # page_cpu: the parent process (its engine threads re-rendering pictures included, and the
+        # pool thread's store writes meanwhile); page_thread_cpu: the thread writing the section alone.
+        c0, th0, r0 = _cpu(resource.RUSAGE_SELF), time.thread_time(), bench_report._RENDER_CPU[0]
         out = orig_section(config, *a, **kw)
         for c in log[::-1]:
             if c["config"] == config.name:
                 c["page_cpu"] = _cpu(resource.RUSAGE_SELF) - c0
+                c["page_thread_cpu"] = time.thread_time() - th0
+                c["page_render_cpu"] = bench_report._RENDER_CPU[0] - r0
                 break
         return out
 
     pages.run_sweep = sweep
     pages.section_markdown = section
+    # the parent's renders (pictures drawn without a stored one); forked workers inherit the wrapper.
+    # By the module's name: run as a script, this file is also __main__, whose counter no worker sees.
+    bench_report._count_render()
     references.reference_image = reference
 
 
@@ -162,7 +202,8 @@ def _page(log, jobs, cpu, wall, loads, args, started, rc) -> list[str]:
     from experiments.report.tables import md_table
 
     n = args.workers
-    by_cfg = defaultdict(lambda: {"cpu": 0.0, "n": 0, "max": 0.0, "refs": 0.0, "n_refs": 0})
+    empty = {"cpu": 0.0, "n": 0, "max": 0.0, "refs": 0.0, "n_refs": 0, "render": 0.0}
+    by_cfg = defaultdict(lambda: dict(empty))
     for j in jobs:
         d = by_cfg[j["name"]]
         if j["kind"] == "reference":
@@ -172,23 +213,40 @@ def _page(log, jobs, cpu, wall, loads, args, started, rc) -> list[str]:
             d["cpu"] += j["cpu"]
             d["n"] += 1
             d["max"] = max(d["max"], j["cpu"])
-    rows, pages_cpu, page_cpu = [], defaultdict(float), 0.0
+            d["render"] += j.get("render_cpu", 0.0)
+    rows = []
+    pages = defaultdict(lambda: {"configs": 0, "jobs": 0, "cpu": 0.0, "section": 0.0, "thread": 0.0, "render": 0.0})
     seen = set()
     for c in log:
-        d = by_cfg.get(c["config"], {"cpu": 0.0, "n": 0, "max": 0.0, "refs": 0.0, "n_refs": 0})
+        d = by_cfg.get(c["config"], empty)
         seen.add(c["config"])
-        s = c["summary"]
-        pages_cpu[c["page"]] += d["cpu"] + d["refs"]
+        pg = pages[c["page"]]
+        pg["configs"] += 1
+        pg["jobs"] += d["n"] + d["n_refs"]
+        pg["cpu"] += d["cpu"] + d["refs"]
+        pg["section"] += c.get("page_cpu", 0.0)
+        pg["thread"] += c.get("page_thread_cpu", 0.0)
+        pg["render"] += c.get("page_render_cpu", 0.0)
         rows.append([c["config"], c["page"], c["points"], d["n"], f"{d['cpu']:.1f}",
                      f"{d['refs']:.1f} ({d['n_refs']})" if d["n_refs"] else "", f"{d['max']:.1f}",
-                     f"{c['cpu_rusage']:.1f}", f"{c['wall']:.1f}", f"{c.get('page_cpu', 0.0):.1f}",
-                     f"{c['load']:.1f}"])
-        page_cpu += c.get("page_cpu", 0.0)
-    for name, d in by_cfg.items():  # jobs computed outside any config's sweep (a shared phase)
+                     f"{c['cpu_rusage']:.1f}", f"{c.get('sweep_thread_cpu', 0.0):.1f}", f"{c['wall']:.1f}",
+                     f"{c.get('page_cpu', 0.0):.1f}", f"{c.get('page_thread_cpu', 0.0):.1f}",
+                     f"{c.get('page_render_cpu', 0.0):.1f}", f"{c['load']:.1f}"])
+    for name, d in by_cfg.items():  # jobs of a config with no sweep of its own in this run
         if name not in seen:
             rows.append([name, "", "", d["n"], f"{d['cpu']:.1f}", f"{d['refs']:.1f} ({d['n_refs']})"
-                         if d["n_refs"] else "", f"{d['max']:.1f}", "", "", "", ""])
+                         if d["n_refs"] else "", f"{d['max']:.1f}", "", "", "", "", "", "", ""])
+            pg = pages[f"({name})"]
+            pg["jobs"] += d["n"] + d["n_refs"]
+            pg["cpu"] += d["cpu"] + d["refs"]
     job_cpu = sum(j["cpu"] for j in jobs)
+    points = [j for j in jobs if j["kind"] == "point"]
+    render_cpu = sum(j.get("render_cpu", 0.0) for j in points)
+    startup = [j["startup_cpu"] for j in points if "startup_cpu" in j]
+    page_cpu = sum(c.get("page_cpu", 0.0) for c in log)
+    page_thread = sum(c.get("page_thread_cpu", 0.0) for c in log)
+    page_render = sum(c.get("page_render_cpu", 0.0) for c in log)
+    sweep_thread = sum(c.get("sweep_thread_cpu", 0.0) for c in log)
     longest = max(jobs, key=lambda j: j["cpu"]) if jobs else None
     ideal = max(cpu / n, longest["cpu"] if longest else 0.0)
     out = ["# The whole report's time", "",
@@ -198,8 +256,15 @@ def _page(log, jobs, cpu, wall, loads, args, started, rc) -> list[str]:
            f"started {started}." + (f" {args.label}" if args.label else ""), "",
            f"- CPU, whole run (RUSAGE_SELF + RUSAGE_CHILDREN): **{cpu:.0f} s**; of it in computed points and "
            f"reference images (per job, in the process that ran it): {job_cpu:.0f} s over {len(jobs)} jobs",
-           f"- of the rest, writing the pages (figures, tables; the parent process): {page_cpu:.0f} s; "
-           f"loading configs, hashing points, starting workers: {cpu - job_cpu - page_cpu:.0f} s",
+           f"- per point job outside sim.render (config validation and hashing, metrics, the store's row, "
+           f"records and pictures): {job_cpu - render_cpu - sum(j['cpu'] for j in jobs if j['kind'] == 'reference'):.1f} s "
+           f"over {len(points)} points ({(sum(j['cpu'] - j.get('render_cpu', 0.0) for j in points)) / max(1, len(points)) * 1e3:.0f} ms each); "
+           f"worker start-up before the first point: {sum(startup):.1f} s over {len(startup)} workers",
+           f"- the parent process, writing the page sections: {page_cpu:.0f} s (figures and tables in the "
+           f"writing thread: {page_thread:.0f} s; pictures rendered there because the store had none: "
+           f"{page_render:.0f} s); reading each sweep's rows from the store and waiting for them: "
+           f"{sweep_thread:.0f} s; the rest (loading configs, hashing points, the pool's thread: storing rows, "
+           f"starting workers): {cpu - job_cpu - page_cpu - sweep_thread:.0f} s",
            f"- ideal wall on {n} idle cores, max(CPU / {n}, longest job): **{ideal:.0f} s** "
            f"({ideal / 60:.1f} min)" + (f"; longest job: {longest['cpu']:.1f} CPU-s ({longest['kind']} of "
                                         f"`{longest['name']}`)" if longest else ""),
@@ -209,14 +274,19 @@ def _page(log, jobs, cpu, wall, loads, args, started, rc) -> list[str]:
            "Per config, in the order the report runs them. *points CPU*: CPU seconds of the points this "
            "config computed (a point shared with an earlier config is computed once, by the first); "
            "*references*: CPU seconds of the reference images rendered for its image metrics (count); "
-           "*longest*: its most expensive point; *sweep CPU / wall*: RUSAGE_SELF + CHILDREN and wall "
-           "seconds around its sweep (with one pool over all configs, most work happens before the "
-           "sweeps, which then read the store); *page CPU*: writing its section (figures, tables).", ""]
+           "*longest*: its most expensive point; *sweep CPU / thread / wall*: RUSAGE_SELF + CHILDREN, the "
+           "parent thread's CPU and wall seconds around its sweep (with one pool over all configs most work "
+           "happens in the pool; the sweep reads the store and waits); *section CPU*: writing its section "
+           "in the parent (process CPU; *thread*: the writing thread alone; *renders*: pictures rendered "
+           "there).", ""]
     out += md_table(["config", "page", "points", "computed", "points CPU [s]", "references CPU [s]",
-                     "longest [s]", "sweep CPU [s]", "sweep wall [s]", "page CPU [s]", "load"], rows)
-    out += ["", "Per page (points + references CPU):", ""]
-    out += md_table(["page", "CPU [s]"], [[p, f"{v:.1f}"] for p, v in sorted(pages_cpu.items(),
-                                                                             key=lambda t: -t[1])])
+                     "longest [s]", "sweep CPU [s]", "sweep thread [s]", "sweep wall [s]", "section CPU [s]",
+                     "section thread [s]", "section renders [s]", "load"], rows)
+    out += ["", "Per page: its configs' jobs (points and references) and the parent's CPU writing its sections.", ""]
+    out += md_table(["page", "configs", "jobs", "jobs CPU [s]", "section CPU [s]", "section thread [s]",
+                     "section renders [s]"],
+                    [[p, v["configs"], v["jobs"], f"{v['cpu']:.1f}", f"{v['section']:.1f}", f"{v['thread']:.1f}",
+                      f"{v['render']:.1f}"] for p, v in sorted(pages.items(), key=lambda t: -(t[1]["cpu"] + t[1]["section"]))])
     return out
 
 

@@ -165,8 +165,8 @@ class PlotSpec(_Strict):
         "line", description="line | bar | table | scatter | heatmap | image_grid | image")
     map: Optional[str] = Field(None, description=(
         "heatmap only: a per-pixel map (sim.pixel_stats: raster.samples_tested, ops.total, tile.culled_H, ...) "
-        "or 'tile.cull_reason' of the one point left by where: (one panel per facet value), re-rendered "
-        "when the page is drawn; then x, row and y are not needed"))
+        "or 'tile.cull_reason' of the one point left by where: (one panel per facet value), kept in the "
+        "result store by the render of its sweep point; then x, row and y are not needed"))
     x: Optional[str] = Field(None, description=(
         "Column on the x axis (table: the row key; heatmap and image_grid: the column whose values make the "
         "columns)"))

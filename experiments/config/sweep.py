@@ -6,6 +6,7 @@ import copy
 import hashlib
 import itertools
 import json
+import re
 
 from .inputs import config_inputs
 from .schema import ConfigError, RenderConfig, validate
@@ -107,15 +108,38 @@ def point_columns(config: RenderConfig) -> dict:
     return flatten({"point": d})
 
 
+# Page tables ({{table:NAME}} in outputs.text, experiments/report/tables.py) that read timing figures.
+TIMING_TABLES = frozenset({"methods_table", "methods_claim", "methods_pareto", "pareto_members", "gpu_vs_tile",
+                           "gpu_table2", "gpu_early_depth"})
+# Plot fields that are presentation only (never a result column).
+_PRESENTATION = ("title", "xlabel", "ylabel", "format", "paper", "kind", "logx", "logy", "stacked", "pareto",
+                 "fit", "echo", "optional")
+
+
+def reads_timing(outputs) -> bool:
+    """Whether a page's outputs read the timing model: a `timing.` column named by a derived expression
+    or a plot (its columns, `where:` and `labels:` keys; titles and labels aside), or a table of
+    TIMING_TABLES included in its text. Prose in the text reads nothing."""
+    named = list(outputs.derived.values())
+    for spec in outputs.plots:
+        d = spec.model_dump(exclude=set(_PRESENTATION))
+        named += [*d.pop("where", {}), *d.pop("labels", {})]
+        named += [json.dumps(v) for v in d.values() if v is not None]
+    tables = re.findall(r"\{\{table:([A-Za-z0-9_]+)\}\}", outputs.text or "")
+    return any(_TIMING_COLUMN.search(str(n)) for n in named) or any(t in TIMING_TABLES for t in tables)
+
+
+_TIMING_COLUMN = re.compile(r"(?<![A-Za-z0-9_.])timing\.")
+
+
 def timing_needed(config: RenderConfig) -> bool:
     """Whether a render point runs the timing model: always, except for the points of a report page
-    (``outputs.page``) whose outputs never mention ``timing`` (plots, derived figures, tables, text):
-    with records per shading visit the model can cost as much as the render, and those pages do not
-    read it. Such points hash apart (config_hash), so a row without timing figures never serves a
-    config that reads them."""
+    (``outputs.page``) whose outputs do not read it (reads_timing): with records per shading visit the
+    model can cost as much as the render, and those pages do not read it. Such points hash apart
+    (config_hash), so a row without timing figures never serves a config that reads them."""
     if config.point.kind != "render" or not config.outputs.page:
         return True
-    return "timing" in config.outputs.model_dump_json()
+    return reads_timing(config.outputs)
 
 
 def config_hash(config: RenderConfig) -> str:

@@ -4,9 +4,12 @@ becomes a PNG with a colour bar labelled from `sim.counter_docs()`; tile-level c
 per screen tile; the tile cull reason is a categorical map with a titled legend."""
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
+
+from .frames import apply_derived
 
 # Maps written by default (those present in the result), with the rendered image and the cull reason.
 DEFAULT_MAPS = ("raster.samples_tested", "raster.samples_hit", "ops.total", "tile.culled")
@@ -143,14 +146,82 @@ def write_heatmaps(result, out_dir, tile: int = 1, names=None) -> list[Path]:
 MAX_PANELS = 6
 
 
+def picture_name(spec) -> str | None:
+    """What a plot pictures of its points: 'image' (`kind: image`), a map name (`kind: heatmap` with
+    `map:`), or None (a plot of the rows)."""
+    if spec.kind == "image":
+        return "image"
+    return spec.map
+
+
+def pictured_points(config, points) -> dict[str, set[str]]:
+    """{config_hash: picture names} of the points that ``config``'s page pictures (point_pictures),
+    chosen before they are rendered, from their config columns: the sweep renders them with what the
+    pictures need and keeps it in the store. A `where:` on a column that only the results have picks
+    nothing here; point_pictures then renders those points itself. points: [(hash, config)]."""
+    from ..run.points import config_columns
+    from ..run.store import to_frame
+    from .frames import PlotError, apply_where, same
+
+    specs = [sp for sp in config.outputs.plots if picture_name(sp) is not None]
+    if not specs or not points:
+        return {}
+    df = to_frame([config_columns(cfg, h) for h, cfg in points])
+    for name, expr in config.outputs.derived.items():  # the derived columns that need no result
+        try:
+            df = apply_derived(df, {name: expr})
+        except PlotError:
+            continue
+    out: dict[str, set[str]] = {}
+    for spec in specs:
+        dd = df
+        for col, names in spec.labels.items():  # display names first, as section_markdown does
+            if col in dd.columns:
+                dd = dd.assign(**{col: [next((n for k, n in names.items() if same(v, k)), v) for v in dd[col]]})
+        try:
+            hashes = list(apply_where(dd, spec.where)["config_hash"])
+        except PlotError:
+            continue
+        if len(hashes) > MAX_PANELS:
+            continue
+        for h in hashes:
+            out.setdefault(h, set()).add(picture_name(spec))
+    return out
+
+
+class _Stored:
+    """A point's stored pictures in the shape point_pictures reads from a render's result."""
+
+    def __init__(self, arrays: dict):
+        self.image = arrays.get("image")
+        self.pixel_stats = {k[4:]: v for k, v in arrays.items() if k.startswith("map:")}
+
+
+def _stored(h: str, name: str):
+    """The stored pictures of point h if they hold what picture ``name`` draws, else None."""
+    from sim.pixel_stats import TILE_VERDICTS
+
+    from ..run.store import cached_pictures
+
+    arrays = cached_pictures(h)
+    if arrays is None:
+        return None
+    need = ["image"] if name == "image" else [f"map:{n}" for n in TILE_VERDICTS] if name == "tile.cull_reason" \
+        else [f"map:{name}"]
+    return _Stored(arrays) if all(k in arrays for k in need) else None
+
+
 def point_pictures(spec, config, d, out_base: Path | None) -> dict:
     """`kind: image` (the rendered image) or `kind: heatmap` with `map:` (a Result.pixel_stats map,
     or 'tile.cull_reason') of the sweep points left by `where:`, one panel per `facet` value (one
-    panel without facet). The points are re-rendered when the page is drawn (maps are not stored)."""
+    panel without facet). The image and maps come from the result store, where the sweep's render of
+    the point kept them (pictured_points); a point without them is rendered here and they are kept."""
     import matplotlib
 
-    from ..config import config_hash, expand_sweep
+    from ..config.inputs import input_digests, tracking_reads
+    from ..run.runner import hashed_sweep
     from ..run import render_point
+    from ..run.points import keep_pictures
     from .figures import STYLE, _plt, _save, facet_title, grid_shape, value_label
     from .frames import PlotError, label, same, unique
 
@@ -160,7 +231,7 @@ def point_pictures(spec, config, d, out_base: Path | None) -> dict:
     facets = unique(d[spec.facet]) if spec.facet else [None]
     if len(facets) > MAX_PANELS:
         raise PlotError(f"{what}: {len(facets)} panels (at most {MAX_PANELS}); narrow it with where:")
-    by_hash = {config_hash(pc): pc for _, pc in expand_sweep(config)}
+    by_hash = {h: pc for _, pc, h in hashed_sweep(config)}
     picks = []
     for f in facets:
         sub = d if f is None else d[[same(v, f) for v in d[spec.facet]]]
@@ -171,16 +242,24 @@ def point_pictures(spec, config, d, out_base: Path | None) -> dict:
         if hashes[0] not in by_hash:
             raise PlotError(f"{what}: point {hashes[0]} is not in the config's sweep")
         picks.append((f, by_hash[hashes[0]], sub.iloc[0]))
+    name = spec.map or "image"
+    results = []
+    for _, pc, row in picks:
+        h = str(row["config_hash"])
+        res = _stored(h, name)
+        if res is None:
+            with tracking_reads() as reads:
+                _, res = render_point(pc, options={"pixel_stats": True} if spec.kind == "heatmap" else None, h=h)
+            if pc.point.kind == "render" and getattr(res, "ci95", None) is None:
+                keep_pictures(h, res, [name], json.dumps(input_digests(reads)))
+        results.append(res)
     plt = _plt()
     rows_md = []
-    name = spec.map or "image"
     with matplotlib.rc_context(STYLE):
         nr, nc = grid_shape(len(picks))
         fig, axes = plt.subplots(nr, nc, figsize=(3.0 * nc + (1.6 if name == "tile.cull_reason" else 0.6), 2.8 * nr),
                                  squeeze=False)
         flat = [a for r in axes for a in r]
-        options = {"pixel_stats": True} if spec.kind == "heatmap" else None
-        results = [render_point(pc, options=options)[1] for _, pc, _ in picks]
         norm = last = None
         if spec.kind == "heatmap" and name != "tile.cull_reason":
             for res in results:

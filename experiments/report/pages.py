@@ -195,18 +195,43 @@ def report_configs(configs_dir: Path | None = None) -> list[Path]:
 def _retimed_renders(loaded) -> set[str]:
     """Hashes of the renders that the report's retime points re-time: those render points keep their
     timing records in the store, so a page's retime sections re-time them instead of rendering again."""
-    from ..config import config_hash, expand_sweep
-    from ..run.points import render_config
+    from ..run.runner import hashed_sweep, render_hash
 
     keep = set()
     for p, config, _, lines in loaded:
         if config.point.kind == "retime":
-            keep.update(config_hash(render_config(cfg)) for _, cfg in expand_sweep(config, str(p), lines))
+            keep.update(render_hash(cfg) for _, cfg, _ in hashed_sweep(config, _source(p), lines))
     return keep
+
+
+def _pictured(loaded) -> dict[str, set[str]]:
+    """{config hash: picture names} of the points the pages picture (heatmaps.pictured_points): their
+    sweep renders keep the image and maps in the store, so the page does not render them again."""
+    from ..run.runner import hashed_sweep
+    from .heatmaps import pictured_points
+
+    out: dict[str, set[str]] = {}
+    for p, config, _, lines in loaded:
+        if any(sp.kind == "image" or sp.map is not None for sp in config.outputs.plots):
+            for h, names in pictured_points(config, [(h, cfg) for _, cfg, h in
+                                                     hashed_sweep(config, _source(p), lines)]).items():
+                out.setdefault(h, set()).update(names)
+    return out
+
+
+def _source(p: Path) -> str:
+    return str(p.relative_to(REPO) if p.is_relative_to(REPO) else p)
 
 
 def main(only=None, workers=None, scheduler=None, force=False, quick=False, configs_dir: Path | None = None,
          reports_dir: Path | None = None, retry_failed: bool = False) -> int:
+    from ..run.runner import sweeps_once
+
+    with sweeps_once():  # each sweep expanded and hashed once for the pool, the sweep and its pictures
+        return _main(only, workers, scheduler, force, quick, configs_dir, reports_dir, retry_failed)
+
+
+def _main(only, workers, scheduler, force, quick, configs_dir, reports_dir, retry_failed) -> int:
     out_root = (reports_dir or REPORTS) / ("quick" if quick else "")
     if quick:
         os.environ["RAST5D_RESULTS"] = str(results_dir() / "quick")
@@ -233,13 +258,12 @@ def main(only=None, workers=None, scheduler=None, force=False, quick=False, conf
     else:
         chosen = {c.name for _, c, _, _ in loaded}
     keep_records = _retimed_renders(loaded)
+    pictures = _pictured(loaded)
     sections: dict[tuple[str, str], list] = defaultdict(list)
     counts = {"rendered": 0, "cached": 0, "failures": 0, "rows": 0}
     t_all = time.perf_counter()
 
-    def source(p: Path) -> str:
-        return str(p.relative_to(REPO) if p.is_relative_to(REPO) else p)
-
+    source = _source
     # One pool over every config's missing points, largest first (experiments/run/schedule.py), in a
     # thread: the sweeps below wait for their points' rows (the pool holds their store locks) and each
     # page section is written as soon as its rows are in, while the pool works on. Dask-run configs and
@@ -250,10 +274,11 @@ def main(only=None, workers=None, scheduler=None, force=False, quick=False, conf
 
         pool = run_all([(c, source(p), lines) for p, c, _, lines in loaded if c.executor.kind != "dask"],
                        workers=workers or os.cpu_count() or 1, keep_records=keep_records,
-                       force=chosen if force else frozenset(), retry_failed=retry_failed, background=True)
+                       force=chosen if force else frozenset(), retry_failed=retry_failed, background=True,
+                       pictures=pictures)
     try:
         _sweeps_and_sections(loaded, pool, chosen, sections, counts, out_root, quick, workers, scheduler, force,
-                             retry_failed, keep_records, source)
+                             retry_failed, keep_records, source, pictures)
     except BaseException:
         if pool is not None:
             pool.stop()
@@ -283,14 +308,14 @@ def main(only=None, workers=None, scheduler=None, force=False, quick=False, conf
 
 
 def _sweeps_and_sections(loaded, pool, chosen, sections, counts, out_root, quick, workers, scheduler, force,
-                         retry_failed, keep_records, source):
+                         retry_failed, keep_records, source, pictures=None):
     """Each config's sweep (from the store, or waiting for the pool's rows) and its page section."""
     for p, config, overrides, lines in loaded:
         t0 = time.perf_counter()
         pooled = pool is not None and config.executor.kind != "dask"
         df = run_sweep(config, source=source(p), workers=workers, scheduler=scheduler,
                        force=force and config.name in chosen and not pooled, lines=lines,
-                       retry_failed=retry_failed, keep_records=keep_records)
+                       retry_failed=retry_failed, keep_records=keep_records, pictures=pictures)
         counts["failures"] += int((df["status"] != "ok").sum()) if "status" in df.columns else 0
         counts["rendered"] += df.attrs.get("summary", {}).get("rendered", 0)
         counts["rows"] += len(df)

@@ -23,19 +23,20 @@ from pathlib import Path
 
 from ..config import RESULT_EXCLUDE, RenderConfig, build, build_scene, config_hash, flatten, point_columns, timing_needed
 from ..config.inputs import input_digests, tracking_reads
-from .store import cached_records, engine_id, git_rev, store_records
+from .store import cached_records, engine_id, git_rev, store_pictures, store_records
 from .uses import USE_KINDS
 
 
-def config_columns(config: RenderConfig) -> dict:
-    """The flattened resolved config of a point (hardware fully resolved; camera from the built camera)."""
+def config_columns(config: RenderConfig, h: str | None = None) -> dict:
+    """The flattened resolved config of a point (hardware fully resolved; camera from the built camera);
+    h: its config_hash when already known."""
     row = flatten(config.model_dump(exclude=RESULT_EXCLUDE | {"hardware"}))
     row.update(point_columns(config))
     try:
         row.update(flatten({"hardware": config.hardware_config().describe()}))
     except Exception:  # noqa: BLE001 - validated on load; keep the row even if not
         pass
-    row["config_hash"] = config_hash(config)
+    row["config_hash"] = config_hash(config) if h is None else h
     return row
 
 
@@ -59,17 +60,17 @@ def _build(config: RenderConfig, row: dict, threads: int | None):
     return scene, camera, table, pipeline
 
 
-def _rendered(config, row: dict, threads, options: dict | None = None):
+def _rendered(config, row: dict, threads, options: dict | None = None, timing: bool | None = None):
     """sim.render of a point; adds its resolved lens grid and every counter and figure to row.
-    options: extra sim.render keywords that observe the render (pixel_stats, progress)."""
+    options: extra sim.render keywords that observe the render (pixel_stats, progress); timing: run the
+    timing model (None: as the point's config asks, timing_needed)."""
     import sim
 
     scene, camera, table, pipeline = _build(config, row, threads)
-    # Sweep points of pages that never read timing skip the model, and so do their pixel-statistics
-    # re-renders for a page's heatmaps; a render from the command line (`rast5d render`, with progress)
-    # keeps every figure.
+    # Sweep points of pages that never read timing skip the model (timing_needed); a render from the
+    # command line (`rast5d render`) asks for every figure with timing=True.
     result = sim.render(scene, camera, table, pipeline, hardware=config.hardware_config(),
-                        timing=timing_needed(config) or "progress" in (options or {}), **(options or {}))
+                        timing=timing_needed(config) if timing is None else timing, **(options or {}))
     row["resolved.lens_grid"] = result.config.get("lens_grid")
     row.update(result.flat_stats)
     if result.ci95 is not None:  # sampled simulation: 95% half-widths beside the estimates
@@ -77,8 +78,8 @@ def _rendered(config, row: dict, threads, options: dict | None = None):
     return result
 
 
-def _render(config, row, image_path, threads, options=None):
-    result = _rendered(config, row, threads, options)
+def _render(config, row, image_path, threads, options=None, timing=None):
+    result = _rendered(config, row, threads, options, timing)
     if config.outputs.metrics is not None and result.ci95 is not None:
         raise ValueError(f"outputs.metrics: image metrics need the whole frame; pipeline.sample_fraction="
                          f"{config.pipeline.sample_fraction!r} renders only sampled bins (not estimable)")
@@ -161,34 +162,62 @@ POINT_KINDS.update(USE_KINDS)  # the uses of the rasterizer (experiments/run/use
 
 
 def render_point(config: RenderConfig, image_path: str | Path | None = None, threads: int | None = None,
-                 options: dict | None = None) -> tuple[dict, object]:
+                 options: dict | None = None, timing: bool | None = None, h: str | None = None) -> tuple[dict, object]:
     """Compute one (non-swept) point: (row, the sim result of its kind). options: sim.render keywords
-    that observe a render point (pixel_stats, progress)."""
+    that observe a render point (pixel_stats, progress); timing: run the timing model of a render point
+    (None: as its config asks, timing_needed); h: the point's config_hash when already known."""
     kind = config.point.kind
     if image_path is not None and kind not in ("render", *USE_KINDS):
         raise ValueError(f"outputs.images: only render and use points have images, got point kind {kind!r}")
-    if options and kind != "render":
-        raise ValueError(f"point.kind: per-pixel statistics and progress need a render point, got {kind!r}")
-    row = config_columns(config)
-    result = POINT_KINDS[kind](config, row, image_path, threads, **({"options": options} if options else {}))
+    if (options or timing is not None) and kind != "render":
+        raise ValueError(f"point.kind: per-pixel statistics, progress and timing need a render point, got {kind!r}")
+    row = config_columns(config, h)
+    extra = {"options": options} if options else {}
+    if timing is not None:
+        extra["timing"] = timing
+    result = POINT_KINDS[kind](config, row, image_path, threads, **extra)
     row.update(status="ok", error="", **{"engine.version": engine_id(), "engine.git_rev": git_rev()})
     return row, result
 
 
+def picture_options(pictures) -> dict | None:
+    """The sim.render keywords that the pictures of a point need: the pixel-statistics maps they draw
+    (the tile verdict maps for 'tile.cull_reason'), only maps of pixel_stats=True (a page asking for
+    another name renders the point itself and reports it)."""
+    from sim.pixel_stats import DEFAULT, DERIVED, TILE_VERDICTS
+
+    maps: list[str] = []
+    for name in pictures or ():
+        wanted = TILE_VERDICTS if name == "tile.cull_reason" else (name,) if name in DEFAULT or name in DERIVED else ()
+        maps += [n for n in wanted if n not in maps]
+    return {"pixel_stats": maps} if maps else None
+
+
 def run_point(config_json: str, image_path: str | None = None, threads: int | None = None,
-              records_hash: str | None = None) -> dict:
+              records_hash: str | None = None, pictures: tuple[str, ...] = ()) -> dict:
     """One point, isolated: any exception becomes a row with status 'error', its message and its
     traceback (never raised). ``inputs.files`` lists the files read meanwhile ({path: sha256}, JSON):
     the store serves the row only while they are unchanged. ``records_hash``: a render point stores its
-    timing records and counters under it, as stored_render would, for the retime points that re-time it."""
+    timing records and counters under it, as stored_render would, for the retime points that re-time it.
+    ``pictures``: what a report page pictures of this point ('image', pixel-statistics map names,
+    'tile.cull_reason'; experiments/report/heatmaps.py): kept in the store (store_pictures) from this
+    render, so the page does not render the point again."""
     config = RenderConfig.model_validate_json(config_json)
+    h = config_hash(config)
     t0 = time.perf_counter()
     result = None
+    options = picture_options(pictures) if config.point.kind == "render" else None
     with tracking_reads() as reads:
         try:
-            row, result = render_point(config, image_path, threads)
+            try:
+                row, result = render_point(config, image_path, threads, options=options, h=h)
+            except Exception:  # noqa: BLE001 - the pictures' statistics must not fail the point
+                if options is None:
+                    raise
+                options = None
+                row, result = render_point(config, image_path, threads, h=h)
         except Exception as e:  # noqa: BLE001 - a failing point must not stop the sweep
-            row = config_columns(config)
+            row = config_columns(config, h)
             row.update(status="error", error=f"{type(e).__name__}: {e}", traceback=traceback.format_exc(),
                        **{"engine.version": engine_id(), "engine.git_rev": git_rev(),
                           "time.wall_s": time.perf_counter() - t0})
@@ -198,7 +227,28 @@ def run_point(config_json: str, image_path: str | None = None, threads: int | No
         stats = {"resolved.lens_grid": row.get("resolved.lens_grid"), **result.flat_stats,
                  "inputs.files": row["inputs.files"]}
         store_records(records_hash, records, stats)
+    if pictures and row.get("status") == "ok" and getattr(result, "ci95", None) is None:
+        keep_pictures(h, result, pictures, row["inputs.files"])
     return row
+
+
+def keep_pictures(h: str, result, pictures, inputs_files: str) -> None:
+    """Store the arrays the pictures of point ``h`` draw: its image and the pixel-statistics maps
+    named (all tile verdict maps for 'tile.cull_reason'); maps the render did not make are left out
+    (the page then renders the point and reports the missing map)."""
+    from sim.pixel_stats import TILE_VERDICTS
+
+    arrays = {}
+    stats = getattr(result, "pixel_stats", None) or {}
+    for name in pictures:
+        if name == "image" and getattr(result, "image", None) is not None:
+            arrays["image"] = result.image
+        elif name == "tile.cull_reason":
+            arrays.update({f"map:{n}": stats[n] for n in TILE_VERDICTS if n in stats})
+        elif name in stats:
+            arrays[f"map:{name}"] = stats[name]
+    if arrays:
+        store_pictures(h, arrays, inputs_files)
 
 
 def error_row(config_json: str, message: str, transient: bool = False) -> dict:

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import os
 import time
+from contextlib import contextmanager
 from pathlib import Path
 
 from ..config import RenderConfig, config_hash, expand_sweep
@@ -15,10 +16,63 @@ from .store import (cached_row, claim, images_dir as store_images_dir, lock_is_s
                     store_point, table_path, to_frame, write_parquet)
 
 
+_SWEEPS: dict | None = None  # inside sweeps_once(): id(config) -> (config, [(point, config, hash)])
+
+
+@contextmanager
+def sweeps_once():
+    """Within this context each config object's sweep is expanded and hashed once (hashed_sweep):
+    ``rast5d report`` reads a sweep for the pool, the sweep itself and its pictures. Outside it every
+    call hashes again, so a file edited between two runs in one process gives its points new hashes."""
+    global _SWEEPS
+    outer = _SWEEPS
+    _SWEEPS = {} if outer is None else outer
+    try:
+        yield
+    finally:
+        _SWEEPS = outer
+
+
+def hashed_sweep(config: RenderConfig, source: str = "config", lines: dict | None = None) -> list:
+    """[(point, point config, config_hash)] of config's sweep (expand_sweep); once per config object
+    inside sweeps_once(). ``source`` and ``lines`` only name the place of an invalid point in its error."""
+    hit = _SWEEPS.get(id(config)) if _SWEEPS is not None else None
+    if hit is not None and hit[0] is config:
+        return hit[1]
+    out = [(point, cfg, config_hash(cfg)) for point, cfg in expand_sweep(config, source, lines)]
+    if _SWEEPS is not None:
+        _SWEEPS[id(config)] = (config, out)
+    return out
+
+
+def render_hash(config: RenderConfig) -> str:
+    """The hash of the render whose work records a retime point re-times."""
+    return config_hash(render_config(config))
+
+
+def stored_row(h: str, images_dir=None, retry_failed: bool = False) -> dict | None:
+    """The stored row of point ``h`` if it can be served: a row of a sweep with images needs its image
+    too (a failed point has none)."""
+    cached = cached_row(h, retry_failed=retry_failed)
+    if cached is not None and (images_dir is None or cached.get("status") != "ok"
+                               or (Path(images_dir) / f"{h}.png").exists()):
+        return cached
+    return None
+
+
+def point_args(h: str, cfg: RenderConfig, images_dir, threads: int | None, keep_records=frozenset(),
+               pictures: dict | None = None) -> tuple:
+    """The run_point arguments of point ``h``: its image path (a sweep with images), the records it keeps
+    for retime points (``keep_records``), the pictures a page draws of it (``pictures``: {hash: names})."""
+    image = str(Path(images_dir) / f"{h}.png") if images_dir is not None else None
+    return (cfg.model_dump_json(), image, threads, h if h in keep_records else None,
+            tuple(sorted((pictures or {}).get(h, ()))))
+
+
 def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "config", workers: int | None = None,
               scheduler=None, force: bool = False, images_dir: str | Path | None = None, progress: bool = True,
               lines: dict | None = None, retry_failed: bool = False, wait_poll_s: float = 0.5,
-              keep_records: set[str] | frozenset[str] = frozenset()):
+              keep_records: set[str] | frozenset[str] = frozenset(), pictures: dict | None = None):
     """Run every point of config's sweep; returns the sweep's table (pandas DataFrame, one row per point,
     in sweep order) and writes it to results/<name>.parquet. ``workers`` (default: executor.workers or the
     core count; 0 = in-process) is the local pool; ``scheduler`` (an address or a distributed.Client, or
@@ -26,26 +80,29 @@ def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "c
     unless ``retry_failed``. Points another run is computing (locked in the store) are waited for.
     Ctrl-C raises KeyboardInterrupt after the finished points are saved. ``keep_records``: hashes of
     render points whose timing records a retime point will re-time (``rast5d report`` collects them):
-    those points store their records, so the retime does not render them again."""
+    those points store their records, so the retime does not render them again. ``pictures``
+    ({hash: names}, experiments/report/heatmaps.py pictured_points): what a page pictures of a point,
+    kept in the store by its render."""
     name = name or config.name or "experiment"
     ex = config.executor
     if scheduler is None and ex.kind == "dask":
         scheduler = ex.address
     if workers is None:
         workers = ex.workers or os.cpu_count() or 1
-    points = expand_sweep(config, source, lines)
+    swept = hashed_sweep(config, source, lines)
+    points = [(point, cfg) for point, cfg, _ in swept]
+    hashes = [h for _, _, h in swept]
     if config.outputs.images and images_dir is None:
         images_dir = store_images_dir(name)
     rows: dict[int, dict] = {}
-    hashes = [config_hash(cfg) for _, cfg in points]
+    # Several processes on 2 cores: one engine thread per point (results do not depend on it).
+    threads = 1 if (scheduler is not None or workers > 1) else None
 
     def from_store(i: int) -> dict | None:
-        h = hashes[i]
-        cached = cached_row(h, retry_failed=retry_failed)
-        if cached is not None and (images_dir is None or cached.get("status") != "ok"
-                                   or (Path(images_dir) / f"{h}.png").exists()):
-            return cached
-        return None
+        return stored_row(hashes[i], images_dir, retry_failed)
+
+    def job(i: int) -> tuple:
+        return i, point_args(hashes[i], points[i][1], images_dir, threads, keep_records, pictures)
 
     todo, waiting = [], []
     claimed: set[str] = set()
@@ -59,7 +116,7 @@ def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "c
             waiting.append(i)
             continue
         claimed.add(h)
-        todo.append(_job(i, h, cfg, images_dir, scheduler, workers, h in keep_records))
+        todo.append(job(i))
     if config.outputs.metrics is not None and todo:
         from .references import prepare_references
 
@@ -70,7 +127,7 @@ def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "c
     if config.point.kind == "retime":
         first: dict = {}
         for key, args in todo:
-            first.setdefault(config_hash(render_config(points[key][1])), key)
+            first.setdefault(render_hash(points[key][1]), key)
         lead = set(first.values())
         phases = [[t for t in todo if t[0] in lead], [t for t in todo if t[0] not in lead]]
     bar = None
@@ -121,7 +178,7 @@ def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "c
                     n_waited += 1
                 elif claim(h):
                     claimed.add(h)
-                    execute([_job(i, h, points[i][1], images_dir, scheduler, workers)])
+                    execute([job(i)])
                 else:
                     still.append(i)
             waiting = still
@@ -152,11 +209,3 @@ def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "c
     if interrupted:
         raise KeyboardInterrupt
     return df
-
-
-def _job(i: int, h: str, cfg: RenderConfig, images_dir, scheduler, workers: int, keep_records: bool = False):
-    """(key, run_point arguments) of point i."""
-    image = str(Path(images_dir) / f"{h}.png") if images_dir is not None else None
-    # Several processes on 2 cores: one engine thread per point (results do not depend on it).
-    threads = 1 if (scheduler is not None or workers > 1) else None
-    return i, (cfg.model_dump_json(), image, threads) + ((h,) if keep_records else ())

@@ -15,10 +15,11 @@ from __future__ import annotations
 import heapq
 import itertools
 
-from ..config import RenderConfig, config_hash, expand_sweep
+from ..config import RenderConfig
 from .executors import worker_init
-from .points import render_config, run_point
-from .store import cached_row, claim, images_dir as store_images_dir, records_path, release, store_point
+from .points import run_point
+from .runner import hashed_sweep, point_args, render_hash, stored_row
+from .store import claim, images_dir as store_images_dir, records_path, release, store_point
 
 # Relative work per sample of an algorithm (estimate_cost); only the order of the pool uses it.
 _ALGORITHM_WEIGHT = {"bruteforce": 2.0, "interleave": 3.0, "hinterleave": 3.0, "tile_interleaved": 3.0,
@@ -47,11 +48,12 @@ def reference_job(config_json: str) -> None:
 
 
 def run_all(sweeps, *, workers: int, keep_records=frozenset(), force=frozenset(), retry_failed: bool = False,
-            progress: bool = True, background: bool = False) -> "PoolRun":
+            progress: bool = True, background: bool = False, pictures: dict | None = None) -> "PoolRun":
     """Compute every missing point of ``sweeps`` [(config, source, lines)] on one pool of ``workers``
     processes, largest first; configs named in ``force`` are recomputed. Every job's point is claimed
     (locked in the store) before this returns, so a sweep run meanwhile waits for its rows instead of
-    computing them. ``background``: the pool runs in a thread (PoolRun.join waits for it)."""
+    computing them. ``background``: the pool runs in a thread (PoolRun.join waits for it).
+    ``keep_records`` and ``pictures`` as for run_sweep."""
     from .references import _reference_path, reference_config
 
     jobs, seen, waits = [], set(), {}
@@ -61,25 +63,19 @@ def run_all(sweeps, *, workers: int, keep_records=frozenset(), force=frozenset()
     retimes = []
     for config, source, lines in sweeps:
         img_dir = store_images_dir(config.name) if config.outputs.images else None
-        for _, cfg in expand_sweep(config, source, lines):
-            h = config_hash(cfg)
+        for _, cfg, h in hashed_sweep(config, source, lines):
             if h in seen:
                 continue
             seen.add(h)
-            if config.name not in force:
-                cached = cached_row(h, retry_failed=retry_failed)
-                if cached is not None and (img_dir is None or cached.get("status") != "ok"
-                                           or (img_dir / f"{h}.png").exists()):
-                    continue
+            if config.name not in force and stored_row(h, img_dir, retry_failed) is not None:
+                continue
             if not claim(h):  # another run is computing it; the sweep waits for its row
                 continue
             claimed.add(h)
             if config.point.kind == "retime":
                 retimes.append((h, cfg))
                 continue
-            image = str(img_dir / f"{h}.png") if img_dir is not None else None
-            args = (cfg.model_dump_json(), image, 1) + ((h,) if h in keep_records else ())
-            job = ("point", h, args, estimate_cost(cfg), h)
+            job = ("point", h, point_args(h, cfg, img_dir, 1, keep_records, pictures), estimate_cost(cfg), h)
             rendering.add(h)
             if cfg.outputs.metrics is not None:
                 ref = reference_config(cfg)
@@ -95,14 +91,14 @@ def run_all(sweeps, *, workers: int, keep_records=frozenset(), force=frozenset()
     # the first retime point of the render, which renders and stores it).
     leads: set[str] = set()
     for h, cfg in retimes:
-        rh = config_hash(render_config(cfg))
+        rh = render_hash(cfg)
         if rh in rendering or rh in leads:
-            waits.setdefault(rh, []).append(("point", h, (cfg.model_dump_json(), None, 1), 1.0, None))
+            waits.setdefault(rh, []).append(("point", h, point_args(h, cfg, None, 1), 1.0, None))
         elif records_path(rh).exists():
-            jobs.append(("point", h, (cfg.model_dump_json(), None, 1), 1.0, None))
+            jobs.append(("point", h, point_args(h, cfg, None, 1), 1.0, None))
         else:
             leads.add(rh)
-            jobs.append(("point", h, (cfg.model_dump_json(), None, 1), estimate_cost(cfg), rh))
+            jobs.append(("point", h, point_args(h, cfg, None, 1), estimate_cost(cfg), rh))
     total = len(jobs) + len(refs) + sum(len(v) for v in waits.values())
     run = PoolRun(refs, jobs, waits, claimed, workers, progress, total)
     if background:

@@ -21,6 +21,10 @@
   interrupted; ``experiments.load(name)`` reads it.
 - ``results/records/<hash>-<engine version>.npz``: the timing work records and counters of a
   render, read by `retime` points (experiments/run/points.py).
+- ``results/pictures/<hash>-<engine version>.npz``: the image and per-pixel statistics maps of a
+  point that a report page pictures (``kind: image``, ``kind: heatmap`` with ``map:``), kept by the
+  render of its sweep point and read by the page (experiments/report/heatmaps.py); served only while
+  the files the point read are unchanged.
 - ``results/references/``: reference images of the image-error metrics (experiments/run/references.py).
 
 A row is the flattened resolved config (``camera.coc_px``, ``samples.kind``, ``pipeline.algorithm``,
@@ -139,28 +143,96 @@ def write_parquet(df, path: Path):
 _CHECKSUM_KEY = b"rast5d.sha256"
 
 
-def _table_digest(table) -> str:
+def _table_digest(table, values: list | None = None) -> str:
     """sha256 of a pyarrow table's column names, types and values (not of its file bytes: the same
-    row read back gives the same digest)."""
+    row read back gives the same digest). ``values``: the columns' to_pylist(), when already made."""
     import hashlib
     import json
 
     h = hashlib.sha256()
-    for name, col in zip(table.column_names, table.columns):
-        h.update(json.dumps([name, str(col.type), col.to_pylist()], default=repr).encode())
+    for i, (name, col) in enumerate(zip(table.column_names, table.columns)):
+        h.update(json.dumps([name, str(col.type), col.to_pylist() if values is None else values[i]],
+                            default=repr).encode())
     return h.hexdigest()
 
 
+def row_table(row: dict):
+    """The one-row pyarrow table of a result row, with the column types that pandas gives it
+    (to_frame([row]) through pyarrow: float64, int64, bool, string, null for a missing value; NaN is
+    stored as missing), built column by column without a DataFrame (a row has hundreds of columns)."""
+    import pyarrow as pa
+
+    names, arrays = [], []
+    for k, v in row.items():
+        if isinstance(v, float) and math.isnan(v):
+            v = None
+        if v is not None and not isinstance(v, (bool, int, float, str, np_scalar_types())):
+            return None  # anything else takes the DataFrame path
+        names.append(k)
+        arrays.append(pa.array([v], type=_text_type()) if isinstance(v, str) else pa.array([v]))
+    return pa.Table.from_arrays(arrays, names=names)
+
+
+_TEXT_TYPE = []
+
+
+def _text_type():
+    """The arrow type pandas gives a text column (string, or large_string with pandas' arrow strings)."""
+    if not _TEXT_TYPE:
+        import pandas as pd
+        import pyarrow as pa
+
+        _TEXT_TYPE.append(pa.Table.from_pandas(pd.DataFrame({"a": ["x"]}), preserve_index=False).schema.types[0])
+    return _TEXT_TYPE[0]
+
+
+def np_scalar_types() -> tuple:
+    import numpy as np
+
+    return (np.bool_, np.integer, np.floating)
+
+
 def write_point_file(df, path: Path) -> None:
-    """One point's row with its checksum (Parquet metadata) and Parquet page checksums, atomically."""
+    """One point's row (a one-row DataFrame, or the row's dict) with its checksum (Parquet metadata)
+    and Parquet page checksums, atomically."""
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    table = pa.Table.from_pandas(df, preserve_index=False)
+    table = row_table(df) if isinstance(df, dict) else None
+    if table is None:
+        table = pa.Table.from_pandas(to_frame([df]) if isinstance(df, dict) else df, preserve_index=False)
     meta = dict(table.schema.metadata or {})
     meta[_CHECKSUM_KEY] = _table_digest(table).encode()
     table = table.replace_schema_metadata(meta)
     atomic_write(path, lambda tmp: pq.write_table(table, tmp, write_page_checksum=True))
+    _remember(path, _table_row(table, [col.to_pylist() for col in table.columns]))
+
+
+# The rows this process wrote or read, by point file and the file's identity (mtime, size, inode):
+# `rast5d report` reads back every row its pool just stored. A file replaced since (another run,
+# a rewrite) has another identity and is read again.
+_ROWS: dict = {}
+
+
+def _identity(path: Path):
+    st = os.stat(path)
+    return st.st_mtime_ns, st.st_size, st.st_ino
+
+
+def _remember(path: Path, row: dict) -> None:
+    try:
+        _ROWS[str(path)] = (_identity(path), row)
+    except OSError:
+        pass
+
+
+def _table_row(table, values: list) -> dict:
+    """The row of a one-row table (values: its columns' to_pylist())."""
+    if all(pa_numeric(t) for t in table.schema.types):  # one numeric dtype: pandas would cast it
+        return table.to_pandas().iloc[0].to_dict()
+    # A one-row table of mixed column types: DataFrame.iloc[0].to_dict() gives each value as a Python
+    # scalar, as to_pylist does, without building the DataFrame.
+    return {name: v[0] for name, v in zip(table.column_names, values)}
 
 
 def read_point_file(path: Path) -> dict:
@@ -174,11 +246,18 @@ def read_point_file(path: Path) -> dict:
     stored = (table.schema.metadata or {}).get(_CHECKSUM_KEY)
     if stored is None:
         raise ValueError("no checksum")
-    if stored.decode() != _table_digest(table):
+    values = [col.to_pylist() for col in table.columns]
+    if stored.decode() != _table_digest(table, values):
         raise ValueError("checksum mismatch (the file was modified or corrupted)")
     if table.num_rows != 1:
         raise ValueError(f"expected one row, found {table.num_rows}")
-    return table.to_pandas().iloc[0].to_dict()
+    return _table_row(table, values)
+
+
+def pa_numeric(t) -> bool:
+    import pyarrow as pa
+
+    return pa.types.is_integer(t) or pa.types.is_floating(t) or pa.types.is_boolean(t)
 
 
 def store_point(row: dict):
@@ -186,7 +265,7 @@ def store_point(row: dict):
     marked transient (a lost Dask worker: nothing about the point itself)."""
     if row.pop("_transient", False):
         return
-    write_point_file(to_frame([row]), point_path(row["config_hash"]))
+    write_point_file(row, point_path(row["config_hash"]))
 
 
 def cached_row(h: str, retry_failed: bool = False) -> dict | None:
@@ -199,11 +278,19 @@ def cached_row(h: str, retry_failed: bool = False) -> dict | None:
     from ..config.inputs import unchanged
 
     p = point_path(h)
-    if not p.exists():
-        return None
     try:
-        row = read_point_file(p)
-    except FileNotFoundError:
+        ident = _identity(p)
+    except OSError:
+        return None
+    hit = _ROWS.get(str(p))
+    try:
+        if hit is not None and hit[0] == ident:
+            row = dict(hit[1])
+        else:
+            row = read_point_file(p)
+            if _identity(p) == ident:
+                _ROWS[str(p)] = (ident, dict(row))
+    except (FileNotFoundError, OSError):
         return None
     except ValueError as e:
         warnings.warn(f"{p}: {e}; the point is recomputed", StoreWarning, stacklevel=2)
@@ -360,3 +447,44 @@ def cached_records(h: str):
     if isinstance(files, str) and files and unchanged(json.loads(files)) is not None:
         return None
     return records, stats
+
+
+# ---- pictures: the arrays a report page draws of a point (experiments/report/heatmaps.py) -----------
+
+def pictures_path(h: str) -> Path:
+    return results_dir() / "pictures" / f"{h}-{engine_id()}.npz"
+
+
+def store_pictures(h: str, arrays: dict, inputs_files: str) -> None:
+    """The image and pixel-statistics maps of point ``h`` that a page pictures ({'image': ...,
+    'map:<counter>': ...}), with the files the point read (``inputs.files``, JSON)."""
+    import numpy as np
+
+    atomic_write(pictures_path(h), lambda tmp: np.savez(tmp, inputs=np.array(inputs_files), **arrays),
+                 suffix=".npz")
+
+
+def cached_pictures(h: str) -> dict | None:
+    """The stored picture arrays of point ``h`` (see store_pictures), or None: none stored for this
+    engine version, an input file changed since, or an unreadable file (a StoreWarning says so)."""
+    import json
+    import warnings
+
+    import numpy as np
+
+    from ..config.inputs import unchanged
+
+    p = pictures_path(h)
+    if not p.exists():
+        return None
+    try:
+        with open(p, "rb") as fh, np.load(fh) as f:  # an npz member carries a CRC-32, checked on read
+            arrays = {k: f[k] for k in f.files}
+        files = json.loads(str(arrays.pop("inputs")))
+    except Exception as e:  # noqa: BLE001 - a corrupt file is rendered again
+        warnings.warn(f"{p}: unreadable ({type(e).__name__}: {e}); the point is rendered again", StoreWarning,
+                      stacklevel=2)
+        return None
+    if files and unchanged(files) is not None:
+        return None
+    return arrays
