@@ -17,6 +17,7 @@
 // bounds its pixels by the projected vertices (the setup box when a vertex is behind the eye).
 // On other interleaved tables moving triangles take INTERLEAVE's conservative path.
 #include <algorithm>
+#include <cstdint>
 #include <utility>
 #include <vector>
 
@@ -37,6 +38,9 @@ class Interleave final : public Traversal {
  public:
   Interleave(const Frame& f, ThreadState& ts) : f_(f), c_(ts.counters), pipe_(f, ts) {
     if constexpr (kPassSetup) pass_times(f.table);
+    // Without per-pixel statistics nothing is done for a pixel without samples of the pass's lens
+    // coordinate (at_pixel() is a no-op): the passes visit only the pixels that hold some.
+    if (!ts.cursor) lens_rows(f.table);
   }
 
   void rasterize(const TriSetup& tri, const BinRect& bin, bool charge_setup) override {
@@ -190,8 +194,42 @@ class Interleave final : public Traversal {
     pipe_.flush();      // pass_tri_ and the vertices are this pass's
   }
 
-  // Inside-test the samples of lens coordinate i in the pixel rectangle, row by row.
+  // Per lens coordinate i and row my of the table's period (P <= 64): bit mx of rows_[i * P + my]
+  // is set when pixel (mx, my) holds a sample of lens coordinate i.
+  void lens_rows(const SampleTable& table) {
+    const int N = table.n_lens(), P = table.period(), spp = table.spp();
+    if (N <= 0 || P > 64) return;
+    rows_.assign(static_cast<std::size_t>(N) * P, 0);
+    for (int my = 0; my < P; ++my)
+      for (int mx = 0; mx < P; ++mx) {
+        const PixelSamples ps = table.pixel(mx, my);
+        for (int s = 0; s < spp; ++s) rows_[static_cast<std::size_t>(ps.lens_index[s]) * P + my] |= std::uint64_t(1) << mx;
+      }
+    period_ = P;
+  }
+
+  // Inside-test the samples of lens coordinate i in the pixel rectangle, row by row (pixels in
+  // increasing x, each pixel's samples in lens_order).
   void pass(int i, int x0, int x1, int y0, int y1) {
+    if (period_ > 0) {  // the same pixels and samples in the same order, skipping the pixels without any
+      const int P = period_;
+      const std::uint64_t* rows = rows_.data() + static_cast<std::size_t>(i) * P;
+      const int bx_first = x0 - ((x0 % P) + P) % P;
+      for (int py = y0; py < y1; ++py) {
+        const std::uint64_t r = rows[((py % P) + P) % P];
+        if (!r) continue;
+        for (int bx = bx_first; bx < x1; bx += P) {
+          const int lo = std::max(x0 - bx, 0), hi = std::min(x1 - bx, P);
+          std::uint64_t m = r & (hi >= 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << hi) - 1) & ~((std::uint64_t(1) << lo) - 1);
+          for (; m; m &= m - 1) {
+            const int px = bx + __builtin_ctzll(m);
+            const PixelSamples ps = f_.table.pixel(px, py);
+            for (int k = ps.lens_offsets[i]; k < ps.lens_offsets[i + 1]; ++k) pipe_.push(px, py, ps, ps.lens_order[k]);
+          }
+        }
+      }
+      return;
+    }
     for (int py = y0; py < y1; ++py)
       for (int px = x0; px < x1; ++px) {
         const PixelSamples ps = f_.table.pixel(px, py);
@@ -203,6 +241,8 @@ class Interleave final : public Traversal {
   const Frame& f_;
   Counters& c_;
   SamplePipeline<A> pipe_;
+  std::vector<std::uint64_t> rows_;  // lens_rows(); empty with per-pixel statistics or a period above 64
+  int period_ = 0;                    // the table's period when rows_ is set, else 0
   std::vector<float> pass_t_;  // accumulation: each pass's shutter time (empty: not one per pass)
   TriSetup pass_tri_;
   float pass_xs_[3], pass_ys_[3];
