@@ -32,7 +32,7 @@ REPO = Path(__file__).resolve().parents[2]
 
 # (config, sweep point selected by these values, reference image of the point instead of the point)
 POINTS = (
-    ("fig16_interleaved", {"pipeline.algorithm": "interleave", "samples.spp": 256, "pipeline.cost_model": "robust"}, False),
+    ("fig16_interleaved", {"pipeline.algorithm": "interleave", "samples.spp": 64, "pipeline.cost_model": "robust"}, False),
     ("fig16_interleaved", {"pipeline.algorithm": "hinterleave", "samples.spp": 64, "pipeline.cost_model": "hardware"}, False),
     ("fig16_interleaved", {"pipeline.algorithm": "tile_interleaved", "samples.spp": 256, "pipeline.cost_model": "robust"}, False),
     ("fig15_interleaved", {"scene": "bunny", "pipeline.algorithm": "interleave", "camera.coc_px": 20,
@@ -42,7 +42,7 @@ POINTS = (
     ("table2", {"scene": "mixed_sizes", "camera.coc_px": 50, "pipeline.algorithm": "tile",
                 "pipeline.halfspace": {"h": True, "H": True}, "pipeline.cost_model": "robust"}, False),
     ("table2", {"scene": "modern_hall", "camera.coc_px": 50, "pipeline.algorithm": "interval", "pipeline.cost_model": "robust"}, False),
-    ("fig16", {"pipeline.algorithm": "bruteforce", "samples.spp": 256, "pipeline.cost_model": "robust"}, False),
+    ("fig16", {"pipeline.algorithm": "bruteforce", "samples.spp": 64, "pipeline.cost_model": "robust"}, False),
     ("motion5d", {"scene": "motion_field", "camera.coc_px": 30, "pipeline.algorithm": "tile",
                   "pipeline.time_splits": 4, "pipeline.halfspace": {"h": True, "H": True, "H5": True}}, False),
     ("methods", {"scene": "teapot", "camera.coc_px": 15, "pipeline.algorithm": "interleave", "samples.spp": 1024}, False),
