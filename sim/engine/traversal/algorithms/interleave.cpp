@@ -226,6 +226,7 @@ class Interleave final : public Traversal {
         }
       }
     period_ = P;
+    pow2_mask_ = (P & (P - 1)) == 0 ? P - 1 : -1;
   }
 
   // Inside-test the samples of lens coordinate i in the pixel rectangle, row by row (pixels in
@@ -235,9 +236,11 @@ class Interleave final : public Traversal {
       const int P = period_;
       const std::uint64_t* rows = rows_.data() + static_cast<std::size_t>(i) * P;
       const std::int32_t* loff = loff_.data() + static_cast<std::size_t>(i) * P * P;
-      const int bx_first = x0 - ((x0 % P) + P) % P;
+      // coordinate mod P: a mask for a power-of-two period (no division per pass and row)
+      auto wrap = [P, m = pow2_mask_](int a) { return m >= 0 ? (a & m) : ((a % P) + P) % P; };
+      const int bx_first = x0 - wrap(x0);
       for (int py = y0; py < y1; ++py) {
-        const int my = ((py % P) + P) % P;
+        const int my = wrap(py);
         const std::uint64_t r = rows[my];
         if (!r) continue;
         for (int bx = bx_first; bx < x1; bx += P) {
@@ -267,7 +270,8 @@ class Interleave final : public Traversal {
   std::vector<std::uint64_t> rows_;
   std::vector<std::int32_t> loff_, es_;
   std::vector<float> ex_, ey_;
-  int period_ = 0;  // the table's period when rows_ is set, else 0
+  int period_ = 0;      // the table's period when rows_ is set, else 0
+  int pow2_mask_ = -1;  // period_ - 1 when it is a power of two, else -1
   std::vector<float> pass_t_;  // accumulation: each pass's shutter time (empty: not one per pass)
   TriSetup pass_tri_;
   float pass_xs_[3], pass_ys_[3];
