@@ -1,7 +1,8 @@
 """Engine throughput benchmark (`make bench`, i.e. `pytest -m bench`), never part of `make test`.
 
-Runs experiments/bench/bench_core.py and bench_speed.py and writes reports/bench/bench_core.md and
-bench_speed.md. Its figures are rates
+Runs experiments/bench/bench_core.py, bench_speed.py and bench_report_points.py and writes
+reports/bench/bench_core.md, bench_speed.md and bench_report_points.md (RAST5D_BENCH_BASE_CORE: a
+built sim._core module the last compares against). Its figures are rates
 and ratios measured in one run; nothing here compares a time against a threshold. With
 RAST5D_BENCH_QUICK=1 it runs the quick variant (smaller mixed_sizes) and writes the page to a
 temporary directory instead, so the reviewed page only ever holds the full benchmark.
@@ -44,3 +45,19 @@ def test_bench_speed(tmp_path):
     for r in got["rows"]:
         if r["algorithm"] == "bruteforce":
             assert r["ops_ratio"] == 1.0
+
+
+def test_bench_report_points(tmp_path):
+    """experiments/bench/bench_report_points.py: CPU time of the report's most expensive points
+    (reports/bench/bench_report_points.md); against the engine module named by
+    RAST5D_BENCH_BASE_CORE when set (alternating processes), where the images and counters must be
+    the same. Checks no time."""
+    from experiments.bench import bench_report_points
+
+    quick = os.environ.get("RAST5D_BENCH_QUICK", "") not in ("", "0")
+    out = tmp_path if quick else bench_report_points.REPO / "reports" / "bench"
+    base = os.environ.get("RAST5D_BENCH_BASE_CORE") or None
+    got = bench_report_points.run(base_core=base, rounds=1 if quick else 2, out=out)
+    assert len(got["rows"]) == len(bench_report_points.POINTS)
+    if base:
+        assert all(r["same"] for r in got["rows"]), [r["point"] for r in got["rows"] if not r["same"]]

@@ -4,6 +4,10 @@
 #pragma once
 
 #include <algorithm>
+#include <cstdint>
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#endif
 
 #include "core/sample_table.h"
 #include "setup/footprint.h"
@@ -68,6 +72,98 @@ inline bool in_exact_region(const TriSetup& tri, const Footprint& fp, const Fram
     if (!(P[j][2] > fc.near_d)) return true;  // crosses the near plane at t: not evaluated
   }
   return footprint_overlaps_tile(P, 3, fc.kx_d, fc.ky_d, fc.focus_d, u, v, tx, tx + T, ty, ty + T);
+}
+
+#if defined(__AVX512F__)
+// polygon_overlaps_tile() of 8 polygons at once (vertex j of lane l in x[j], y[j]), each lane
+// performing its double operations (min / max in its operand order, ordered compares, the same sums
+// in the same order): the lanes where it returns true, within ok.
+inline __mmask8 polygons_overlap_tile(const __m512d* x, const __m512d* y, int m, double tx0, double tx1, double ty0,
+                                      double ty1, __mmask8 ok) {
+  const __m512d zero = _mm512_setzero_pd();
+  const __m512d x0 = _mm512_set1_pd(tx0), x1 = _mm512_set1_pd(tx1), y0 = _mm512_set1_pd(ty0), y1 = _mm512_set1_pd(ty1);
+  __m512d lx = _mm512_set1_pd(kInf), hx = _mm512_set1_pd(-kInf), ly = lx, hy = hx;
+  for (int j = 0; j < m; ++j) {
+    lx = _mm512_min_pd(x[j], lx), hx = _mm512_max_pd(x[j], hx);  // std::min(lx, x) = x < lx ? x : lx
+    ly = _mm512_min_pd(y[j], ly), hy = _mm512_max_pd(y[j], hy);
+  }
+  ok &= static_cast<__mmask8>(~(_mm512_cmp_pd_mask(hx, x0, _CMP_LT_OQ) | _mm512_cmp_pd_mask(lx, x1, _CMP_GT_OQ) |
+                                _mm512_cmp_pd_mask(hy, y0, _CMP_LT_OQ) | _mm512_cmp_pd_mask(ly, y1, _CMP_GT_OQ)));
+  __m512d area = zero;
+  for (int j = 0; j < m; ++j) {
+    const int k = (j + 1) % m;
+    area = _mm512_add_pd(area, _mm512_sub_pd(_mm512_mul_pd(x[j], y[k]), _mm512_mul_pd(x[k], y[j])));
+  }
+  ok &= static_cast<__mmask8>(~_mm512_cmp_pd_mask(area, zero, _CMP_EQ_OQ));
+  const __m512d sg = _mm512_mask_blend_pd(_mm512_cmp_pd_mask(area, zero, _CMP_GT_OQ), _mm512_set1_pd(-1.0),
+                                          _mm512_set1_pd(1.0));
+  const __m512d cx[4] = {x0, x1, x0, x1}, cy[4] = {y0, y0, y1, y1};
+  for (int j = 0; j < m && ok; ++j) {
+    const int k = (j + 1) % m;
+    const __m512d ex = _mm512_sub_pd(x[k], x[j]), ey = _mm512_sub_pd(y[k], y[j]);
+    const __mmask8 point = _mm512_cmp_pd_mask(ex, zero, _CMP_EQ_OQ) & _mm512_cmp_pd_mask(ey, zero, _CMP_EQ_OQ);
+    __mmask8 some_in = 0;
+    for (int c = 0; c < 4; ++c) {
+      const __m512d d = _mm512_mul_pd(
+          sg, _mm512_sub_pd(_mm512_mul_pd(ex, _mm512_sub_pd(cy[c], y[j])), _mm512_mul_pd(ey, _mm512_sub_pd(cx[c], x[j]))));
+      some_in |= _mm512_cmp_pd_mask(d, zero, _CMP_GE_OQ);
+    }
+    ok &= point | some_in;
+  }
+  return ok;
+}
+#endif
+
+// How many of the samples cand[0..n) of pixel ps lie in the exact active region of the tile: the sum
+// of in_exact_region() over them, 8 samples at a time in AVX-512 lanes, each lane performing
+// in_exact_region's double operations, so the count is the scalar one. Uncounted instrumentation.
+inline std::uint64_t count_exact_region(const TriSetup& tri, const Footprint& fp, const FrameConst& fc,
+                                        const PixelSamples& ps, const int* cand, int n, int tx, int ty, int T) {
+  std::uint64_t count = 0;
+  int i = 0;
+#if defined(__AVX512F__)
+  if (tri.moving || fp.n > 0) {
+    for (; i < n; i += 8) {
+      const int lanes = std::min(8, n - i);
+      alignas(64) double ub[8], vb[8], tb[8];
+      for (int l = 0; l < 8; ++l) {
+        const int s = cand[i + (l < lanes ? l : 0)];
+        ub[l] = ps.u[s], vb[l] = ps.v[s], tb[l] = ps.t[s];
+      }
+      const __m512d u = _mm512_load_pd(ub), v = _mm512_load_pd(vb);
+      const __mmask8 live = static_cast<__mmask8>((1u << lanes) - 1);
+      __m512d x[6], y[6];
+      if (!tri.moving) {
+        for (int j = 0; j < fp.n; ++j) {
+          x[j] = _mm512_add_pd(_mm512_set1_pd(fp.lv[j].ax), _mm512_mul_pd(u, _mm512_set1_pd(fp.lv[j].bx)));
+          y[j] = _mm512_add_pd(_mm512_set1_pd(fp.lv[j].ay), _mm512_mul_pd(v, _mm512_set1_pd(fp.lv[j].by)));
+        }
+        count += static_cast<std::uint64_t>(__builtin_popcount(polygons_overlap_tile(x, y, fp.n, tx, tx + T, ty, ty + T, live)));
+        continue;
+      }
+      // Moving: the vertices at each sample's t; a vertex not beyond the near plane counts the sample.
+      const __m512d t = _mm512_load_pd(tb);
+      const __m512d near = _mm512_set1_pd(fc.near_d), focus = _mm512_set1_pd(fc.focus_d);
+      const __m512d ukx = _mm512_mul_pd(u, _mm512_set1_pd(fc.kx_d)), vky = _mm512_mul_pd(v, _mm512_set1_pd(fc.ky_d));
+      __mmask8 behind = 0;
+      for (int j = 0; j < 3; ++j) {
+        const __m512d P0 = _mm512_add_pd(_mm512_set1_pd(tri.X[j]), _mm512_mul_pd(t, _mm512_set1_pd(tri.dX[j])));
+        const __m512d P1 = _mm512_add_pd(_mm512_set1_pd(tri.Y[j]), _mm512_mul_pd(t, _mm512_set1_pd(tri.dY[j])));
+        const __m512d P2 = _mm512_add_pd(_mm512_set1_pd(tri.W[j]), _mm512_mul_pd(t, _mm512_set1_pd(tri.dW[j])));
+        behind |= static_cast<__mmask8>(~_mm512_cmp_pd_mask(P2, near, _CMP_GT_OQ));
+        const __m512d d = _mm512_sub_pd(P2, focus);
+        x[j] = _mm512_div_pd(_mm512_add_pd(P0, _mm512_mul_pd(ukx, d)), P2);
+        y[j] = _mm512_div_pd(_mm512_add_pd(P1, _mm512_mul_pd(vky, d)), P2);
+      }
+      behind &= live;
+      count += static_cast<std::uint64_t>(__builtin_popcount(behind));
+      count += static_cast<std::uint64_t>(
+          __builtin_popcount(polygons_overlap_tile(x, y, 3, tx, tx + T, ty, ty + T, static_cast<__mmask8>(live & ~behind))));
+    }
+  }
+#endif
+  for (; i < n; ++i) count += in_exact_region(tri, fp, fc, ps, cand[i], tx, ty, T);
+  return count;
 }
 
 }  // namespace rast5d::tiletest

@@ -139,6 +139,20 @@ class SamplePipeline {
       if (stride_) bl_[i] = ps.lens_index[s];
     }
   }
+  // push() of sample s of pixel (px, py) whose in-pixel position (ps.x[s], ps.y[s]) is (x, y): the
+  // same float operations. A static triangle sheared to one lens coordinate (begin_sheared() with
+  // lens stride 0) reads no other sample field; anything else goes through push().
+  inline void push_xy(int px, int py, float x, float y, int s) {
+    if (one_at_a_time() || !sheared_ || stride_) {
+      push(px, py, f_.table.pixel(px, py), s);
+      return;
+    }
+    if (n_ == cap_) flush();
+    const int i = n_++;
+    gx_[i] = static_cast<float>(px) + x;
+    gy_[i] = static_cast<float>(py) + y;
+    bpx_[i] = px, bpy_[i] = py, bs_[i] = s;
+  }
   // Samples idx[0..n) of pixel (px, py), in order: push() of each, with the batch bookkeeping
   // once per list on the fast path.
   inline void push_list(int px, int py, const PixelSamples& ps, const std::int32_t* idx, int n) {

@@ -17,6 +17,7 @@
 // bounds its pixels by the projected vertices (the setup box when a vertex is behind the eye).
 // On other interleaved tables moving triangles take INTERLEAVE's conservative path.
 #include <algorithm>
+#include <cstdint>
 #include <utility>
 #include <vector>
 
@@ -37,6 +38,9 @@ class Interleave final : public Traversal {
  public:
   Interleave(const Frame& f, ThreadState& ts) : f_(f), c_(ts.counters), pipe_(f, ts) {
     if constexpr (kPassSetup) pass_times(f.table);
+    // Without per-pixel statistics nothing is done for a pixel without samples of the pass's lens
+    // coordinate (at_pixel() is a no-op): the passes visit only the pixels that hold some.
+    if (!ts.cursor) lens_rows(f.table);
   }
 
   void rasterize(const TriSetup& tri, const BinRect& bin, bool charge_setup) override {
@@ -190,8 +194,67 @@ class Interleave final : public Traversal {
     pipe_.flush();      // pass_tri_ and the vertices are this pass's
   }
 
-  // Inside-test the samples of lens coordinate i in the pixel rectangle, row by row.
+  // The table's samples by lens coordinate (period P <= 64): bit mx of rows_[i * P + my] is set when
+  // pixel (mx, my) holds a sample of lens coordinate i; that pixel's samples of i are entries
+  // loff_[i * P * P + my * P + mx] .. loff_[... + 1] of ex_ / ey_ / es_ ((x, y) in the pixel and the
+  // canonical index), in the pixel's lens_order.
+  void lens_rows(const SampleTable& table) {
+    const int N = table.n_lens(), P = table.period(), spp = table.spp();
+    if (N <= 0 || P > 64) return;
+    const std::size_t PP = static_cast<std::size_t>(P) * P;
+    rows_.assign(static_cast<std::size_t>(N) * P, 0);
+    loff_.assign(static_cast<std::size_t>(N) * PP + 1, 0);
+    for (int my = 0; my < P; ++my)
+      for (int mx = 0; mx < P; ++mx) {
+        const PixelSamples ps = table.pixel(mx, my);
+        for (int s = 0; s < spp; ++s) {
+          const std::size_t i = static_cast<std::size_t>(ps.lens_index[s]);
+          rows_[i * P + my] |= std::uint64_t(1) << mx;
+          ++loff_[i * PP + static_cast<std::size_t>(my) * P + mx + 1];
+        }
+      }
+    for (std::size_t k = 1; k < loff_.size(); ++k) loff_[k] += loff_[k - 1];
+    ex_.resize(PP * spp), ey_.resize(PP * spp), es_.resize(PP * spp);
+    for (int my = 0; my < P; ++my)
+      for (int mx = 0; mx < P; ++mx) {
+        const PixelSamples ps = table.pixel(mx, my);
+        const std::size_t pi = static_cast<std::size_t>(my) * P + mx;
+        for (int k = 0; k < spp; ++k) {
+          const int s = ps.lens_order[k], i = ps.lens_index[s];
+          const std::size_t e = static_cast<std::size_t>(loff_[i * PP + pi] + (k - ps.lens_offsets[i]));
+          ex_[e] = ps.x[s], ey_[e] = ps.y[s], es_[e] = s;
+        }
+      }
+    period_ = P;
+    pow2_mask_ = (P & (P - 1)) == 0 ? P - 1 : -1;
+  }
+
+  // Inside-test the samples of lens coordinate i in the pixel rectangle, row by row (pixels in
+  // increasing x, each pixel's samples in lens_order).
   void pass(int i, int x0, int x1, int y0, int y1) {
+    if (period_ > 0) {  // the same pixels and samples in the same order, skipping the pixels without any
+      const int P = period_;
+      const std::uint64_t* rows = rows_.data() + static_cast<std::size_t>(i) * P;
+      const std::int32_t* loff = loff_.data() + static_cast<std::size_t>(i) * P * P;
+      // coordinate mod P: a mask for a power-of-two period (no division per pass and row)
+      auto wrap = [P, m = pow2_mask_](int a) { return m >= 0 ? (a & m) : ((a % P) + P) % P; };
+      const int bx_first = x0 - wrap(x0);
+      for (int py = y0; py < y1; ++py) {
+        const int my = wrap(py);
+        const std::uint64_t r = rows[my];
+        if (!r) continue;
+        for (int bx = bx_first; bx < x1; bx += P) {
+          const int lo = std::max(x0 - bx, 0), hi = std::min(x1 - bx, P);
+          std::uint64_t m = r & (hi >= 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << hi) - 1) & ~((std::uint64_t(1) << lo) - 1);
+          for (; m; m &= m - 1) {
+            const int mx = __builtin_ctzll(m);
+            const int pi = my * P + mx;
+            for (int e = loff[pi]; e < loff[pi + 1]; ++e) pipe_.push_xy(bx + mx, py, ex_[e], ey_[e], es_[e]);
+          }
+        }
+      }
+      return;
+    }
     for (int py = y0; py < y1; ++py)
       for (int px = x0; px < x1; ++px) {
         const PixelSamples ps = f_.table.pixel(px, py);
@@ -203,6 +266,12 @@ class Interleave final : public Traversal {
   const Frame& f_;
   Counters& c_;
   SamplePipeline<A> pipe_;
+  // lens_rows(); empty with per-pixel statistics or a period above 64
+  std::vector<std::uint64_t> rows_;
+  std::vector<std::int32_t> loff_, es_;
+  std::vector<float> ex_, ey_;
+  int period_ = 0;      // the table's period when rows_ is set, else 0
+  int pow2_mask_ = -1;  // period_ - 1 when it is a power of two, else -1
   std::vector<float> pass_t_;  // accumulation: each pass's shutter time (empty: not one per pass)
   TriSetup pass_tri_;
   float pass_xs_[3], pass_ys_[3];

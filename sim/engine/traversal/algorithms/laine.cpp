@@ -83,8 +83,7 @@ class Laine final : public Traversal {
             }
             charge<A>(c_[Counter::ops_sample_region], region_cost * static_cast<std::uint64_t>(spp));
             if (p.count_optimal && fp.n > 0)
-              for (int i = 0; i < n; ++i)
-                c_[Counter::tile_samples_optimal] += tiletest::in_exact_region(tri, fp, f_.fc, ps, cand_[i], tx, ty, T);
+              c_[Counter::tile_samples_optimal] += tiletest::count_exact_region(tri, fp, f_.fc, ps, cand_.data(), n, tx, ty, T);
             for (int i = 0; i < n; ++i) pipe_.push(px, py, ps, cand_[i]);
           }
         pipe_.end_visit();  // a visit = one tile

@@ -362,8 +362,7 @@ class Tile final : public Traversal {
             region_checked += static_cast<std::uint64_t>(checked);
           }
           if (count_opt)
-            for (int i = 0; i < n; ++i)
-              c_[Counter::tile_samples_optimal] += tiletest::in_exact_region(tri, fp, f_.fc, ps, cand_[i], tx, ty, T);
+            c_[Counter::tile_samples_optimal] += tiletest::count_exact_region(tri, fp, f_.fc, ps, cand_.data(), n, tx, ty, T);
           if (vectorised)
             pipe_.push_pixel_masked(px, py, ps, sel_.data(), cand_.data(), n);
           else
@@ -475,8 +474,7 @@ class Tile final : public Traversal {
           // Charge the selection before the sample tests (the counting path tallies in order).
           charge<A>(c_[Counter::ops_sample_region], region_ops);
           if (p.count_optimal)
-            for (int i = 0; i < n; ++i)
-              c_[Counter::tile_samples_optimal] += tiletest::in_exact_region(tri, fp_dummy_, f_.fc, ps, cand_[i], tx, ty, T);
+            c_[Counter::tile_samples_optimal] += tiletest::count_exact_region(tri, fp_dummy_, f_.fc, ps, cand_.data(), n, tx, ty, T);
           for (int i = 0; i < n; ++i) pipe_.push(px, py, ps, cand_[i]);
         }
     });
