@@ -149,7 +149,9 @@ def test_a_damaged_point_file_is_recomputed_with_a_warning(tmp_path, store, dama
             data[i] ^= 0x55
     else:
         data = bytearray(b"not parquet at all")
+    st = path.stat()
     path.write_bytes(bytes(data))
+    os.utime(path, ns=(st.st_atime_ns, st.st_mtime_ns))  # damaged in place within one mtime tick
     with pytest.warns(result_store.StoreWarning, match=r"the point is recomputed"):
         again = runner.run_sweep(config, workers=0, progress=False)
     assert again.attrs["summary"]["rendered"] == 1

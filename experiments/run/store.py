@@ -208,15 +208,18 @@ def write_point_file(df, path: Path) -> None:
     _remember(path, _table_row(table, [col.to_pylist() for col in table.columns]))
 
 
-# The rows this process wrote or read, by point file and the file's identity (mtime, size, inode):
-# `rast5d report` reads back every row its pool just stored. A file replaced since (another run,
-# a rewrite) has another identity and is read again.
+# The rows this process wrote or read, by point file and the file's identity (mtime, size, inode and
+# a digest of its bytes): `rast5d report` reads back every row its pool just stored. A file replaced
+# or modified since (another run, a rewrite, damage in place within one mtime tick) has another
+# identity and is read, and checked, again.
 _ROWS: dict = {}
 
 
 def _identity(path: Path):
+    import hashlib
+
     st = os.stat(path)
-    return st.st_mtime_ns, st.st_size, st.st_ino
+    return st.st_mtime_ns, st.st_size, st.st_ino, hashlib.blake2b(path.read_bytes(), digest_size=16).digest()
 
 
 def _remember(path: Path, row: dict) -> None:
