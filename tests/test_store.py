@@ -144,8 +144,14 @@ def test_a_damaged_point_file_is_recomputed_with_a_warning(tmp_path, store, dama
     data = bytearray(path.read_bytes())
     if damage == "truncate":
         data = data[: len(data) // 2]
-    elif damage == "flip_bytes":  # a run of bytes in the middle of the data pages
-        for i in range(len(data) // 3, len(data) // 3 + 64):
+    elif damage == "flip_bytes":  # the last bytes of the largest column chunk: its last data page's values
+        import pyarrow.parquet as pq
+
+        with pq.ParquetFile(path) as f:
+            rg = f.metadata.row_group(0)
+            c = max((rg.column(i) for i in range(rg.num_columns)), key=lambda c: c.total_compressed_size)
+            end = min(o for o in (c.dictionary_page_offset, c.data_page_offset) if o) + c.total_compressed_size
+        for i in range(end - 16, end):
             data[i] ^= 0x55
     else:
         data = bytearray(b"not parquet at all")
