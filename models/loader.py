@@ -248,8 +248,9 @@ def load(name_or_path: str | Path, **overrides: Any) -> Scene:
       camera hint (models/mitsuba.py);
     - a glTF 2.0 scene (.gltf/.glb; overrides: color, name, texture) with node transforms, base-colour
       textures and its camera node as the hint (models/gltf.py);
-    - a mesh (.obj/.ply/.stl/.off; overrides: load_mesh's color, name, texture), with a camera hint that
-      frames its bounding box (models/framing.py).
+    - a mesh (.obj/.ply/.stl/.off; overrides: load_mesh's color, name, texture, and shading), with a
+      camera hint that frames its bounding box (models/framing.py); a mesh without colours is shaded
+      by a headlight at that camera (models/shading.py; ``shading="flat"`` keeps one colour).
 
     Elements an importer leaves out or approximates are listed in one SceneImportWarning. Relative
     paths are tried against the working directory, then the repository (or installed package) root;
@@ -274,13 +275,17 @@ def load(name_or_path: str | Path, **overrides: Any) -> Scene:
                 raise SceneError(f"{path}: unknown Mitsuba option(s) {unknown}; accepted: include_emitters, parameters")
             return load_mitsuba(path, **overrides)
         if suffix in MESH_SUFFIXES:
-            unknown = sorted(set(overrides) - {"color", "name", "texture"})
+            unknown = sorted(set(overrides) - {"color", "name", "texture", "shading"})
             if unknown:
-                raise SceneError(f"{path}: unknown mesh option(s) {unknown}; accepted: color, name, texture")
+                raise SceneError(f"{path}: unknown mesh option(s) {unknown}; accepted: color, name, texture, shading")
+            from . import shading as _shading
+
+            mode = overrides.pop("shading", "headlight")
             if suffix in GLTF_SUFFIXES:
-                return load_gltf(path, **overrides)
+                return _shading.apply(load_gltf(path, **overrides), mode)
             mesh = load_mesh(path, **overrides)
-            return mesh.with_camera_hint(**frame_hint(mesh))
+            mesh = mesh.with_camera_hint(**frame_hint(mesh))
+            return _shading.apply(mesh, mode)  # an uncoloured mesh: Lambert under a headlight
         raise SceneError(f"{path}: unknown scene file type {suffix!r}; expected one of "
                          f"{', '.join(YAML_SUFFIXES + XML_SUFFIXES + MESH_SUFFIXES)} or a scene name")
     return named(text, **overrides)

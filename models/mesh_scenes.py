@@ -58,14 +58,17 @@ def place_in_view(
 
 def _mesh_scene(
     relative: str, name: str, distance: float, rotation_deg: Sequence[float], color: Any,
-    width: int, height: int, fov_y_deg: float,
+    width: int, height: int, fov_y_deg: float, shading: str = "headlight",
 ) -> Scene:
+    from . import shading as _shading
+
     scene = _asset_scene(relative)
     if color is not None:
         scene = scene.with_color(color)
     scene = place_in_view(
         scene, distance=distance, rotation_deg=rotation_deg, fov_y_deg=fov_y_deg, aspect=width / height
     )
+    scene = _shading.apply(scene, shading)  # one colour: Lambert under a headlight at the camera (origin)
     scene.name = name
     return scene.with_camera_hint(width=width, height=height, fov_y_deg=fov_y_deg, focus_distance=distance)
 
@@ -79,9 +82,10 @@ def bunny(
     width: int = 512,
     height: int = 512,
     fov_y_deg: float = 45.0,
+    shading: str = "headlight",
 ) -> Scene:
-    """The Stanford bunny (69,451 triangles; research/non-commercial licence), fitted in view at distance."""
-    return _mesh_scene(BUNNY_OBJ, "bunny", distance, rotation_deg, color, width, height, fov_y_deg)
+    """The Stanford bunny (69,451 triangles; research/non-commercial licence), fitted in view at distance; shading 'headlight' (Lambert under a light at the camera, models/shading.py) or 'flat'."""
+    return _mesh_scene(BUNNY_OBJ, "bunny", distance, rotation_deg, color, width, height, fov_y_deg, shading)
 
 
 @register_scene("spot")
@@ -106,9 +110,10 @@ def teapot(
     width: int = 512,
     height: int = 512,
     fov_y_deg: float = 45.0,
+    shading: str = "headlight",
 ) -> Scene:
-    """The Utah teapot (6,320 triangles), fitted in view at distance."""
-    return _mesh_scene(TEAPOT_OBJ, "teapot", distance, rotation_deg, color, width, height, fov_y_deg)
+    """The Utah teapot (6,320 triangles), fitted in view at distance; shading 'headlight' (Lambert under a light at the camera, models/shading.py) or 'flat'."""
+    return _mesh_scene(TEAPOT_OBJ, "teapot", distance, rotation_deg, color, width, height, fov_y_deg, shading)
 
 
 def _checker_wall(

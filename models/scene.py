@@ -21,8 +21,7 @@ CAMERA_HINT_KEYS = frozenset(
 )
 
 
-class SceneError(ValueError):
-    """Bad scene input. The message names the field (or file) and the offending value."""
+from sim.errors import SceneError  # noqa: E402 - bad scene input: the message names the field (or file) and value
 
 
 def _as_numeric_array(field_name: str, value: Any) -> np.ndarray:

@@ -9,7 +9,7 @@ Public contract (ARCHITECTURE.md §Public contract)::
 """
 from . import _core
 
-from .errors import ConfigError, EmptyFrameWarning, SceneInputError
+from .errors import ConfigError, EmptyFrameWarning, Error, MemoryLimitError, SceneError, SceneInputError
 from .hardware import HardwareConfig, TextureCacheConfig, UnitConfig
 from .pipeline import (PipelineConfig, algorithm_docs, algorithm_names, interleaved_algorithms, shading_modes,
                        texture_filters, texture_layouts)
@@ -32,6 +32,9 @@ __all__ = [
     "occlusion_query",
     "ConfigError",
     "EmptyFrameWarning",
+    "Error",
+    "MemoryLimitError",
+    "SceneError",
     "HardwareConfig",
     "PipelineConfig",
     "Result",

@@ -31,7 +31,7 @@ import math
 import numpy as np
 
 from . import lens as _lens
-from .errors import ConfigError, check_float, check_int
+from .errors import ConfigError, check_float, check_int, suggest_keywords
 
 _OWNER = "Camera"
 
@@ -46,6 +46,7 @@ def _vec3(field, value):
     return a
 
 
+@suggest_keywords
 class Camera:
     """A thin-lens camera with a shutter. Give either ``coc_px`` or ``aperture_radius`` (or
     neither: a pinhole). ``lens`` is the aperture shape: "disk" (default), "square", "hexagon"."""
@@ -108,6 +109,29 @@ class Camera:
         if np.linalg.norm(np.cross(forward, self.up)) <= 1e-12 * np.linalg.norm(forward) * max(np.linalg.norm(self.up), 1e-300):
             raise ConfigError(f"{_OWNER}.up: must not be parallel to target - eye, got {self.up.tolist()}")
 
+    @classmethod
+    def for_scene(cls, scene, **overrides) -> "Camera":
+        """The camera a scene asks for, with ``overrides``: the one obvious way to set up a scene's
+        camera, and the one the command line and configs use (``rast5d render`` gives the same camera
+        for the same keys). ``scene`` is a models.Scene (its ``camera_hint``: pose, field of view,
+        focus, size) or a hint dict; every keyword of Camera may override it, e.g.
+        ``Camera.for_scene(scene, width=256, height=256, coc_px=10)``. A ``coc_px`` given replaces an
+        ``aperture_radius`` in the hint and the other way round; None values are ignored."""
+        hint = scene if isinstance(scene, dict) else getattr(scene, "camera_hint", None)
+        if hint is not None and not isinstance(hint, dict):
+            raise ConfigError(f"{_OWNER}.for_scene: expected a scene with a camera_hint dict or a dict, "
+                              f"got {type(hint).__name__}")
+        args = dict(hint or {})
+        given = {k: v for k, v in overrides.items() if v is not None}
+        if "coc_px" in given:  # the blur given replaces any blur in the hint
+            args.pop("aperture_radius", None)
+        if "aperture_radius" in given:
+            args.pop("coc_px", None)
+        args.update(given)
+        if args.get("shutter") is not None:
+            args["shutter"] = tuple(args["shutter"])
+        return cls(**args)
+
     # ---- projection constants ------------------------------------------------------------
     @property
     def aspect(self) -> float:
@@ -132,7 +156,7 @@ class Camera:
         return 2.0 * self.focus_distance * self._coc_px / (self._s_x * self.width)
 
     def coc_radius_px(self, depth):
-        """CoC radius in pixels of a point at view depth ``depth``: K |1 - F / depth|."""
+        """CoC radius in pixels of a point at view depth ``depth``: ``K |1 - F / depth|``."""
         depth = np.asarray(depth, dtype=np.float64)
         return self._coc_px * np.abs(1.0 - self.focus_distance / depth)
 

@@ -1,11 +1,45 @@
-"""Exceptions raised for bad input. Every message names the field and the offending value."""
+"""Exceptions raised for bad input. Every message names the field and the offending value.
+
+One hierarchy (re-exported as ``rast5d.Error`` and friends; docs/errors.md lists each refused input
+with its type)::
+
+    Error                      every refused input (catch this to catch them all)
+    ├── ConfigError            a camera, sample-table, pipeline, hardware or render parameter
+    │   ├── MemoryLimitError   a render would allocate more than PipelineConfig.memory_limit_bytes
+    │   ├── KeywordError       an unknown keyword to PipelineConfig, Camera, ... (also a TypeError)
+    │   ├── ConfigFileError    a config file, --set override or sweep point (experiments.config.ConfigError)
+    │   │   └── PlotError      a report spec that does not fit the result table
+    │   └── OutputDirError     a results or pages directory that cannot be written
+    └── SceneError             a scene: a file (models.SceneError is this class) or arrays
+        └── SceneInputError    scene arrays handed to sim.render are malformed
+
+Every class also derives from ValueError, so ``except ValueError`` keeps working.
+"""
 
 
-class ConfigError(ValueError):
+class Error(ValueError):
+    """Base of every exception rast5d raises for bad input (``rast5d.Error``)."""
+
+
+class ConfigError(Error):
     """A camera, pipeline or render parameter is invalid (or a resource limit would be exceeded)."""
 
 
-class SceneInputError(ValueError):
+class MemoryLimitError(ConfigError):
+    """A render would allocate more than PipelineConfig.memory_limit_bytes; the message gives the
+    estimate, its largest parts and what to lower."""
+
+
+class KeywordError(ConfigError, TypeError):
+    """An unknown keyword argument to a parameter class (sim.PipelineConfig, sim.Camera, ...); the
+    message suggests the nearest known name. Also a TypeError, as Python's own would be."""
+
+
+class SceneError(Error):
+    """A scene is invalid: a scene file, a named scene's parameters, or its arrays."""
+
+
+class SceneInputError(SceneError):
     """Scene arrays handed to sim.render are malformed (shape, dtype, non-finite values)."""
 
 
@@ -68,3 +102,30 @@ def field_docs(cls) -> dict[str, dict]:
                     sub["default"] = entry["default"][name]
         out[f.name] = entry
     return out
+
+
+def suggest_keywords(cls):
+    """Class decorator: an unknown keyword argument to ``cls(...)`` raises KeywordError naming it and
+    the nearest known keyword ('did you mean'), instead of a bare TypeError."""
+    import difflib
+    import functools
+    import inspect
+
+    init = cls.__init__
+    params = inspect.signature(init).parameters
+    names = [n for n, p in params.items() if n != "self" and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
+    if any(p.kind == p.VAR_KEYWORD for p in params.values()):
+        return cls
+
+    @functools.wraps(init)
+    def __init__(self, *args, **kwargs):
+        unknown = [k for k in kwargs if k not in names]
+        if unknown:
+            k = unknown[0]
+            close = difflib.get_close_matches(k, names, n=2, cutoff=0.6)
+            hint = f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
+            raise KeywordError(f"{cls.__name__}: unknown keyword {k!r}{hint} (known: {', '.join(names)})")
+        init(self, *args, **kwargs)
+
+    cls.__init__ = __init__
+    return cls

@@ -295,7 +295,9 @@ def declare(cls, specs, name=lambda spec: spec.name):
         annotations[name(spec)] = spec.py_type
         setattr(cls, name(spec), f)
     cls.__annotations__ = {**annotations, **cls.__dict__.get("__annotations__", {})}
-    return dataclasses.dataclass(frozen=True)(cls)
+    from .errors import suggest_keywords
+
+    return suggest_keywords(dataclasses.dataclass(frozen=True)(cls))
 
 
 def check_declared(obj, owner: str) -> None:

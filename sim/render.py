@@ -9,7 +9,7 @@ import numpy as np
 
 from . import _core
 from .camera import Camera
-from .errors import ConfigError, EmptyFrameWarning, SceneInputError
+from .errors import ConfigError, EmptyFrameWarning, MemoryLimitError, SceneInputError
 from .hardware import HardwareConfig, TimingRecordsConfig
 from . import params as _params
 from . import pixel_stats as _pixel_stats
@@ -24,23 +24,23 @@ from .stats import flat_stats, nest
 
 @dataclass
 class Result:
-    """What a render returns.
+    """What a render returns::
 
-    image       (H, W, 3) float32 linear RGB; row 0 is the top; background is black
-    stats       nested dict of counters and derived figures: stats["raster"]["ste"]
-    flat_stats  flat dict: {"raster.samples_tested": ..., "ops.total": ..., "time.wall_s": ...}
-    sample_depth, sample_triangle  (H, W, spp) per-sample depth z = 1 - near/w (+inf empty) and
-                winning triangle index (-1 empty), only with render(..., export_samples=True)
-    timing_records  the timing model's work records (sim.timing.RECORD_DTYPE), None with
-                render(..., timing=False); sim.timing.estimate(result.timing_records, hw) re-times
-                the same render on other hardware
-    ci95        sampled simulation (PipelineConfig.sample_fraction < 1): {figure: 95% confidence
-                half-width} of every counter and derived figure in flat_stats, which then hold
-                frame estimates; NaN for figures not estimable under sampling (sim.sampling).
-                None for a whole-frame render (exact figures)
-    pixel_stats counter name -> (H, W) uint64 map of where that work was done, only with
-                render(..., pixel_stats=True or [names]); each map sums exactly to its frame
-                counter (sim.pixel_stats)
+        image       (H, W, 3) float32 linear RGB; row 0 is the top; background is black
+        stats       nested dict of counters and derived figures: stats["raster"]["ste"]
+        flat_stats  flat dict: {"raster.samples_tested": ..., "ops.total": ..., "time.wall_s": ...}
+        sample_depth, sample_triangle  (H, W, spp) per-sample depth z = 1 - near/w (+inf empty) and
+                    winning triangle index (-1 empty), only with render(..., export_samples=True)
+        timing_records  the timing model's work records (sim.timing.RECORD_DTYPE), None with
+                    render(..., timing=False); sim.timing.estimate(result.timing_records, hw) re-times
+                    the same render on other hardware
+        ci95        sampled simulation (PipelineConfig.sample_fraction < 1): {figure: 95% confidence
+                    half-width} of every counter and derived figure in flat_stats, which then hold
+                    frame estimates; NaN for figures not estimable under sampling (sim.sampling).
+                    None for a whole-frame render (exact figures)
+        pixel_stats counter name -> (H, W) uint64 map of where that work was done, only with
+                    render(..., pixel_stats=True or [names]); each map sums exactly to its frame
+                    counter (sim.pixel_stats)
     """
 
     image: np.ndarray
@@ -279,6 +279,38 @@ def _interval_params(params, config: PipelineConfig) -> None:
     _params.set_layer(params, "pipeline", config, only=_params.stage("pipeline", "intervals"))
 
 
+def check_combination(config: PipelineConfig, table, lens: str = "disk", *, moving: bool = False) -> None:
+    """ConfigError when the pipeline's algorithm cannot render with this sample table, lens shape or
+    scene motion: what sim.render refuses before the engine runs, in one function, so a sweep checks
+    every point (experiments/config/build.py check) before its first render. ``table`` is a
+    sim.SampleTable (its kind, generator and discrete lens positions are read); ``moving``: whether the
+    scene moves during the shutter (unknown before the scene is built: False)."""
+    from .pipeline import interleaved_algorithms
+
+    algorithm = config.algorithm
+    is_lines = getattr(table, "kind", "points") == "lines"
+    table_name = getattr(table, "generator", None) or type(table).__name__
+    if is_lines != (algorithm == "lines"):
+        if is_lines:
+            raise ConfigError(f"algorithm: a line-sample table (SampleTable.lines) needs "
+                              f"algorithm 'lines', got {algorithm!r}")
+        raise ConfigError("algorithm: 'lines' needs a line-sample table (SampleTable.lines / samples.kind lines), "
+                          f"got a {table_name} point-sample table")
+    if algorithm in interleaved_algorithms() and not getattr(table, "n_lens", 0):
+        raise ConfigError(f"algorithm: {algorithm!r} needs an interleaved sample table (SampleTable.interleaved / "
+                          f"samples.kind interleaved, or accumulation), got a {table_name} table without discrete "
+                          "lens positions")
+    if is_lines and lens != "disk":
+        raise ConfigError(f"camera.lens: line samples (algorithm 'lines') cross the disk lens through its centre, "
+                          f"got {lens!r}")
+    if is_lines and config.shading == "per_lens_cell":
+        raise ConfigError("shading: line samples have no lens-grid cells, so 'per_lens_cell' does not apply to "
+                          "algorithm 'lines'; use 'none', 'per_sample', 'msaa' or 'cache'")
+    if is_lines and moving:
+        raise ConfigError("algorithm: 'lines' renders static scenes only (depth of field); the scene moves "
+                          "during the shutter (positions_t1): motion blur needs point samples")
+
+
 def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *,
            export_samples: bool = False, hardware: HardwareConfig | None = None, timing: bool = True,
            query: tuple[int, str] | None = None, pixel_stats=False, progress=None,
@@ -308,15 +340,7 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
             raise ConfigError(str(e)) from None
     p0, p1, col = _scene_arrays(scene)
     is_lines = getattr(table, "kind", "points") == "lines"
-    if is_lines != (config.algorithm == "lines"):
-        if is_lines:
-            raise ConfigError(f"algorithm: a line-sample table (SampleTable.lines) needs algorithm 'lines', "
-                              f"got {config.algorithm!r}")
-        raise ConfigError("algorithm: 'lines' needs a line-sample table (SampleTable.lines / samples.kind lines), "
-                          f"got a {getattr(table, 'generator', type(table).__name__)} point-sample table")
-    if is_lines and p1 is not p0 and not np.array_equal(p0, p1):
-        raise ConfigError("algorithm: 'lines' renders static scenes only (depth of field); the scene moves "
-                          "during the shutter (positions_t1): motion blur needs point samples")
+    check_combination(config, table, camera.lens, moving=p1 is not p0 and not np.array_equal(p0, p1))
     lod_report = getattr(scene, "lod_report", None)
     if config.lod["enabled"] and lod_report is None:
         raise ConfigError("pipeline.lod: level of detail is applied to the scene before the render: "
@@ -334,7 +358,7 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
                          visit_records=visit_record_estimate(camera, v0, v1, config) if per_visit else None)
     need = int(sum(parts.values()))
     if need > config.memory_limit_bytes:
-        raise ConfigError(_memory_message(need, parts, camera, spp, p0.shape[0], config, threads))
+        raise MemoryLimitError(_memory_message(need, parts, camera, spp, p0.shape[0], config, threads))
     if not (np.all(np.isfinite(v0)) and np.all(np.isfinite(v1))):
         t = int(np.argwhere(~np.isfinite(v0) | ~np.isfinite(v1))[0][0])
         raise SceneInputError(f"scene.positions: triangle {t} overflows float32 after projection: {p0[t].tolist()}")

@@ -44,10 +44,12 @@ far below 95% (modern_hall at 512 x 288, 8-px bins, f = 0.01, 11 strata: 0.41 ov
 (``sample.strata``). ``estimate`` warns (``sim.errors.FewStrataWarning``) below FEW_STRATA sampled strata.
 
 Not estimable under sampling (reported as NaN with a NaN half-width, never scaled):
+
 - the texture cache (``tex.cache.*``): it is replayed after the render in bin order, and a bin's
   misses depend on the lines the bins before it left in the cache;
 - the timing model (``timing.*``): its FIFOs and unit overlap couple the work of consecutive bins, so
   a frame's cycles are not a sum of per-bin terms.
+
 HiZ and z-culling, the shading cache and shading visits restart in every bin (backend/hiz.h,
 backend/shading.h), so their counters are per-bin sums and are estimated like the others. Occlusion
 queries stop at the first visible sample of the frame and cannot be sampled (an error).

@@ -527,8 +527,10 @@ def test_report_pool_computes_each_point_once_and_writes_the_pages_of_the_sequen
         pages_out[workers] = [line for line in (tmp_path / f"reports{workers}" / "paper" / "tiny.md").read_text()
                               .splitlines() if not line.startswith("Made by")]
         if workers:
-            # 4 points of a + 1 of b (its other 2 are a's) + 4 retimes, each computed once, by the pool
-            assert "report (all configs)" in out and "b: 3/3 points (0 rendered" in out
+            # 4 points of a + 1 of b (its other 2 are a's) + 4 retimes, each computed once, by the pool:
+            # the bar names the configs, and the pool's points count as rendered by this run
+            assert "report: a, b, c" in out and "b: 3/3 points (3 rendered" in out
+            assert "computed by another run" not in out
         assert "(9 points rendered, 2 from the result store)" in out
     assert pages_out[2] == pages_out[0]
 

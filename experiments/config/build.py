@@ -34,17 +34,12 @@ def build_scene(spec: SceneSpec):
 
 
 def _camera(config: RenderConfig, hint: dict) -> sim.Camera:
-    cam_args = dict(hint or {})
+    """The camera of a point: sim.Camera.for_scene(hint, **the camera section), as Python users write it."""
     given = {k: v for k, v in config.camera.model_dump().items() if v is not None}
-    if "coc_px" in given:  # the config's blur replaces any blur in the hint
-        cam_args.pop("aperture_radius", None)
-    if "aperture_radius" in given:
-        cam_args.pop("coc_px", None)
-    cam_args.update(given)
-    if cam_args.get("shutter") is not None:
-        cam_args["shutter"] = tuple(cam_args["shutter"])
-    u_scale = cam_args.pop("u_scale", None)
-    return sim.Camera(**cam_args) if u_scale in (None, 1) else WideLensCamera(u_scale, **cam_args)
+    u_scale = given.pop("u_scale", None)
+    if u_scale in (None, 1):
+        return sim.Camera.for_scene(dict(hint or {}), **given)
+    return WideLensCamera.for_scene(dict(hint or {}), **given, u_scale=u_scale)
 
 
 def _table_params(config: RenderConfig) -> dict:
@@ -73,14 +68,17 @@ def _make_table(kind: str, params: dict, samples) -> "sim.SampleTable":
     return sim.SampleTable.create(kind, **params)
 
 
-_CHECKED_TABLES: set = set()
+_CHECKED_TABLES: dict = {}
 
 
 def check(config: RenderConfig) -> None:
-    """Everything build() would reject, without building the scene: the named scene and its
-    parameters, the camera, the sample table (each distinct one built once per process) and the
-    pipeline. Run on every point of a sweep before the first render. Raises ConfigError,
+    """Everything build() and sim.render would reject, without building the scene: the named scene and
+    its parameters, the camera, the sample table (each distinct one built once per process), the
+    pipeline, and whether the algorithm can render with that table and lens (sim.render's
+    check_combination). Run on every point of a sweep before the first render. Raises ConfigError,
     ValueError (sim's and models' input errors)."""
+    from sim.render import check_combination
+
     import models
     from models.registry import scene_parameters
 
@@ -91,16 +89,19 @@ def check(config: RenderConfig) -> None:
         if unknown:
             raise models.SceneError(f"scene {spec.name!r}: unknown parameter(s) {', '.join(unknown)}; "
                                     f"accepted: {', '.join(accepted) or '(none)'}")
-    _camera(config, {})
+    camera = _camera(config, {})
     params = _table_params(config)
     key = (config.samples.kind, tuple(sorted(params.items())), config.samples.n_lines, config.samples.wheel)
     if key not in _CHECKED_TABLES:  # the points of a sweep share a few tables: build each once
         try:
-            _make_table(config.samples.kind, params, config.samples)
+            _CHECKED_TABLES[key] = _make_table(config.samples.kind, params, config.samples)
         except ValueError as e:  # "spp: expected ..." -> "samples.spp: expected ..."
             raise ConfigError(f"samples.{e}") from None
-        _CHECKED_TABLES.add(key)
-    sim.PipelineConfig(**config.pipeline.model_dump())
+    pipeline = sim.PipelineConfig(**config.pipeline.model_dump())
+    try:
+        check_combination(pipeline, _CHECKED_TABLES[key], camera.lens)
+    except sim.ConfigError as e:  # name the config's keys: pipeline.algorithm, samples.kind
+        raise ConfigError(f"pipeline.{e} (samples.kind {config.samples.kind!r})") from None
 
 
 def build(config: RenderConfig):

@@ -63,9 +63,9 @@ def tracking_reads():
 
 def _excluded_roots() -> tuple[str, ...]:
     roots = {sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix, "/proc", "/sys", "/dev"}
-    results = os.environ.get("RAST5D_RESULTS")
-    if results:
-        roots.add(str(Path(results).resolve()))
+    from ..paths import results_dir
+
+    roots.add(str(results_dir()))
     return tuple(str(Path(r).resolve()) + os.sep for r in roots) + _PACKAGE_DIRS
 
 

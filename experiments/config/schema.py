@@ -28,8 +28,9 @@ SampleKind = Literal[tuple(sim.SampleTable.kinds())]  # generators and lines (Sa
 ReferenceKind = Literal[tuple(sim.SampleTable.generators(reference=True))]
 
 
-class ConfigError(ValueError):
-    """A configuration file or override is invalid; the message names the file, line, key and value."""
+class ConfigError(sim.ConfigError):
+    """A configuration file, --set override or sweep point is invalid; the message names the file,
+    line, key and value (a sim.ConfigError, so ``rast5d.Error`` catches it)."""
 
 
 class _Strict(BaseModel):
@@ -441,7 +442,10 @@ def _did_you_mean(word: str, known: list[str]) -> str:
     return f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
 
 
-def validate(data: dict, source: str = "config", lines: dict | None = None) -> RenderConfig:
+def validate(data: dict, source: str = "config", lines: dict | None = None, outputs: bool = True) -> RenderConfig:
+    """The RenderConfig of a merged config dict; ConfigError naming file, line, key and value. With
+    ``outputs`` (not for the points of a sweep, checked once as a whole) every column the outputs name
+    is checked too (experiments/config/columns.py)."""
     try:
         config = RenderConfig.model_validate(data)
     except ValidationError as e:
@@ -457,4 +461,8 @@ def validate(data: dict, source: str = "config", lines: dict | None = None) -> R
         except sim.ConfigError as e:
             where = lines.get(("point", "hardware"), source) if lines else source
             raise ConfigError(f"{where}: point.hardware: {e}") from None
+    if outputs:
+        from .columns import check_output_columns
+
+        check_output_columns(config, source, lines)
     return config

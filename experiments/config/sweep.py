@@ -50,25 +50,40 @@ def sweep_points(sweep: dict) -> list[dict]:
     return points
 
 
+# At most this many bad points are listed in one error (the count of all of them is given).
+MAX_LISTED_POINTS = 12
+
+
 def expand_sweep(config: RenderConfig, source: str = "config", lines: dict | None = None
                  ) -> list[tuple[dict, RenderConfig]]:
     """[(point, config)] for every point of config.sweep (one point without a sweep). Each point is
-    validated on its own; ConfigError names the point."""
+    validated on its own (the schema, then build.check: scene, camera, sample table, pipeline and the
+    algorithm-table combination), all before any render: one ConfigError lists every bad point."""
     from .build import check
 
     if not config.sweep:
-        _check_point(check, config, source)
+        _check_point(check, config, source, lines)
         return [({}, config)]
     base = config.model_dump(exclude={"sweep"})
-    points = []
-    for point in sweep_points(config.sweep):
+    points, bad = [], []
+    every = sweep_points(config.sweep)
+    for point in every:
         d = copy.deepcopy(base)
         for k, v in point.items():
             set_dotted(d, k, v, f"{source} sweep")
         where = f"{source} (sweep point {point})"
-        point_config = validate(d, where, _point_lines(lines, point))
-        _check_point(check, point_config, where)
+        try:
+            point_config = validate(d, where, _point_lines(lines, point), outputs=False)
+            _check_point(check, point_config, where, _point_lines(lines, point) or lines)
+        except ConfigError as e:
+            bad.append(str(e))
+            continue
         points.append((point, point_config))
+    if bad:
+        listed = "\n".join(f"  {m}" for m in bad[:MAX_LISTED_POINTS])
+        more = f"\n  ... and {len(bad) - MAX_LISTED_POINTS} more" if len(bad) > MAX_LISTED_POINTS else ""
+        raise ConfigError(f"{source}: {len(bad)} of {len(every)} sweep points are invalid (nothing was "
+                          f"rendered):\n{listed}{more}")
     return points
 
 
@@ -84,14 +99,37 @@ def _point_lines(lines: dict | None, point: dict) -> dict | None:
     return out or None
 
 
-def _check_point(check, config: RenderConfig, where: str) -> None:
-    """ConfigError naming the point when build() would reject it (every point before the first render)."""
+_OWNERS = {"PipelineConfig.": "pipeline.", "Camera.": "camera.", "HardwareConfig.": "hardware."}
+
+
+def _place(message: str, lines: dict | None, where: str) -> str:
+    """The file:line (or --set flag) of the key an error message starts with ('samples.spp: ...',
+    'PipelineConfig.tile_size: ...'), else ``where``."""
+    import re as _re
+
+    m = _re.match(r"([A-Za-z_][\w.]*):", message)
+    if not m or not lines:
+        return where
+    field = m.group(1)
+    for owner, section in _OWNERS.items():
+        if field.startswith(owner):
+            field = section + field[len(owner):]
+    parts = tuple(field.split("."))
+    for n in range(len(parts), 0, -1):
+        if parts[:n] in lines and (n > 1 or str(lines[parts[:n]]).startswith("--set")):
+            place = str(lines[parts[:n]])
+            point = where[where.index(" (sweep point"):] if " (sweep point" in where else ""
+            return place if point in place else place + point
+    return where
+
+
+def _check_point(check, config: RenderConfig, where: str, lines: dict | None = None) -> None:
+    """ConfigError naming the point (its file:line or --set flag where the message's key was set) when
+    build() or sim.render would reject it (every point before the first render)."""
     try:
         check(config)
-    except ConfigError as e:
-        raise ConfigError(f"{where}: {e}") from None
-    except ValueError as e:  # sim.ConfigError, models.SceneError and the sample tables' ValueErrors
-        raise ConfigError(f"{where}: {e}") from None
+    except ValueError as e:  # ConfigError, sim.ConfigError, models.SceneError and the sample tables' errors
+        raise ConfigError(f"{_place(str(e), lines, where)}: {e}") from None
 
 
 RESULT_EXCLUDE = {"name", "description", "extends", "sweep", "outputs", "executor", "point"}

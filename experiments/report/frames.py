@@ -10,7 +10,10 @@ import numpy as np
 _DOTTED = re.compile(r"(?<![\w`.])([A-Za-z_]\w*(?:\.[A-Za-z_]\w*)+)(?![\w`(])")
 
 
-class PlotError(ValueError):
+from ..config.schema import ConfigError  # noqa: E402
+
+
+class PlotError(ConfigError):
     """A plot spec does not fit the result table (unknown column, bad derived expression)."""
 
 
@@ -71,11 +74,13 @@ def spec_columns(spec) -> list[str]:
 
 
 def check_columns(df, spec):
+    import difflib
+
     for col in spec_columns(spec):
         if col not in df.columns:
-            near = [c for c in df.columns if col.split(".")[-1] in c][:6]
+            near = difflib.get_close_matches(col, [str(c) for c in df.columns], n=2, cutoff=0.6)
             raise PlotError(f"plot {spec.title or spec.kind!r}: unknown column {col!r}"
-                            + (f" (similar: {near})" if near else ""))
+                            + (f"; did you mean {' or '.join(repr(c) for c in near)}?" if near else ""))
 
 
 def missing(v) -> bool:

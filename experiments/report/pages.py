@@ -1,6 +1,7 @@
 """`rast5d report`: run every report config (configs/paper/*.yaml, and each configs/*.yaml that names
-an `outputs.page`) through the result store's cache and write one Markdown page per `outputs.page`
-into reports/<outputs.folder>/ (figures as PNG + PDF, our numbers, the paper's published numbers
+an `outputs.page`; the configs folder is --configs DIR, else ./configs, else the shipped configs:
+experiments/paths.py) through the result store's cache and write one Markdown page per `outputs.page`
+into reports/<outputs.folder>/ under the working directory (--reports DIR) (figures as PNG + PDF, our numbers, the paper's published numbers
 beside them, the exact command and config), plus the index reports/README.md. `--quick` renders a
 small-resolution variant into reports/quick/ with its own result store (results/quick/), so it never
 clobbers the full report.
@@ -17,14 +18,13 @@ import time
 from collections import defaultdict
 from pathlib import Path
 
-from ..config import REPO, ConfigError, RenderConfig, load_dict, validate
+from .. import paths
+from ..config import ConfigError, RenderConfig, load_dict, validate
 from ..run import images_dir, results_dir, run_sweep
 from .figures import render_plot
 from .frames import PlotError, apply_derived
 from .tables import TABLES, md_table
 
-CONFIGS = REPO / "configs"
-REPORTS = REPO / "reports"
 # --quick: every point at most QUICK_SIZE pixels on a side (aspect kept when the config gives both),
 # the same samples per pixel, sweeps and pages.
 QUICK_SIZE = 64
@@ -60,7 +60,8 @@ def _command(name: str, quick: bool) -> str:
 
 
 def section_markdown(config: RenderConfig, config_path: Path, df, out_dir: Path, command: str,
-                     overrides: list[str] = (), elapsed: float | None = None, volatile: bool = True) -> list[str]:
+                     overrides: list[str] = (), elapsed: float | None = None, volatile: bool = True,
+                     echo: bool = True) -> list[str]:
     """The Markdown of one config's section: title, text, figures, tables, provenance (with the run's
     times, engine and revision only when volatile)."""
     o = config.outputs
@@ -118,7 +119,7 @@ def section_markdown(config: RenderConfig, config_path: Path, df, out_dir: Path,
             continue
         if spec.title and spec.kind == "table":
             lines += [f"**{spec.title}**", ""]
-        if spec.echo:
+        if spec.echo and echo:
             print("\n".join(([spec.title, ""] if spec.title else []) + res["markdown"]))
         if res["files"]:
             png = res["files"][0]
@@ -144,14 +145,14 @@ def section_markdown(config: RenderConfig, config_path: Path, df, out_dir: Path,
                          f"spp {r.get('samples.spp')}: {r.get('error')}")
         lines.append("")
     wall = float(ok["time.wall_s"].sum()) if "time.wall_s" in ok.columns and len(ok) else 0.0
-    rel = config_path.resolve().relative_to(REPO) if config_path.resolve().is_relative_to(REPO) else config_path
+    shown, target = config_link(config_path, out_dir)
     engine = ok["engine.version"].iloc[0] if "engine.version" in ok.columns and len(ok) else "n/a"
     rev = ok["engine.git_rev"].iloc[0] if "engine.git_rev" in ok.columns and len(ok) else "n/a"
     # Times, engine and revision change on every run: a committed page (volatile=False) keeps them out,
     # so regenerating it leaves git clean; they are printed and kept in results/provenance/ instead.
     run_facts = (f"{wall:.0f} s of render time" + (f", {elapsed:.0f} s this run" if elapsed is not None else "")
                  + f"; engine {engine}, revision {rev}")
-    lines += [f"Made by `{command}` from [`{rel}`]({os.path.relpath(REPO / rel, out_dir) if not Path(rel).is_absolute() else rel})"
+    lines += [f"Made by `{command}` from [`{shown}`]({target})"
               + (f" with `{' '.join('--set ' + shlex.quote(s) for s in overrides)}`" if overrides else "")
               + f": {len(df)} points ({len(bad)} failed)" + (f", {run_facts}" if volatile else "")
               + f". Results: `experiments.load({config.name!r})`.", ""]
@@ -168,28 +169,75 @@ def section_markdown(config: RenderConfig, config_path: Path, df, out_dir: Path,
     return lines
 
 
-def write_config_page(config: RenderConfig, config_path, df, overrides=()) -> Path:
+def _configs_root(config_path: Path) -> Path | None:
+    """The configs folder a config file belongs to (the nearest parent named configs), or None."""
+    for parent in Path(config_path).resolve().parents:
+        if parent.name == "configs":
+            return parent
+    return None
+
+
+def config_link(config_path: Path, out_dir: Path) -> tuple[str, str]:
+    """(the config's name as shown, a relative link from out_dir to it) for a page's provenance line.
+    A config inside the installed package (a shipped config) is copied, with the bases it extends,
+    to <out_dir's report root>/configs/ first, so the link works wherever the pages are moved."""
+    config_path = Path(config_path).resolve()
+    root = _configs_root(config_path)
+    shown = f"configs/{config_path.relative_to(root).as_posix()}" if root is not None else config_path.name
+    target = config_path
+    if paths.inside_installed_package(config_path) and root is not None:
+        report_root = Path(out_dir).resolve()
+        while report_root.parent != report_root and report_root.name != "reports" and report_root != Path.cwd():
+            report_root = report_root.parent
+        target = report_root / shown
+        for src in [config_path, *_config_bases(config_path)]:
+            dst = report_root / "configs" / src.relative_to(root)
+            dst.parent.mkdir(parents=True, exist_ok=True)
+            if not dst.exists() or dst.read_bytes() != src.read_bytes():
+                dst.write_bytes(src.read_bytes())
+    return shown, Path(os.path.relpath(target, Path(out_dir).resolve())).as_posix()
+
+
+def _config_bases(path: Path) -> list[Path]:
+    """The files a config extends, recursively."""
+    import yaml
+
+    try:
+        bases = (yaml.safe_load(path.read_text()) or {}).get("extends") or []
+    except (OSError, yaml.YAMLError):
+        return []
+    out = []
+    for b in [bases] if isinstance(bases, str) else bases:
+        bp = (path.parent / b).resolve()
+        if bp.exists() and bp not in out:
+            out += [bp, *_config_bases(bp)]
+    return out
+
+
+def write_config_page(config: RenderConfig, config_path, df, overrides=(), echo: bool = True) -> Path:
     """`rast5d run`: the config's own page, results/pages/<name>/<name>.md (not committed)."""
     out_dir = results_dir() / "pages" / config.name
     out_dir.mkdir(parents=True, exist_ok=True)
     cmd = "rast5d run " + str(config_path) + "".join(f" --set {shlex.quote(s)}" for s in overrides)
     lines = [f"# {config.outputs.page or config.name}", ""]
-    lines += section_markdown(config, Path(config_path), df, out_dir, cmd, overrides)
+    lines += section_markdown(config, Path(config_path), df, out_dir, cmd, overrides, echo=echo)
     page = out_dir / f"{config.name}.md"
     page.write_text("\n".join(lines) + "\n")
     return page
 
 
 def report_configs(configs_dir: Path | None = None) -> list[Path]:
-    """The report configs: configs/paper/*.yaml and each configs/*.yaml that names an outputs.page, or
-    every config of ``configs_dir`` (files starting with _ are bases for `extends:`)."""
-    def run(paths):
-        return [p for p in sorted(paths) if not p.name.startswith("_")]
+    """The report configs of a configs folder (default: experiments.paths.configs_dir()): its
+    ``paper/*.yaml`` and each top-level ``*.yaml`` that names an outputs.page; a folder without paper/ gives
+    every config in it (files starting with _ are bases for `extends:`)."""
+    def run(found):
+        return [p for p in sorted(found) if not p.name.startswith("_")]
 
-    if configs_dir is not None:
-        return run(Path(configs_dir).glob("*.yaml"))
-    top = [p for p in run(CONFIGS.glob("*.yaml")) if (load_dict(p)[0].get("outputs") or {}).get("page")]
-    return run((CONFIGS / "paper").glob("*.yaml")) + top
+    root = Path(configs_dir) if configs_dir is not None else paths.configs_dir()
+    if not (root / "paper").is_dir():
+        return run(root.glob("*.yaml"))
+    top = [p for p in run(root.glob("*.yaml")) if (load_dict(p)[0].get("outputs") or {}).get("page")]
+    return run((root / "paper").glob("*.yaml")) + top
 
 
 def _retimed_renders(loaded) -> set[str]:
@@ -220,7 +268,9 @@ def _pictured(loaded) -> dict[str, set[str]]:
 
 
 def _source(p: Path) -> str:
-    return str(p.relative_to(REPO) if p.is_relative_to(REPO) else p)
+    """A config file as its errors name it: configs/<path> (or the path as given)."""
+    root = _configs_root(p)
+    return f"configs/{Path(p).resolve().relative_to(root).as_posix()}" if root is not None else str(p)
 
 
 def main(only=None, workers=None, scheduler=None, force=False, quick=False, configs_dir: Path | None = None,
@@ -232,12 +282,18 @@ def main(only=None, workers=None, scheduler=None, force=False, quick=False, conf
 
 
 def _main(only, workers, scheduler, force, quick, configs_dir, reports_dir, retry_failed) -> int:
-    out_root = (reports_dir or REPORTS) / ("quick" if quick else "")
+    reports_root = paths.check_output_dir(paths.reports_dir(reports_dir), "reports directory", "--reports DIR")
+    paths.check_results_dir()
+    out_root = reports_root / ("quick" if quick else "")
     if quick:
         os.environ["RAST5D_RESULTS"] = str(results_dir() / "quick")
-    paths = report_configs(configs_dir)
+    found = report_configs(configs_dir)
+    if not found:
+        print(f"report: no report configs in {paths.display(Path(configs_dir or paths.configs_dir()))} "
+              "(`rast5d init DIR` copies the shipped ones)", file=sys.stderr)
+        return 2
     loaded = []
-    for p in paths:
+    for p in found:
         data, lines = load_dict(p)
         overrides = quick_overrides(data) if quick else []
         if overrides:
@@ -299,11 +355,10 @@ def _main(only, workers, scheduler, force, quick, configs_dir, reports_dir, retr
         for _, _, md, _ in parts:
             text += md
         (page_dir / f"{page}.md").write_text("\n".join(text) + "\n")
-        written, base = page_dir / f"{page}.md", out_root.parent if quick else REPORTS.parent
-        print(f"wrote {written.relative_to(base) if written.is_relative_to(base) else written}")
+        print(f"wrote {paths.display(page_dir / f'{page}.md')}")
     # The index lists the pages on disk, so a partial run that wrote a paper page refreshes it too.
     if not only or any(folder == "paper" for folder, _ in sections):
-        write_index(out_root, out_root / "paper", quick, time.perf_counter() - t_all, counts)
+        write_index(out_root, out_root / "paper", quick, time.perf_counter() - t_all, counts, reports_root)
     return 1 if failures else 0
 
 
@@ -315,9 +370,11 @@ def _sweeps_and_sections(loaded, pool, chosen, sections, counts, out_root, quick
         pooled = pool is not None and config.executor.kind != "dask"
         df = run_sweep(config, source=source(p), workers=workers, scheduler=scheduler,
                        force=force and config.name in chosen and not pooled, lines=lines,
-                       retry_failed=retry_failed, keep_records=keep_records, pictures=pictures)
+                       retry_failed=retry_failed, keep_records=keep_records, pictures=pictures,
+                       pooled=pool.hashes if pooled else frozenset())
         counts["failures"] += int((df["status"] != "ok").sum()) if "status" in df.columns else 0
-        counts["rendered"] += df.attrs.get("summary", {}).get("rendered", 0)
+        summary = df.attrs.get("summary", {})
+        counts["rendered"] += summary.get("rendered", 0) - summary.get("pooled", 0)  # the pool counts its own
         counts["rows"] += len(df)
         page = config.outputs.page or config.name
         page_dir = out_root / config.outputs.folder
@@ -327,7 +384,8 @@ def _sweeps_and_sections(loaded, pool, chosen, sections, counts, out_root, quick
         sections[config.outputs.folder, page].append((config.outputs.order, config.name, md, config))
 
 
-def write_index(out_root: Path, page_dir: Path, quick: bool, elapsed: float, counts: dict):
+def write_index(out_root: Path, page_dir: Path, quick: bool, elapsed: float, counts: dict,
+                reports_root: Path | None = None):
     """reports/README.md (or reports/quick/README.md): every page, with the title of its sections."""
     import re
 
@@ -344,10 +402,11 @@ def write_index(out_root: Path, page_dir: Path, quick: bool, elapsed: float, cou
              "they exist, and the command and config that made it.", ""]
     print(f"report: {elapsed:.0f} s ({counts['rendered']} points rendered, {counts['cached']} from the result store)")
     lines += md_table(["page", "sections"], rows) + [""]
-    other = [p for p in (REPORTS / "quickstart" / "quickstart.md", REPORTS / "bench" / "bench_core.md",
-                         REPORTS / "ccd" / "README.md") if p.exists()]
+    root = reports_root or out_root
+    other = [p for p in (root / "quickstart" / "quickstart.md", root / "bench" / "bench_core.md",
+                         root / "ccd" / "README.md") if p.exists()]
     if other and not quick:
-        lines += ["Other reports: " + ", ".join(f"[{p.relative_to(REPORTS)}]({p.relative_to(REPORTS)})"
+        lines += ["Other reports: " + ", ".join(f"[{p.relative_to(root)}]({p.relative_to(root)})"
                                                  for p in other), ""]
     (out_root / "README.md").write_text("\n".join(lines) + "\n")
 

@@ -72,7 +72,8 @@ def point_args(h: str, cfg: RenderConfig, images_dir, threads: int | None, keep_
 def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "config", workers: int | None = None,
               scheduler=None, force: bool = False, images_dir: str | Path | None = None, progress: bool = True,
               lines: dict | None = None, retry_failed: bool = False, wait_poll_s: float = 0.5,
-              keep_records: set[str] | frozenset[str] = frozenset(), pictures: dict | None = None):
+              keep_records: set[str] | frozenset[str] = frozenset(), pictures: dict | None = None,
+              pooled: frozenset[str] = frozenset()):
     """Run every point of config's sweep; returns the sweep's table (pandas DataFrame, one row per point,
     in sweep order) and writes it to results/<name>.parquet. ``workers`` (default: executor.workers or the
     core count; 0 = in-process) is the local pool; ``scheduler`` (an address or a distributed.Client, or
@@ -82,14 +83,19 @@ def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "c
     render points whose timing records a retime point will re-time (``rast5d report`` collects them):
     those points store their records, so the retime does not render them again. ``pictures``
     ({hash: names}, experiments/report/heatmaps.py pictured_points): what a page pictures of a point,
-    kept in the store by its render."""
+    kept in the store by its render. ``pooled``: hashes this process's report pool computes (their rows
+    count as rendered by this run, not by another one). The result store must be writable
+    (experiments.paths.check_results_dir), checked before the first render."""
+    from ..paths import check_results_dir
+
     name = name or config.name or "experiment"
     ex = config.executor
     if scheduler is None and ex.kind == "dask":
         scheduler = ex.address
     if workers is None:
         workers = ex.workers or os.cpu_count() or 1
-    swept = hashed_sweep(config, source, lines)
+    swept = hashed_sweep(config, source, lines)  # every point validated: ConfigError listing the bad ones
+    check_results_dir()  # before the first render
     points = [(point, cfg) for point, cfg, _ in swept]
     hashes = [h for _, _, h in swept]
     if config.outputs.images and images_dir is None:
@@ -105,12 +111,14 @@ def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "c
         return i, point_args(hashes[i], points[i][1], images_dir, threads, keep_records, pictures)
 
     todo, waiting = [], []
+    n_pooled_early = 0
     claimed: set[str] = set()
     for i, (point, cfg) in enumerate(points):
         h = hashes[i]
         cached = None if force else from_store(i)
         if cached is not None:
             rows[i] = cached
+            n_pooled_early += h in pooled  # finished by this run's report pool before the sweep looked
             continue
         if h not in claimed and not claim(h):  # another run is computing it
             waiting.append(i)
@@ -160,7 +168,7 @@ def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "c
 
     t0 = time.perf_counter()
     interrupted = False
-    n_waited = 0
+    n_waited, n_pooled = 0, n_pooled_early
     try:
         for phase in phases:
             execute(phase)
@@ -175,7 +183,10 @@ def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "c
                 row = from_store(i)
                 if row is not None:
                     rows[i] = row
-                    n_waited += 1
+                    if h in pooled:
+                        n_pooled += 1
+                    else:
+                        n_waited += 1
                 elif claim(h):
                     claimed.add(h)
                     execute([job(i)])
@@ -194,11 +205,12 @@ def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "c
     df = to_frame([rows[i] for i in sorted(rows)])
     if len(df):
         write_parquet(df, table_path(name))
-    n_rendered = n_done
+    n_rendered = n_done + n_pooled
     n_cached = len(rows) - n_rendered - n_waited
     n_failed_stored = sum(1 for r in rows.values() if r.get("status") != "ok") - n_failed
     summary = {"points": len(points), "rendered": n_rendered, "cached": n_cached, "failed": n_failed,
-               "failed_cached": n_failed_stored, "from_other_run": n_waited, "seconds": time.perf_counter() - t0}
+               "failed_cached": n_failed_stored, "from_other_run": n_waited, "pooled": n_pooled,
+               "seconds": time.perf_counter() - t0}
     df.attrs["summary"] = summary
     if progress:
         extra = f", {n_waited} computed by another run" if n_waited else ""

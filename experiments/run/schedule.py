@@ -47,6 +47,19 @@ def reference_job(config_json: str) -> None:
     references.reference_image(RenderConfig.model_validate_json(config_json), threads=1)
 
 
+def pool_label(configs, width: int = 40) -> str:
+    """The progress bar's label: the names of the configs being run ('report: fig14, fig15 +12 more')."""
+    names = [c.name for c in configs]
+    text = ""
+    for i, n in enumerate(names):
+        more = len(names) - i - 1
+        cand = (text + ", " if text else "") + n
+        if len(cand) > width and text:
+            return f"report: {text} +{len(names) - i} more"
+        text = cand
+    return f"report: {text}" if text else "report"
+
+
 def run_all(sweeps, *, workers: int, keep_records=frozenset(), force=frozenset(), retry_failed: bool = False,
             progress: bool = True, background: bool = False, pictures: dict | None = None) -> "PoolRun":
     """Compute every missing point of ``sweeps`` [(config, source, lines)] on one pool of ``workers``
@@ -100,7 +113,7 @@ def run_all(sweeps, *, workers: int, keep_records=frozenset(), force=frozenset()
             leads.add(rh)
             jobs.append(("point", h, point_args(h, cfg, None, 1), estimate_cost(cfg), rh))
     total = len(jobs) + len(refs) + sum(len(v) for v in waits.values())
-    run = PoolRun(refs, jobs, waits, claimed, workers, progress, total)
+    run = PoolRun(refs, jobs, waits, claimed, workers, progress, total, label=pool_label([c for c, _, _ in sweeps]))
     if background:
         run.start()
     else:
@@ -113,8 +126,9 @@ class PoolRun:
     for the rows through the store's point locks), ``loop()`` in the caller. ``computed``: points
     stored; ``complete``: every job ran (after a broken pool the sweeps compute what is left)."""
 
-    def __init__(self, refs, jobs, waits, claimed, workers, progress, total):
+    def __init__(self, refs, jobs, waits, claimed, workers, progress, total, label: str = "report"):
         self.waits, self.claimed, self.workers = waits, claimed, max(1, workers)
+        self.hashes = frozenset(claimed)  # the points this pool computes (the sweeps wait for their rows)
         self.computed, self.complete, self.total = 0, True, total
         self._order = itertools.count()
         self._ready: list = []
@@ -128,7 +142,7 @@ class PoolRun:
         if progress and total:
             from tqdm import tqdm
 
-            self._bar = tqdm(total=total, desc="report (all configs)", unit="job", dynamic_ncols=True)
+            self._bar = tqdm(total=total, desc=label, unit="job", dynamic_ncols=True)
         self._pool = None
         self._running: dict = {}
         if total:

@@ -1,4 +1,5 @@
-"""The result store (results/, git-ignored; RAST5D_RESULTS moves it):
+"""The result store (./results under the working directory; ``--results DIR`` or RAST5D_RESULTS
+moves it, experiments/paths.py):
 
 - ``results/points/<config hash>-<engine version>.parquet``: one finished point (one row), written
   as soon as the point finishes (so Ctrl-C or a crash keeps every finished point). This is the
@@ -41,13 +42,15 @@ from pathlib import Path
 
 from ..config import REPO
 
-RESULTS = Path(os.environ.get("RAST5D_RESULTS", REPO / "results"))
 _ENGINE_ID = None
 _GIT_REV = None
 
 
 def results_dir() -> Path:
-    return Path(os.environ.get("RAST5D_RESULTS", RESULTS))
+    """The result store: $RAST5D_RESULTS, else ./results (experiments/paths.py)."""
+    from ..paths import results_dir as _results_dir
+
+    return _results_dir()
 
 
 class StoreWarning(UserWarning):
@@ -96,7 +99,11 @@ def engine_id() -> str:
 def git_rev() -> str:
     global _GIT_REV
     if _GIT_REV is None:
+        from ..paths import CHECKOUT
+
         try:
+            if not CHECKOUT:  # an installed wheel: no revision (its folder may sit in some other repository)
+                raise FileNotFoundError
             rev = subprocess.check_output(["git", "rev-parse", "--short", "HEAD"], cwd=REPO, text=True,
                                           stderr=subprocess.DEVNULL).strip()
             dirty = subprocess.run(["git", "diff", "--quiet", "HEAD", "--", "sim", "models", "experiments"],
