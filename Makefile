@@ -10,7 +10,7 @@ SOURCES := $(shell find sim/engine sim/bindings -type f 2>/dev/null) CMakeLists.
 INSTALL_PYTHONS ?= 3.12 3.13
 export CMAKE_BUILD_PARALLEL_LEVEL ?= $(shell nproc 2>/dev/null || echo 2)
 
-.PHONY: install run test test-all test-install test-lowest bench golden report report-quick clean sanitize
+.PHONY: install run test test-all test-install test-lowest bench golden report report-quick clean sanitize docs
 
 install: $(STAMPS)/install
 
@@ -21,7 +21,7 @@ $(STAMPS)/venv:
 	@mkdir -p $(STAMPS) && touch $@
 
 $(STAMPS)/install: $(STAMPS)/venv $(SOURCES)
-	$(PY) -m pip install --quiet --no-build-isolation -c $(CONSTRAINTS) -e ".[test]"
+	$(PY) -m pip install --quiet --no-build-isolation -c $(CONSTRAINTS) -e ".[test,docs]"
 	@mkdir -p $(STAMPS) && touch $@
 
 run: install
@@ -29,6 +29,14 @@ run: install
 
 test: install
 	$(PY) -m pytest -q
+
+# The documentation site (docs/conf.py): README, docs/, the report pages and the API reference from
+# the docstrings, warnings as errors, into build/docs/html/ (open build/docs/html/index.html).
+DOCS_OUT := build/docs/html
+docs: install
+	@start=$$(date +%s); rm -rf $(DOCS_OUT); \
+	  $(PY) -m sphinx -b html -W --keep-going -q -c docs . $(DOCS_OUT) && \
+	  echo "docs: $$(find $(DOCS_OUT) -name '*.html' | wc -l) pages in $(DOCS_OUT)/ in $$(( $$(date +%s) - start )) s"
 
 # The engine with AddressSanitizer + UndefinedBehaviorSanitizer (build/sanitize), loaded in place of the
 # installed module (tests/sanitize/sitecustomize.py) into every Python process of the fast test tier.
@@ -84,9 +92,10 @@ test-lowest:
 	  $(LOWEST)/env/bin/python -m pip install --quiet --upgrade "pip>=23.2"; \
 	  $(LOWEST)/env/bin/python -m pip install --quiet -c constraints-lowest.txt scikit-build-core pybind11; \
 	  $(LOWEST)/env/bin/python -m pip install --quiet --no-build-isolation -c constraints-lowest.txt \
-	    --config-settings=build-dir=$(LOWEST)/cmake -e ".[test]"; \
+	    --config-settings=build-dir=$(LOWEST)/cmake -e ".[test,docs]"; \
 	  $(LOWEST)/env/bin/python -m pip list --format=freeze | grep -iE "^($$(sed -n 's/==.*//p' constraints-lowest.txt | paste -sd'|'))==" ; \
 	  RAST5D_CONSTRAINTS=constraints-lowest.txt $(LOWEST)/env/bin/python -m pytest -q -p no:cacheprovider; \
+	  $(LOWEST)/env/bin/python -m sphinx -b html -W --keep-going -q -c docs . $(LOWEST)/docs; \
 	  echo "test-lowest: Python $$v passed in $$(( $$(date +%s) - start )) s"
 
 bench: install

@@ -51,9 +51,14 @@ nitpicky = False
 
 
 def _bibliography_if_present(app, docname, source):
-    """The bibliography page (docs/references.md) joins the site's table of contents once it exists."""
-    if docname == "docs/index" and not (ROOT / "docs" / "references.md").exists():
+    """The bibliography page (docs/references.md) joins the site's table of contents, and the README's
+    link to it works, once it exists; until then both name it as text."""
+    if (ROOT / "docs" / "references.md").exists():
+        return
+    if docname == "docs/index":
         source[0] = re.sub(r"^references\n", "", source[0], flags=re.M)
+    if docname == "README":
+        source[0] = source[0].replace("[bibliography](docs/references.md)", "bibliography (`docs/references.md`)")
 
 
 def setup(app):

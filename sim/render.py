@@ -24,7 +24,9 @@ from .stats import flat_stats, nest
 
 @dataclass
 class Result:
-    """What a render returns::
+    """What a render returns.
+
+    Fields::
 
         image       (H, W, 3) float32 linear RGB; row 0 is the top; background is black
         stats       nested dict of counters and derived figures: stats["raster"]["ste"]

@@ -565,11 +565,10 @@ def test_every_report_config_is_valid():
 def test_full_quick_report(tmp_path):
     """`rast5d report --quick` over every report config (about 9 minutes on 2 busy cores)."""
     env = {**os.environ, "RAST5D_RESULTS": str(tmp_path / "results")}
-    r = subprocess.run([sys.executable, "-m", "experiments.cli", "report", "--quick"], capture_output=True, text=True,
-                       env=env)
+    r = subprocess.run([sys.executable, "-m", "experiments.cli", "report", "--quick", "--reports",
+                        str(tmp_path / "reports")], capture_output=True, text=True, env=env)
     assert r.returncode == 0, r.stderr[-2000:]
-    from experiments.report.pages import REPORTS
-
+    REPORTS = tmp_path / "reports"
     index = (REPORTS / "quick" / "README.md").read_text()
     for p in pages.report_configs():
         outputs = xc.load_config(p).outputs

@@ -17,6 +17,7 @@ from pathlib import Path
 from experiments.bench import write_page
 
 REPO = Path(__file__).resolve().parents[2]
+from experiments.paths import bundled_configs, reports_dir, results_dir  # noqa: E402,F401
 
 
 def scenes(quick: bool):
@@ -47,16 +48,17 @@ def main(argv=None) -> int:
     parser.add_argument("--threads", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--repeats", type=int, default=1)
     parser.add_argument("--quick", action="store_true", help="smaller mixed_sizes, one repeat")
-    parser.add_argument("--out", default=str(REPO / "reports" / "bench"))
+    parser.add_argument("--out", default=str(reports_dir() / "bench"))
     args = parser.parse_args(argv)
     run(size=args.size, spp=args.spp, threads=args.threads, repeats=args.repeats, quick=args.quick, out=args.out)
     return 0
 
 
 def run(size: int = 512, spp: int = 16, threads=(1, 2), repeats: int = 1, quick: bool = False,
-        out=REPO / "reports" / "bench") -> dict:
+        out=None) -> dict:
     """Run the benchmark and write ``out``/bench_core.md. Returns {"page": path of the page,
     "counts_equal": {algorithm: exact and documented operation counts agree}}."""
+    out = reports_dir() / "bench" if out is None else out
     if quick:
         repeats = 1
     import sim

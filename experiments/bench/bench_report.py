@@ -11,6 +11,8 @@ On a shared machine the wall time depends on the load; the CPU seconds and the i
 """
 from __future__ import annotations
 
+from experiments.paths import bundled_configs, reports_dir, results_dir  # noqa: E402,F401
+
 import argparse
 import json
 import os
@@ -189,7 +191,7 @@ def main(argv=None) -> int:
         lines += compare(json.loads(Path(args.compare).read_text()), {"configs": log, "jobs": jobs, "cpu": cpu})
     from experiments.bench import write_page
 
-    out = Path(args.out) if args.out else REPO / "reports" / "bench" / "bench_report.md"
+    out = Path(args.out) if args.out else reports_dir() / "bench" / "bench_report.md"
     write_page(out.parent, out.name, lines)
     if args.keep:
         print(f"kept {tmp}")

@@ -30,6 +30,7 @@ from pathlib import Path
 from experiments.bench import write_page
 
 REPO = Path(__file__).resolve().parents[2]
+from experiments.paths import bundled_configs, reports_dir, results_dir  # noqa: E402,F401
 
 # (config, sweep point selected by these values, reference image of the point instead of the point)
 POINTS = (
@@ -76,7 +77,7 @@ def _point_config(config: str, want: dict, reference: bool):
     from experiments.config.sweep import expand_sweep
     from experiments.run.references import reference_config
 
-    found = [pc for point, pc in expand_sweep(load_config(REPO / "configs" / "paper" / f"{config}.yaml"))
+    found = [pc for point, pc in expand_sweep(load_config(bundled_configs() / "paper" / f"{config}.yaml"))
              if _matches(point, want)]
     if not found:
         raise ValueError(f"{config}: no sweep point matches {want}")
@@ -133,7 +134,7 @@ def _worker_run(core: str | None) -> dict:
 
 def run(base_core: str | None = None, rounds: int = 2, out: Path | None = None, base_label: str = "") -> dict:
     """Alternate worker processes (base engine, this engine) for ``rounds`` rounds; write the page."""
-    out = Path(out) if out is not None else REPO / "reports" / "bench"
+    out = Path(out) if out is not None else reports_dir() / "bench"
     engines = (["base"] if base_core else []) + ["this"]
     best: dict[str, dict] = {e: {} for e in engines}
     loads = []

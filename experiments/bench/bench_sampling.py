@@ -27,6 +27,7 @@ from pathlib import Path
 from experiments.bench import scene_camera as _camera, write_page
 
 REPO = Path(__file__).resolve().parents[2]
+from experiments.paths import bundled_configs, reports_dir, results_dir  # noqa: E402,F401
 FRACTIONS = (1.0, 0.5, 0.2, 0.1, 0.05, 0.04, 0.03, 0.025, 0.02, 0.01)
 FIGURES = ("ops.total", "raster.samples_tested", "raster.samples_hit")
 UNITS = ("setup", "tile_test", "sample_test", "depth", "shader", "texture", "memory")
@@ -230,7 +231,8 @@ def summary_lines(srows, crows, draws: int) -> list[str]:
 
 
 def run(threads: int = 2, seeds: int = 5, draws: int = 200, spp: int = 64, bin_size: int = 8, quick: bool = False,
-        out=REPO / "reports" / "bench") -> dict:
+        out=None) -> dict:
+    out = reports_dir() / "bench" if out is None else out
     if quick:
         seeds, draws, spp = 3, 50, 16
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
@@ -287,7 +289,7 @@ def main(argv=None) -> int:
     ap.add_argument("--spp", type=int, default=64)
     ap.add_argument("--bin-size", type=int, default=8)
     ap.add_argument("--quick", action="store_true", help="small frames, 16 spp, few seeds (a smoke run)")
-    ap.add_argument("--out", type=Path, default=REPO / "reports" / "bench")
+    ap.add_argument("--out", type=Path, default=reports_dir() / "bench")
     a = ap.parse_args(argv)
     run(a.threads, a.seeds, a.draws, a.spp, a.bin_size, a.quick, a.out)
     return 0

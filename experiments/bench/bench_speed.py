@@ -24,6 +24,7 @@ from pathlib import Path
 from experiments.bench import scene_camera as _camera, write_page
 
 REPO = Path(__file__).resolve().parents[2]
+from experiments.paths import bundled_configs, reports_dir, results_dir  # noqa: E402,F401
 ALGORITHMS = (("bruteforce", {}), ("tile", {}), ("tile+optimal", {"count_optimal": True}), ("interval", {}))
 
 
@@ -115,7 +116,8 @@ def sim_isa() -> str:
 
 
 def run(hall_scale: float = 0.5, threads=(1, 2), repeats: int = 3, spp: int = 64,
-        quick: bool = False, out=REPO / "reports" / "bench") -> dict:
+        quick: bool = False, out=None) -> dict:
+    out = reports_dir() / "bench" if out is None else out
     if quick:
         repeats, spp = 1, 16
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
@@ -172,7 +174,7 @@ def main(argv=None) -> int:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--spp", type=int, default=64)
     parser.add_argument("--quick", action="store_true")
-    parser.add_argument("--out", default=str(REPO / "reports" / "bench"))
+    parser.add_argument("--out", default=str(reports_dir() / "bench"))
     args = parser.parse_args(argv)
     run(args.hall_scale, args.threads, args.repeats, args.spp, args.quick, args.out)
     return 0

@@ -24,6 +24,7 @@ import numpy as np
 import sim
 
 REPO = Path(__file__).resolve().parents[2]
+from experiments.paths import bundled_configs, reports_dir, results_dir  # noqa: E402,F401
 
 
 @dataclass
@@ -122,7 +123,7 @@ def example(same_time: bool) -> tuple[Tris, Tris]:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--out", default=str(REPO / "reports" / "ccd"))
+    parser.add_argument("--out", default=str(reports_dir() / "ccd"))
     args = parser.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

@@ -28,6 +28,7 @@ import sim
 from sim import _core
 
 REPO = Path(__file__).resolve().parents[2]
+from experiments.paths import bundled_configs, reports_dir, results_dir  # noqa: E402,F401
 VIEWPORTS = (512, 1024, 2048, 4096, 8192)
 FRAC_BITS = (4, 8)
 TILE = 8
@@ -570,7 +571,7 @@ def rows_5d(V, seed=7):
     return rows
 
 
-ROWS = REPO / "results" / "precision_rows.json"  # finished viewports: a rerun resumes
+ROWS = results_dir() / "precision_rows.json"  # finished viewports: a rerun resumes
 
 
 def study():
@@ -1082,7 +1083,7 @@ def main(argv=None) -> int:
     if args.print:
         print(md)
     else:
-        (REPO / "reports" / "paper" / "precision.md").write_text(md)
+        (reports_dir() / "paper" / "precision.md").write_text(md)
         print("wrote reports/paper/precision.md")
     return 0
 
