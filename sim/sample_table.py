@@ -110,7 +110,8 @@ class SampleTable:
         if name not in _GENERATORS:
             raise ValueError(
                 f"generator: unknown sample-table generator {name!r} "
-                f"(known: {', '.join(_GENERATORS)}; user arrays go through SampleTable.from_array)"
+                f"(known: {', '.join(_GENERATORS)}; line samples are SampleTable.lines (samples.kind lines), "
+                "user arrays go through SampleTable.from_array)"
             )
         impl, extra_defaults = _GENERATORS[name]
         known = ["spp", *_COMMON_DEFAULTS, *extra_defaults]

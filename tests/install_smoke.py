@@ -1,7 +1,12 @@
 """Smoke test of an installed wheel (run by `make test-install` in a fresh venv, outside the checkout):
 the package imports from the environment, not the checkout; the version matches pyproject.toml; a
 named scene renders with honest counters; a Mitsuba XML and a mesh load; the command line renders a
-config. Plain asserts, no pytest (the fresh environment has only the package's own dependencies)."""
+config; and, as a new user would in an empty directory: `rast5d report --only quickstart` from the
+shipped configs, `rast5d init`, `rast5d run` of the starter sweep, one point of it with --point, the
+continuous-collision example, with every file written under that directory and none inside the
+installed package. Plain asserts, no pytest (the fresh environment has only the package's own
+dependencies). `--quick` runs the report's quick variant (make test-install does so for all but the
+last Python)."""
 from __future__ import annotations
 
 import re
@@ -53,9 +58,66 @@ def main() -> int:
                              capture_output=True, text=True, cwd=tmp)
         assert out.returncode == 0, out.stderr
         assert (tmp / "c.png").stat().st_size > 0 and "samples tested" in out.stdout, out.stdout
+    new_user(bin_dir, quick="--quick" in sys.argv)
     print(f"install smoke: rast5d {expected} on Python {sys.version.split()[0]} from "
           f"{Path(sim.__file__).resolve().parent.parent}: ok")
     return 0
+
+
+def _package_files() -> set[str]:
+    import sim
+
+    root = Path(sim.__file__).resolve().parent.parent  # site-packages
+    return {str(p.relative_to(root)) for d in ("sim", "models", "experiments", "rast5d") for p in (root / d).rglob("*")
+            if "__pycache__" not in p.parts}
+
+
+def _run(cmd: list, cwd: Path, timeout: float = 900) -> str:
+    import time
+
+    t0 = time.perf_counter()
+    out = subprocess.run([str(c) for c in cmd], capture_output=True, text=True, cwd=cwd, timeout=timeout)
+    shown = " ".join(str(c) for c in [Path(cmd[0]).name, *cmd[1:]])
+    assert out.returncode == 0, (shown, out.stdout[-3000:], out.stderr[-3000:])
+    print(f"$ {shown}   [{time.perf_counter() - t0:.0f} s]")
+    text = out.stdout.strip()
+    lines = text.splitlines()
+    print("\n".join(lines if len(lines) <= 16 else lines[:6] + ["..."] + lines[-8:]))
+    return text
+
+
+def new_user(bin_dir: Path, quick: bool) -> None:
+    """What a new user runs from the wheel in an empty directory, with the output they see."""
+    rast5d = bin_dir / "rast5d"
+    before = _package_files()
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(tmp) / "empty"
+        work.mkdir()
+        out = _run([rast5d, "report", "--only", "quickstart", *(["--quick"] if quick else [])], work)
+        page = work / "reports" / ("quick" if quick else "") / "quickstart" / "quickstart.md"
+        assert page.exists() and "wrote reports/" in out, out
+        text = page.read_text()
+        link = re.search(r"from \[`configs/quickstart.yaml`\]\(([^)]+)\)", text).group(1)
+        assert (page.parent / link).resolve().exists(), link  # the page's link to its config works here
+        assert (work / "results").is_dir()
+        out = _run([rast5d, "init", "study"], work)
+        study = work / "study"
+        assert (study / "my_sweep.yaml").exists() and (study / "configs" / "paper").is_dir(), out
+        refused = subprocess.run([rast5d, "init", "study"], capture_output=True, text=True, cwd=work)
+        assert refused.returncode == 2 and "not empty" in refused.stderr, refused.stderr
+        out = _run([rast5d, "run", "my_sweep.yaml", "--workers", "2"], study)
+        assert "samples tested" in out and "9/9 points" in out, out
+        out = _run([rast5d, "render", "my_sweep.yaml", "--point", "camera.coc_px=10,pipeline.algorithm=tile",
+                    "-o", "tile.png"], study)
+        assert (study / "tile.png").exists() and "samples tested" in out, out
+        out = _run([bin_dir / "python", "-m", "experiments.examples.ccd"], work)
+        assert (work / "reports" / "ccd" / "README.md").exists(), out
+        bad = subprocess.run([rast5d, "run", "my_sweep.yaml", "--results", "/proc/rast5d"], capture_output=True,
+                             text=True, cwd=study)
+        assert bad.returncode == 2 and "results directory" in bad.stderr, bad.stderr
+        print(f"$ rast5d run my_sweep.yaml --results /proc/rast5d\n{bad.stderr.strip()}")
+    written = _package_files() - before
+    assert not written, f"written inside the installed package: {sorted(written)[:10]}"
 
 
 if __name__ == "__main__":

@@ -86,5 +86,9 @@ def check_output_columns(config: RenderConfig, source: str = "config", lines: di
                 title = f" ({spec.title!r})" if spec.title else ""
                 errors.append(f"{where}: outputs.plots[{i}]{title}.{field}: unknown column {col!r}"
                               f"{_suggest(col, known)}")
+    for col in o.column_labels:
+        if not ok(col):
+            where = lines.get(("outputs", "column_labels", col), lines.get(("outputs", "column_labels"), source))
+            errors.append(f"{where}: outputs.column_labels: unknown column {col!r}{_suggest(col, known)}")
     if errors:
         raise ConfigError("\n".join(dict.fromkeys(errors)))

@@ -261,6 +261,10 @@ class OutputsSpec(_Strict):
     derived: dict[str, str] = Field(default_factory=dict, description=(
         "New columns: pandas expressions over result columns (dotted names allowed), e.g. "
         "'shade.quad_requests / raster.samples_hit'"))
+    column_labels: dict[str, str] = Field(default_factory=dict, description=(
+        "Human labels with units for columns on axes, legends and panel titles {column: 'label [unit]'}, "
+        "e.g. {mcycles: 'estimated frame time [Mcycles]'}; counters and config keys take theirs from their "
+        "declarations, a derived 'counter / 1e6' its counter's with the prefix"))
     plots: list[PlotSpec] = Field(default_factory=list, description="Figures and tables (see the plot keys below)")
     order: int = Field(0, description="Position of this config's section on a shared page (ascending)")
 

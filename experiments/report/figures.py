@@ -7,6 +7,8 @@ per-figure plotting scripts.
 from __future__ import annotations
 
 import math
+import re
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -41,40 +43,136 @@ CONFIG_LABELS = {
     "samples.views": ("views", ""), "pipeline.texture_layout": ("texture layout", ""),
     "hardware.tex_cache.ways": ("texture cache ways", ""), "samples.n_lens": ("lens positions", ""),
     "pipeline.motion_test": ("motion test", ""), "pipeline.time_strata": ("time strata", ""),
+    "ops.total": ("operations per frame", "ops"), "ops.per_pixel": ("operations per pixel", ""),
+    "raster.samples_tested": ("samples tested", ""), "raster.samples_hit": ("samples hit", ""),
+    "timing.cycles": ("estimated frame time", "cycles"), "pipeline.lod.enabled": ("level of detail", ""),
+    "samples.n_lines": ("line samples per pixel", ""), "metric.rmse": ("RMSE against the reference", ""),
+    "metric.psnr": ("PSNR against the reference", "dB"), "metric.ssim": ("SSIM against the reference", ""),
+    "metric.flip": ("FLIP against the reference", ""),
 }
 
 
-def value_label(col: str | None, derived: dict | None = None) -> str:
-    """An axis or legend label for a column: '<what> [<unit>]' from CONFIG_LABELS or sim.counter_docs()
-    (the description up to its first ':' when short), a derived column as 'name = expression', else
-    the column name. Combined hue columns ('a / b') are labelled part by part."""
-    if not col:
-        return ""
-    if " / " in col and col not in (derived or {}):
-        return " / ".join(value_label(c, derived) for c in col.split(" / "))
-    if derived and col in derived:
-        return f"{col} = {derived[col]}"
+# The config's outputs.column_labels while a figure is drawn (labels(...) sets them).
+_COLUMN_LABELS: dict = {}
+# Scale factors of derived 'counter / 1e6' columns and the unit prefix they give.
+_PREFIX = {1e3: "k", 1e6: "M", 1e9: "G", 1e12: "T", 1e-3: "m", 1e-6: "µ"}
+_SCALED = re.compile(r"^\s*`?([A-Za-z_]\w*(?:\.[A-Za-z_]\w*)+)`?\s*([/*])\s*(1e-?\d+|1000|1000000)\s*$")
+_SECTIONS = ("pipeline.", "camera.", "samples.", "hardware.", "scene.params.", "scene.", "point.", "resolved.")
+
+
+@contextmanager
+def column_labels(names: dict | None):
+    """Within this block value_label and facet_title use a config's outputs.column_labels first."""
+    global _COLUMN_LABELS
+    outer = _COLUMN_LABELS
+    _COLUMN_LABELS = dict(names or {})
+    try:
+        yield
+    finally:
+        _COLUMN_LABELS = outer
+
+
+def _humanize(col: str) -> str:
+    """'pipeline.lod.enabled' -> 'lod enabled', 'tile_size' -> 'tile size': no dots, no underscores."""
+    for sec in _SECTIONS:
+        if col.startswith(sec) and len(col) > len(sec):
+            col = col[len(sec):]
+            break
+    return col.removesuffix(".name").replace(".", " ").replace("_", " ").strip()
+
+
+def _what_unit(col: str) -> tuple[str, str] | None:
+    """(what, unit) of a counter, derived figure or config key from its declaration, or None."""
     if col in CONFIG_LABELS:
-        what, unit = CONFIG_LABELS[col]
-        return f"{what} [{unit}]" if unit else what
+        return CONFIG_LABELS[col]
     import sim
 
     doc = sim.counter_docs().get(col)
-    if doc is None:
-        return col
-    unit, desc = doc
-    what = desc.split(":")[0].split(" (")[0].strip()
-    if len(what) > 48 or not what:
-        what = col
-    return f"{what} [{unit}]" if unit and unit not in ("ratio",) else (f"{what} (ratio)" if unit == "ratio" else what)
+    if doc is not None:
+        unit, desc = doc
+        what = desc.split(":")[0].split(" (")[0].strip()
+        what = re.sub(r"\s*(as in |of )?\b00\d\b( §[\d.–-]+)?", "", what).strip()  # no paper file numbers
+        if len(what) > 48 or not what or label_leaks(what):  # a derived figure's doc may be its expression
+            what = _humanize(col)
+        return what, unit
+    return _config_doc(col)
+
+
+def _config_doc(col: str) -> tuple[str, str] | None:
+    """(short description, unit) of a pipeline or camera key from sim's parameter declarations."""
+    import sim
+
+    parts = col.split(".")
+    if len(parts) == 2 and parts[0] == "pipeline":
+        info = sim.PipelineConfig.field_docs().get(parts[1])
+        if info:
+            what = re.split(r"[:;(]|, ", info["doc"])[0].strip().rstrip(".")
+            return (what if 0 < len(what) <= 40 else _humanize(col)), info.get("unit", "")
+    return None
+
+
+def value_label(col: str | None, derived: dict | None = None) -> str:
+    """An axis or legend label for a column, never a dotted name or an expression: the config's
+    outputs.column_labels, else '<what> [<unit>]' from CONFIG_LABELS, sim.counter_docs() (the
+    description up to its first ':' when short) or the pipeline's declarations; a derived
+    'counter / 1e6' gets its counter's label with the unit prefixed (M); any other derived column or
+    key its name in words. Combined hue columns ('a / b') are labelled part by part."""
+    if not col:
+        return ""
+    if col in _COLUMN_LABELS:
+        return _COLUMN_LABELS[col]
+    if " / " in col and col not in (derived or {}):
+        return " / ".join(value_label(c, derived) for c in col.split(" / "))
+    if derived and col in derived:
+        m = _SCALED.match(derived[col])
+        base = _what_unit(m.group(1)) if m else None
+        if base is not None:
+            factor = float(m.group(3)) if m.group(2) == "/" else 1.0 / float(m.group(3))
+            prefix = _PREFIX.get(factor, f"{factor:g} ")
+            what, unit = base
+            return f"{what} [{prefix}{unit or ''}]".replace(" []", "")
+        return _humanize(col)
+    found = _what_unit(col)
+    if found is None:
+        return _humanize(col)
+    what, unit = found
+    if unit == "ratio":
+        return f"{what} (ratio)"
+    return f"{what} [{unit}]" if unit else what
 
 
 def facet_title(col: str, v) -> str:
     """'CoC radius 10 px' rather than 'coc_px = 10'."""
-    if col in CONFIG_LABELS:
-        what, unit = CONFIG_LABELS[col]
-        return f"{what} {label(v)}" + (f" {unit}" if unit else "")
-    return f"{_short(col)} {label(v)}"
+    if col in _COLUMN_LABELS:
+        return f"{_COLUMN_LABELS[col]}: {label(v)}"
+    found = _what_unit(col)
+    if found is not None:
+        what, unit = found
+        return f"{what} {label(v)}" + (f" {unit}" if unit and unit != "ratio" else "")
+    return f"{_humanize(col)} {label(v)}"
+
+
+LEAK = re.compile(r"(?<![\w.])[A-Za-z_]\w+(?:\.[A-Za-z_]\w+)+(?![\w(])|==|`|\*\s*\d")
+SCALE = re.compile(r"\b\d+e-?\d+\b")
+
+
+def label_leaks(text: str) -> list[str]:
+    """The parts of a figure's label that are code: dotted column names, comparisons, assignments,
+    backticks, products, scale factors (1e6) outside a [unit]. Empty for a human label."""
+    text = str(text)
+    return [m.group(0) for m in LEAK.finditer(text)] + SCALE.findall(re.sub(r"\[[^\]]*\]", "", text))
+
+
+def figure_labels(fig) -> list[str]:
+    """Every text a reader sees on a figure but its tick labels: titles, axis labels, legend titles
+    and entries, colour-bar labels, annotations."""
+    from matplotlib.text import Text
+
+    ticks = set()
+    for ax in fig.get_axes():
+        ticks.update(id(t) for t in ax.get_xticklabels() + ax.get_yticklabels()
+                     + ax.get_xticklabels(minor=True) + ax.get_yticklabels(minor=True))
+    return [t.get_text() for t in fig.findobj(Text) if id(t) not in ticks and t.get_text().strip()]
 
 
 def color_for(h, i: int) -> str:
@@ -110,6 +208,34 @@ def _panels(plt, n: int):
     return fig, flat[:n]
 
 
+def readable_log_ticks(axis, least: int = 3) -> None:
+    """A log axis spanning less than a few decades gets ticks at 1, 2 and 5 times the powers of its
+    base (or every power of 2), labelled as plain numbers, so it shows at least ``least`` labelled ticks
+    instead of one power of ten."""
+    from matplotlib.ticker import FuncFormatter, LogLocator
+
+    lo, hi = sorted(axis.get_view_interval())
+    if not (lo > 0 and hi > lo):
+        return
+    base = axis.get_scale() == "log" and getattr(axis.get_transform(), "base", 10) or 10
+    decades = math.log(hi / lo, base)
+    if decades >= least - 0.5:
+        return
+    subs = (1.0,) if base == 2 else (1.0, 2.0, 5.0) if decades > 1 else (1.0, 1.5, 2.0, 3.0, 5.0, 7.0)
+    axis.set_major_locator(LogLocator(base=base, subs=subs))
+    axis.set_major_formatter(FuncFormatter(lambda v, _pos: _tick(v)))
+
+
+def _tick(v: float) -> str:
+    """A tick as a reader writes it: 20, 0.05, 2k, 1.5M."""
+    if v == 0:
+        return "0"
+    for scale, suffix in ((1e9, "G"), (1e6, "M"), (1e3, "k")):
+        if abs(v) >= scale:
+            return f"{v / scale:g}{suffix}"
+    return f"{v:g}"
+
+
 def _series(spec, hues) -> list[tuple]:
     """[(hue value or None, y column, label)] for every line/bar series."""
     out = []
@@ -128,12 +254,18 @@ def _draw_line(ax, spec, d, hues):
     xs_all = sorted_x(d[spec.x])
     numeric = all(paper_number(x) is not None for x in xs_all)
     pos = {i: x for i, x in enumerate(xs_all)}
+    drawn: list[dict] = []
     for i, (h, y, name) in enumerate(series):
         sub = d if h is None else d[[same(v, h) for v in d[spec.hue]]]
         xs = sorted_x(sub[spec.x])
         ys = [cell(sub, {spec.x: x}, y)[0] for x in xs]
         px = [float(x) for x in xs] if numeric else [xs_all.index(x) for x in xs]
-        ax.plot(px, ys, marker=MARKERS[i % len(MARKERS)], color=color_for(h, i), label=name)
+        style = {}
+        if any(overlaps(dict(zip(px, ys)), other) for other in drawn):
+            # the same values as a line drawn before: dashed, with hollow, larger markers, so both show
+            style = {"linestyle": (0, (4, 2)), "markerfacecolor": "none", "markersize": 7, "markeredgewidth": 1.2}
+        drawn.append(dict(zip(px, ys)))
+        ax.plot(px, ys, marker=MARKERS[i % len(MARKERS)], color=color_for(h, i), label=name, **style)
         group = h if h is not None else y
         paper = [(x, paper_number(paper_value(spec, group, x))) for x in (paper_x(spec, group) or [])]
         paper = [(x, v) for x, v in paper if v is not None]
@@ -152,6 +284,15 @@ def _draw_line(ax, spec, d, hues):
                     color=["#555555", "#999999", "#333333", "#BBBBBB"][k % 4], alpha=0.9, label=f"{label(g)} (paper)")
     if not numeric:
         ax.set_xticks(list(pos), [label(x) for x in pos.values()])
+
+
+def overlaps(a: dict, b: dict, rel: float = 0.02) -> bool:
+    """Whether two series {x: y} share at least two x values and lie within ``rel`` of each other at
+    every shared x (one would hide the other)."""
+    shared = [x for x in a if x in b and not (missing(a[x]) or missing(b[x]))]
+    if len(shared) < 2:
+        return False
+    return all(abs(a[x] - b[x]) <= rel * max(abs(a[x]), abs(b[x]), 1e-300) for x in shared)
 
 
 def unmatched_paper(spec, d, hues) -> list[str]:
@@ -337,22 +478,30 @@ def image_grid(spec, d, out_base: Path | None) -> dict:
                 if len(sub) and Path(sub["image.path"].iloc[0]).exists():
                     ax.imshow(Image.open(sub["image.path"].iloc[0]))
                     v = cell(sub, {}, spec.ys[0])[0]
-                    ax.set_title(f"{_short(spec.x)} {label(x)}, {_short(spec.row)} {label(r)}\n"
-                                 f"{spec.ylabel or _short(spec.ys[0])} {fmt(v, spec.format or '{:.3f}')}", fontsize=7)
+                    ax.set_title(f"{facet_title(spec.x, x)}, {facet_title(spec.row, r)}\n"
+                                 f"{spec.ylabel or value_label(spec.ys[0])} {fmt(v, spec.format or '{:.3f}')}",
+                                 fontsize=7)
                 ax.set_axis_off()
         if spec.title:
             fig.suptitle(spec.title, fontsize=9)
         files = _save(fig, out_base, dpi=150)
+        texts = figure_labels(fig)
         plt.close(fig)
-    return {"files": files, "markdown": grid_table(spec, d), "fits": []}
+    return {"files": files, "markdown": grid_table(spec, d), "fits": [], "labels": texts}
 
 
 # ---- entry point ---------------------------------------------------------------------------------
 
-def render_plot(spec, df, out_base: Path | None, derived: dict | None = None) -> dict:
-    """Draw one plot spec. Returns {"files": [png, pdf], "markdown": [table lines], "fits": [...]}.
-    ``df`` already carries the derived columns (``derived``: their expressions, for axis labels);
-    failed rows (status != ok) are left out."""
+def render_plot(spec, df, out_base: Path | None, derived: dict | None = None, names: dict | None = None) -> dict:
+    """Draw one plot spec. Returns {"files": [png, pdf], "markdown": [table lines], "fits": [...],
+    "labels": [every title, axis label and legend text of the figure]}. ``df`` already carries the
+    derived columns (``derived``: their expressions, for axis labels; ``names``: the config's
+    outputs.column_labels); failed rows (status != ok) are left out."""
+    with column_labels(names):
+        return _render_plot(spec, df, out_base, derived)
+
+
+def _render_plot(spec, df, out_base: Path | None, derived: dict | None = None) -> dict:
     if "status" in df.columns:
         df = df[df["status"] == "ok"]
     for col, names in spec.labels.items():  # display names replace the values (before where: and paper:)
@@ -401,9 +550,11 @@ def render_plot(spec, df, out_base: Path | None, derived: dict | None = None) ->
             if spec.logx:
                 ax.set_xscale("log", base=2 if spec.x and "spp" in spec.x else 10)
                 ax.xaxis.set_minor_formatter(NullFormatter())
+                readable_log_ticks(ax.xaxis)
             if spec.logy:
                 ax.set_yscale("log")
                 ax.yaxis.set_minor_formatter(NullFormatter())
+                readable_log_ticks(ax.yaxis)
             ax.set_xlabel(spec.xlabel or value_label(spec.x, derived))
             if spec.kind == "heatmap":
                 ax.set_ylabel(value_label(spec.row, derived))
@@ -437,6 +588,7 @@ def render_plot(spec, df, out_base: Path | None, derived: dict | None = None) ->
         if spec.title:
             fig.suptitle(spec.title, fontsize=9)
         files = _save(fig, out_base)
+        texts = figure_labels(fig)
         plt.close(fig)
     return {"files": files, "markdown": grid_table(spec, d) if spec.kind == "heatmap" else data_table(spec, d, hues),
-            "fits": []}
+            "fits": [], "labels": texts}

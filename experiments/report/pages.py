@@ -109,9 +109,12 @@ def section_markdown(config: RenderConfig, config_path: Path, df, out_dir: Path,
                 for col, names in spec.labels.items():  # display names first, as in render_plot
                     if col in dd.columns:
                         dd = dd.assign(**{col: [next((n for k, n in names.items() if same(v, k)), v) for v in dd[col]]})
-                res = point_pictures(spec, config, apply_where(dd, spec.where), base)
+                from .figures import column_labels
+
+                with column_labels(o.column_labels):
+                    res = point_pictures(spec, config, apply_where(dd, spec.where), base)
             else:
-                res = render_plot(spec, dfd, base, derived=o.derived)
+                res = render_plot(spec, dfd, base, derived=o.derived, names=o.column_labels)
         except PlotError as e:
             lines += [f"**Plot error:** {e}", ""]
             continue

@@ -18,7 +18,7 @@ from typing import Callable
 
 import numpy as np
 
-CATEGORIES = ("Python API", "bindings", "YAML config", "scene file")
+CATEGORIES = ("Python API", "bindings", "YAML config", "command line", "scene file")
 
 
 @dataclass(frozen=True)
@@ -628,6 +628,45 @@ def yaml_use_unknown_option(d):
     _config(d, "scene: {name: glossy_floor}\npoint: {kind: glossy, options: {spp: 4}}\n")
 
 
+@case("Python API", "a misspelled keyword to PipelineConfig (tile_sise=2)", "KeywordError",
+      r"PipelineConfig: unknown keyword 'tile_sise'; did you mean 'tile_size'", "the keyword and the nearest name")
+def pipeline_keyword(d):
+    _sim().PipelineConfig(tile_sise=2)
+
+
+@case("Python API", "a misspelled keyword to Camera (widht=64)", "KeywordError",
+      r"Camera: unknown keyword 'widht'; did you mean 'width'", "the keyword and the nearest name")
+def camera_keyword(d):
+    _sim().Camera(widht=64)
+
+
+@case("YAML config", "a misspelled plot column (y: raster.stee)", "ConfigError",
+      r"c\.yaml:7: outputs\.plots\[0\]\.y: unknown column 'raster\.stee'; did you mean 'raster\.ste'",
+      "the file, the line, the plot, the column and the nearest known ones")
+def yaml_plot_column(d):
+    _config(d, BASE + "outputs:\n  plots:\n    - kind: line\n      x: camera.coc_px\n      y: raster.stee\n")
+
+
+@case("YAML config", "an unknown column in a derived expression (ops.totl / 1e9)", "ConfigError",
+      r"c\.yaml:5: outputs\.derived\.gops: unknown column 'ops\.totl'.*did you mean 'ops\.total'",
+      "the file, the line, the derived column and the nearest known ones")
+def yaml_derived_column(d):
+    _config(d, BASE + "outputs:\n  derived:\n    gops: 'ops.totl / 1e9'\n")
+
+
+@case("YAML config", "a sweep whose algorithms need other sample tables (interleave, lines with stratified samples)",
+      "ConfigError", r"2 of 3 sweep points are invalid \(nothing was rendered\).*'interleave' needs an interleaved "
+      r"sample table.*'lines' needs a line-sample table", "every bad point, its sweep line and what it needs")
+def yaml_sweep_combinations(d):
+    _config(d, BASE + "sweep:\n  pipeline.algorithm: [tile, interleave, lines]\n")
+
+
+@case("YAML config", "a --set value out of range (--set samples.spp=0)", "ConfigError",
+      r"--set samples\.spp=0: samples\.spp: expected an integer in 1\.\.4096, got 0", "the flag, the key and the value")
+def yaml_set_out_of_range(d):
+    _config(d, BASE, overrides=["samples.spp=0"])
+
+
 @case("YAML config", "an unknown key (camera.heigth)", "ConfigError", r"c\.yaml:4: unknown key 'camera\.heigth'",
       "the file, the line and the key")
 def yaml_unknown_key(d):
@@ -709,6 +748,106 @@ def yaml_override(d):
 @case("YAML config", "a list where a mapping goes (camera: [1, 2])", "ConfigError", r"c\.yaml:2: camera", "the file, the line and the key")
 def yaml_section_type(d):
     _config(d, "scene: {name: quad}\ncamera: [1, 2]\n")
+
+
+# ---- command line --------------------------------------------------------------------------------
+
+@case("command line", "a results directory that cannot be written (--results /proc/x)", "OutputDirError",
+      r"results directory: cannot write to /proc/x.*--results DIR", "the directory, why, and the option that moves it")
+def cli_results_unwritable(d):
+    import os
+
+    from experiments.paths import check_results_dir
+
+    old = os.environ.get("RAST5D_RESULTS")
+    os.environ["RAST5D_RESULTS"] = "/proc/x"
+    try:
+        check_results_dir()
+    finally:
+        if old is None:
+            os.environ.pop("RAST5D_RESULTS")
+        else:
+            os.environ["RAST5D_RESULTS"] = old
+
+
+@case("command line", "rast5d init into a directory that is not empty", "ConfigError",
+      r"init: .* is not empty; give an empty or new directory, or --force", "the directory and --force")
+def cli_init_not_empty(d):
+    from experiments.cli import init_dir
+
+    (d / "mine.txt").write_text("x")
+    init_dir(d)
+
+
+@case("command line", "rast5d render --point naming a key the sweep does not sweep (camera.cox)", "ConfigError",
+      r"--point camera\.cox: not a swept key .*did you mean 'camera\.coc_px'", "the flag, the key and the swept keys")
+def cli_point_unknown_key(d):
+    from experiments.cli import parse_point, select_point
+    from experiments.config import load_dict, validate
+
+    p = d / "c.yaml"
+    p.write_text(BASE + "sweep: {camera.coc_px: [0, 4]}\n")
+    data, lines = load_dict(p)
+    select_point(validate(data, str(p), lines), str(p), lines, parse_point("camera.cox=4"))
+
+
+@case("command line", "rast5d render --point that leaves a swept key open", "ConfigError",
+      r"--point: 2 points of .* match \{'camera\.coc_px': 4\}; also give pipeline\.algorithm",
+      "the points matched and the keys still to give, with their values")
+def cli_point_ambiguous(d):
+    from experiments.cli import parse_point, select_point
+    from experiments.config import load_dict, validate
+
+    p = d / "c.yaml"
+    p.write_text(BASE + "sweep: {camera.coc_px: [0, 4], pipeline.algorithm: [tile, bruteforce]}\n")
+    data, lines = load_dict(p)
+    select_point(validate(data, str(p), lines), str(p), lines, parse_point("camera.coc_px=4"))
+
+
+@case("command line", "a results or pages directory inside the installed package (site-packages)", "OutputDirError",
+      r"results directory: .* is inside the installed package; run from a working directory of your own or give "
+      r"--results DIR", "the directory and the option that moves it")
+def cli_results_in_package(d):
+    import sysconfig
+
+    from experiments.paths import check_output_dir
+
+    check_output_dir(Path(sysconfig.get_paths()["purelib"]) / "results", "results directory",
+                     "--results DIR or RAST5D_RESULTS")
+
+
+@case("command line", "rast5d report --configs naming a folder that does not exist", "ConfigError",
+      r"--configs: not a directory: .*nowhere", "the flag and the path")
+def cli_configs_missing(d):
+    from experiments.paths import configs_dir
+
+    configs_dir(d / "nowhere")
+
+
+@case("command line", "rast5d render --point with a value the sweep does not have (camera.coc_px=5)", "ConfigError",
+      r"--point camera\.coc_px=5: not one of the sweep's values \[0, 4\]", "the flag, the value and the swept values")
+def cli_point_unknown_value(d):
+    from experiments.cli import parse_point, select_point
+    from experiments.config import load_dict, validate
+
+    p = d / "c.yaml"
+    p.write_text(BASE + "sweep: {camera.coc_px: [0, 4]}\n")
+    data, lines = load_dict(p)
+    select_point(validate(data, str(p), lines), str(p), lines, parse_point("camera.coc_px=5"))
+
+
+@case("command line", "rast5d render --point without '=' (camera.coc_px)", "ConfigError",
+      r"--point camera\.coc_px: expected key=value\[,key=value\.\.\.\], got 'camera\.coc_px'", "the flag and the text")
+def cli_point_malformed(d):
+    from experiments.cli import parse_point
+
+    parse_point("camera.coc_px")
+
+
+@case("command line", "--set without '=' (--set camera.coc_px)", "ConfigError",
+      r"--set: expected key=value, got 'camera\.coc_px'", "the flag and the text")
+def cli_set_malformed(d):
+    _config(d, BASE, overrides=["camera.coc_px"])
 
 
 # ---- scene files -------------------------------------------------------------------------------------
@@ -830,8 +969,12 @@ def expected_types(c: Case) -> tuple[type, ...]:
     import sim
     from experiments.config import ConfigError as XConfigError
 
+    from experiments.paths import OutputDirError
+
     names = {"SceneInputError": (sim.SceneInputError,), "ConfigError": (sim.ConfigError, XConfigError),
-             "SceneError": (models.SceneError,), "ValueError": (ValueError,), "TypeError": (TypeError,)}
+             "SceneError": (models.SceneError,), "ValueError": (ValueError,), "TypeError": (TypeError,),
+             "KeywordError": (sim.errors.KeywordError,), "MemoryLimitError": (sim.MemoryLimitError,),
+             "OutputDirError": (OutputDirError,)}
     return names[_type_name(c.error)]
 
 
@@ -852,11 +995,14 @@ def page() -> str:
         "page is stale. Rows whose exception is `-` are inputs accepted on purpose. `<dir>` stands for the",
         "folder the case ran in.",
         "",
-        "Every exception is a `ValueError` subclass except `TypeError` for an argument of the wrong Python type",
-        "at the binding level: `sim.ConfigError` (camera, pipeline, hardware, resources),",
-        "`sim.SceneInputError` (scene arrays), `models.SceneError` (scene files and `models.Scene`),",
-        "`experiments.config.ConfigError` (YAML configs, file:line first); the bindings (`sim._core`) raise",
-        "`ValueError`.",
+        "Every refused input raises a subclass of `rast5d.Error` (`sim.Error`, a `ValueError`): `ConfigError`",
+        "(camera, sample table, pipeline, hardware) with `MemoryLimitError` (a render over",
+        "`PipelineConfig.memory_limit_bytes`), `KeywordError` (an unknown keyword, also a `TypeError`),",
+        "`experiments.config.ConfigError` (YAML configs, `--set` and sweep points, file:line first) with",
+        "`PlotError`, and `OutputDirError` (a results or pages directory that cannot be written); and",
+        "`SceneError` (scene files and `models.Scene`: `models.SceneError` is this class) with",
+        "`SceneInputError` (scene arrays). The bindings (`sim._core`) raise `ValueError` or `TypeError`.",
+        "The exception column gives each case's own type.",
         "",
         f"{len(CASES)} cases: " + ", ".join(f"{k} {v}" for k, v in counts.items()) + ".",
         "",
