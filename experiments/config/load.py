@@ -100,7 +100,14 @@ def load_dict(path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> 
     data.setdefault("name", path.stem)
     for text in overrides:
         key, value = parse_override(text)
-        set_dotted(data, key, value, f"{path} --set")
+        if key.startswith("sweep.") and len(key) > 6:  # --set sweep.camera.coc_px=[0, 10]: one swept key
+            sweep = data.setdefault("sweep", {})
+            if not isinstance(sweep, dict):
+                raise ConfigError(f"--set {text}: sweep is not a mapping in {path}")
+            sweep[key[6:]] = value
+            lines[("sweep", key[6:])] = f"--set {text}"
+            continue
+        set_dotted(data, key, value, f"--set {text}")
         lines[tuple(key.split("."))] = f"--set {text}"
     resolve_scene_paths(data, lines, path)
     return data, lines

@@ -73,18 +73,34 @@ def expand_sweep(config: RenderConfig, source: str = "config", lines: dict | Non
             set_dotted(d, k, v, f"{source} sweep")
         where = f"{source} (sweep point {point})"
         try:
-            point_config = validate(d, where, _point_lines(lines, point), outputs=False)
-            _check_point(check, point_config, where, _point_lines(lines, point) or lines)
+            point_lines = {**(lines or {}), **(_point_lines(lines, point) or {})}
+            point_config = validate(d, where, point_lines, outputs=False)
+            _check_point(check, point_config, where, point_lines)
         except ConfigError as e:
-            bad.append(str(e))
+            bad.append((point, str(e)))
             continue
         points.append((point, point_config))
     if bad:
-        listed = "\n".join(f"  {m}" for m in bad[:MAX_LISTED_POINTS])
-        more = f"\n  ... and {len(bad) - MAX_LISTED_POINTS} more" if len(bad) > MAX_LISTED_POINTS else ""
         raise ConfigError(f"{source}: {len(bad)} of {len(every)} sweep points are invalid (nothing was "
-                          f"rendered):\n{listed}{more}")
+                          f"rendered):\n{_grouped(bad)}")
     return points
+
+
+def _grouped(bad: list[tuple[dict, str]]) -> str:
+    """The bad points' errors, one line per distinct error: an error shared by several points (a
+    --set value, a base key) is listed once with their count and the first of them."""
+    groups: dict[str, list] = {}
+    for point, message in bad:
+        groups.setdefault(message.replace(f" (sweep point {point})", ""), []).append((point, message))
+    out = []
+    for key, members in groups.items():
+        if len(members) == 1:
+            out.append(members[0][1])
+        else:
+            out.append(f"{key} ({len(members)} points, e.g. sweep point {members[0][0]})")
+    listed = "\n".join(f"  {m}" for m in out[:MAX_LISTED_POINTS])
+    more = f"\n  ... and {len(out) - MAX_LISTED_POINTS} more" if len(out) > MAX_LISTED_POINTS else ""
+    return listed + more
 
 
 def _point_lines(lines: dict | None, point: dict) -> dict | None:

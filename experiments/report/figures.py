@@ -478,7 +478,7 @@ def image_grid(spec, d, out_base: Path | None) -> dict:
                 if len(sub) and Path(sub["image.path"].iloc[0]).exists():
                     ax.imshow(Image.open(sub["image.path"].iloc[0]))
                     v = cell(sub, {}, spec.ys[0])[0]
-                    ax.set_title(f"{facet_title(spec.x, x)}, {facet_title(spec.row, r)}\n"
+                    ax.set_title(f"{facet_title(spec.x, x)}\n{facet_title(spec.row, r)}\n"
                                  f"{spec.ylabel or value_label(spec.ys[0])} {fmt(v, spec.format or '{:.3f}')}",
                                  fontsize=7)
                 ax.set_axis_off()

@@ -101,6 +101,21 @@ def draw_reason(ax, stats: dict, tile: int, title: str | None = None):
               loc="upper left", bbox_to_anchor=(1.02, 1.0), frameon=False)
 
 
+def map_title(result, name: str) -> str:
+    """A map's title: its counter and the frame's total; under sampling (Result.ci95) the map holds
+    the sampled bins only, so the title gives the frame estimate with its 95% interval and says so."""
+    from .figures import value_label
+
+    what = value_label(name)
+    total = int(result.pixel_stats[name].sum())
+    ci = (result.ci95 or {}).get(name)
+    if ci is None:
+        return f"{what} (frame total {total:,})"
+    estimate = result.flat_stats.get(name, float("nan"))
+    return (f"{what}: frame estimate {round(estimate):,} ± {round(ci):,}\n"
+            f"(map: the sampled bins only, {total:,})")
+
+
 def write_heatmaps(result, out_dir, tile: int = 1, names=None) -> list[Path]:
     """Write the rendered image and one PNG per map of result.pixel_stats into out_dir; returns
     the files. tile: the screen tile size (tile-level counters are summed per tile)."""
@@ -125,8 +140,7 @@ def write_heatmaps(result, out_dir, tile: int = 1, names=None) -> list[Path]:
     for name in wanted:
         values, per_tile = map_values(stats, name, tile)
         fig, ax = plt.subplots(figsize=size)
-        draw_map(ax, values, map_label(name, per_tile), fig,
-                 title=f"{name} (frame total {int(stats[name].sum()):,})")
+        draw_map(ax, values, map_label(name, per_tile), fig, title=map_title(result, name))
         path = out / f"{name}.png"
         fig.savefig(path, dpi=150, bbox_inches="tight")
         plt.close(fig)
