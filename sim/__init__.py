@@ -2,7 +2,7 @@
 
 Public contract (ARCHITECTURE.md §Public contract)::
 
-    camera = sim.Camera(width=256, height=256, fov_y_deg=45, focus_distance=5.0, coc_px=10)
+    camera = sim.Camera.for_scene(scene, width=256, height=256, coc_px=10)  # the scene's camera hint
     table  = sim.SampleTable.stratified(spp=16, seed=1)
     result = sim.render(scene, camera, table, sim.PipelineConfig(algorithm="tile", tile_size=2))
     result.image, result.stats, result.flat_stats
@@ -11,6 +11,10 @@ from . import _core
 
 from .errors import ConfigError, EmptyFrameWarning, Error, MemoryLimitError, SceneError, SceneInputError
 from .hardware import HardwareConfig, TextureCacheConfig, UnitConfig
+from .errors import suggest_keywords as _suggest_keywords
+
+for _cls in (HardwareConfig, TextureCacheConfig, UnitConfig):  # unknown keywords: KeywordError, did you mean
+    _suggest_keywords(_cls)
 from .pipeline import (PipelineConfig, algorithm_docs, algorithm_names, interleaved_algorithms, shading_modes,
                        texture_filters, texture_layouts)
 from .pipeline import line_algorithms

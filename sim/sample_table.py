@@ -117,7 +117,11 @@ class SampleTable:
         known = ["spp", *_COMMON_DEFAULTS, *extra_defaults]
         for key in params:
             if key not in known:
-                raise ValueError(f"{name}: unknown parameter {key!r} (known: {', '.join(known)})")
+                import difflib
+
+                close = difflib.get_close_matches(key, known, n=1, cutoff=0.6)
+                hint = f"; did you mean {close[0]!r}?" if close else ""
+                raise ValueError(f"{name}: unknown parameter {key!r}{hint} (known: {', '.join(known)})")
         if "spp" not in params:
             raise ValueError(f"spp: required by the {name} generator")
         full = {**_COMMON_DEFAULTS, **extra_defaults, **params}
