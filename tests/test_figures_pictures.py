@@ -21,7 +21,7 @@ def test_labels_come_from_counter_docs_and_config_names():
     assert figures.value_label("camera.coc_px") == "CoC radius [px]"
     assert figures.value_label("ops.total").endswith("[ops]") and "ops.total" not in figures.value_label("ops.total")
     assert figures.value_label("raster.ste").startswith("Sample-test efficiency")
-    assert figures.value_label("my_derived") == "my_derived"
+    assert figures.value_label("my_derived") == "my derived"  # in words, never the column's code
     assert figures.facet_title("camera.coc_px", 0) == "CoC radius 0 px"
 
 
@@ -111,8 +111,11 @@ def test_scatters_of_the_same_rows_share_one_data_table(tmp_path):
 
 
 def test_derived_and_combined_columns_are_labelled():
-    assert figures.value_label("quad_ratio", {"quad_ratio": "shade.quad_requests / depth.passes"}) == \
-        "quad_ratio = shade.quad_requests / depth.passes"
+    # a derived expression is never shown: its name in words, or its declared label (column_labels)
+    assert figures.value_label("quad_ratio", {"quad_ratio": "shade.quad_requests / depth.passes"}) == "quad ratio"
+    with figures.column_labels({"quad_ratio": "quad requests per depth pass (ratio)"}):
+        assert figures.value_label("quad_ratio", {"quad_ratio": "shade.quad_requests / depth.passes"}) == \
+            "quad requests per depth pass (ratio)"
     assert figures.value_label("samples.kind / samples.n_lens") == "sample table / lens positions"
 
 
