@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from experiments.config import PlotSpec, load_config
+from experiments.config import PlotSpec, load_dict, validate
 from experiments.report import figures as F
 from experiments.report.pages import report_configs
 
@@ -51,7 +51,8 @@ class _null:
 
 def report_figures():
     for path in report_configs(REPO / "configs"):
-        config = load_config(path)
+        data, lines = load_dict(path)
+        config = validate(data, str(path), lines)  # the outputs checked; the sweep's points need not be
         for i, spec in enumerate(config.outputs.plots):
             if spec.kind != "table":
                 yield f"{config.name}_{i + 1}", spec, config
