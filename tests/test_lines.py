@@ -175,7 +175,7 @@ def test_wrong_combinations_are_clear_errors():
     moving = Scene.from_arrays(scene.positions, positions_t1=scene.positions + 0.1)
     with pytest.raises(sim.ConfigError, match="motion blur needs point samples"):
         sim.render(moving, cam, lines_table, sim.PipelineConfig(algorithm="lines"))
-    with pytest.raises(sim.ConfigError, match="lens_shape"):
+    with pytest.raises(sim.ConfigError, match="camera.lens: line samples .* disk lens.* got .square."):
         sim.render(scene, sim.Camera(width=8, height=8, coc_px=4.0, lens="square"), lines_table,
                    sim.PipelineConfig(algorithm="lines"))
     with pytest.raises(sim.ConfigError, match="shading.*per_lens_cell"):
