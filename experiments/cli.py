@@ -65,10 +65,14 @@ def _json_safe(x):
 
 
 def _sampling_overrides(args) -> list[str]:
-    """--sample-fraction F as the --set override it stands for (validated by the pipeline schema)."""
-    if getattr(args, "sample_fraction", None) is None:
-        return []
-    return [f"pipeline.sample_fraction={args.sample_fraction!r}"]
+    """--sample-fraction F and --no-timing as the --set overrides they stand for (validated by the
+    schema)."""
+    out = []
+    if getattr(args, "sample_fraction", None) is not None:
+        out.append(f"pipeline.sample_fraction={args.sample_fraction!r}")
+    if getattr(args, "no_timing", False):
+        out.append("hardware.timing.enabled=false")
+    return out
 
 
 def parse_point(text: str) -> dict:
@@ -149,7 +153,8 @@ def cmd_render(args) -> int:
     if args.heatmaps:
         options["pixel_stats"] = True
     try:
-        row, result = render_point(config, image, options=options, timing=True)  # every figure
+        # every figure (the timing and memory model's too, unless switched off)
+        row, result = render_point(config, image, options=options, timing=config.hardware_config().timing.enabled)
     finally:
         bar.close()
     print(_summary(row))
@@ -368,6 +373,9 @@ def main(argv: list[str] | None = None) -> int:
                         "tile test's verdict, each sample tested and hit, the operations charged")
     p.add_argument("--progress-delay", type=float, default=2.0, metavar="S",
                    help="show a progress bar once the render has run S seconds (default 2)")
+    p.add_argument("--no-timing", action="store_true",
+                   help="do not run the timing and memory model (hardware.timing.enabled=false): no timing.*, "
+                        "dram.*, depth.cache.* or color.* figures")
     p.add_argument("--point", metavar="KEY=VALUE,...",
                    help="render one point of a sweep config, e.g. --point camera.coc_px=10,pipeline.algorithm=tile "
                         "(every swept key that has more than one value)")
@@ -383,6 +391,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--retry-failed", action="store_true",
                    help="re-render stored failed points (otherwise served from the store with their error)")
     p.add_argument("--no-report", action="store_true", help="do not write the config's report page")
+    p.add_argument("--no-timing", action="store_true",
+                   help="do not run the timing and memory model (hardware.timing.enabled=false): faster, and no "
+                        "timing.*, dram.*, depth.cache.* or color.* figures")
     p.add_argument("-q", "--quiet", action="store_true", help="print no progress bar, table or page path")
     _results_option(p)
     p.add_argument("--sample-fraction", type=float, metavar="F",

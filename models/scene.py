@@ -366,6 +366,17 @@ class Scene:
             t1 = t1 + shift.astype(np.float64)
         return self._replace(positions_t1=np.array(t1, dtype=np.float64))
 
+    def subdivided(self, levels: int = 1) -> "Scene":
+        """Each level splits every triangle into four at its edge midpoints (positions at both shutter
+        ends, colours, uvs and opacity carried over, the texture kept): 4^levels times the triangles,
+        the same surface. A denser workload of the same scene, for benchmarks."""
+        if isinstance(levels, bool) or not isinstance(levels, int) or not 0 <= levels <= 4:
+            raise SceneError(f"subdivide: expected an integer in 0..4, got {levels!r}")
+        out = self
+        for _ in range(levels):
+            out = out._replace(**_split4(out))
+        return out
+
     def with_camera_hint(self, **keys: Any) -> "Scene":
         """A copy whose camera_hint has these keys set (the other keys are kept)."""
         return self._replace(camera_hint={**self.camera_hint, **keys})
@@ -424,3 +435,19 @@ class Scene:
             f"Scene(name={self.name!r}, n_triangles={self.n_triangles}, {motion}, "
             f"textures={len(self.textures)}, camera_hint={self.camera_hint})"
         )
+
+
+def _split4(scene: "Scene") -> dict:
+    """Scene fields with every triangle (a, b, c) split into (a, ab, ca), (ab, b, bc), (ca, bc, c) and
+    (ab, bc, ca), per-vertex attributes at the midpoints, per-triangle ones repeated."""
+
+    def split(v: np.ndarray) -> np.ndarray:  # (N, 3, k) -> (4N, 3, k), same dtype
+        a, b, c = v[:, 0], v[:, 1], v[:, 2]
+        ab, bc, ca = (a + b) / 2, (b + c) / 2, (c + a) / 2
+        tris = np.stack([np.stack(t, axis=1) for t in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))], axis=1)
+        return tris.reshape(-1, 3, v.shape[2]).astype(v.dtype, copy=False)
+
+    return {"positions": split(scene.positions), "positions_t1": split(scene.positions_t1),
+            "colors": split(scene.colors), "uvs": None if scene.uvs is None else split(scene.uvs),
+            "texture_ids": np.repeat(scene.texture_ids, 4),
+            "alpha": None if scene.alpha is None else np.repeat(scene.alpha, 4)}

@@ -10,10 +10,12 @@ Public contract (ARCHITECTURE.md §Public contract)::
 from . import _core
 
 from .errors import ConfigError, EmptyFrameWarning, Error, MemoryLimitError, SceneError, SceneInputError
-from .hardware import HardwareConfig, TextureCacheConfig, UnitConfig
+from .hardware import (ColorBufferConfig, DepthBufferConfig, DramConfig, HardwareConfig, TextureCacheConfig,
+                       UnitConfig)
 from .errors import suggest_keywords as _suggest_keywords
 
-for _cls in (HardwareConfig, TextureCacheConfig, UnitConfig):  # unknown keywords: KeywordError, did you mean
+for _cls in (HardwareConfig, TextureCacheConfig, DepthBufferConfig, ColorBufferConfig, DramConfig,
+             UnitConfig):  # unknown keywords: KeywordError, did you mean
     _suggest_keywords(_cls)
 from .pipeline import (PipelineConfig, algorithm_docs, algorithm_names, interleaved_algorithms, shading_modes,
                        texture_filters, texture_layouts)
@@ -45,6 +47,9 @@ __all__ = [
     "SampleTable",
     "SceneInputError",
     "TextureCacheConfig",
+    "DepthBufferConfig",
+    "ColorBufferConfig",
+    "DramConfig",
     "UnitConfig",
     "algorithm_docs",
     "algorithm_names",

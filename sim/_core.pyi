@@ -78,11 +78,23 @@ class RenderParams:
     tex_cache_line_bytes: int  # Cache line size (a power of two) [bytes]; default 64
     tex_cache_ways: int  # Associativity; 0 = fully associative [ways]; default 4
     tex_cache_count: int  # Number of texture caches; screen bin b uses cache b mod count [caches]; default 1
+    depth_buffer_enabled: bool  # Model the depth-tile cache and compression; false: every depth read and write goes to DRAM (4 bytes per sample, depth.bytes_read + depth.bytes_written); default True
+    depth_buffer_cache_bytes: int  # Depth-tile cache capacity (a whole number of sets of cache_ways x line_bytes) [bytes]; default 1048576
+    depth_buffer_cache_ways: int  # Depth-tile cache associativity, LRU; 0 = fully associative [ways]; default 4
+    depth_buffer_line_bytes: int  # Depth-buffer line: the samples of a screen tile of the largest power-of-two edge (up to 8 px) whose samples fit (line_bytes / 4 samples); a power of two [bytes]; default 1024
+    depth_buffer_compression: str  # Depth compression of lines written to DRAM: 'none', 'plane' (static-plane baseline) or 'time_predictor' (two layers of time-dependent predictors and delta residuals) (depth_compressions: none, plane, time_predictor); default 'time_predictor'
+    depth_buffer_fast_clear: bool  # A line not written this frame is read as cleared from its tile-status bit, at no DRAM cost; default True
+    color_buffer_enabled: bool  # Model the colour sample buffer (writes, fills, write-backs, the resolve); false: no colour traffic; default True
+    color_buffer_cache_bytes: int  # Colour-tile cache capacity (a whole number of sets of cache_ways lines; a line holds the samples of one depth-buffer line) [bytes]; default 1048576
+    color_buffer_cache_ways: int  # Colour-tile cache associativity, LRU; 0 = fully associative [ways]; default 4
+    color_buffer_bytes_per_sample: int  # Bytes of one colour sample (and of one resolved pixel) [bytes]; default 4
+    color_buffer_fast_clear: bool  # A line not written this frame is in the constant-colour (cleared) state: no DRAM read; default True
+    dram_burst_bytes: int  # Smallest DRAM transfer: compressed depth lines are rounded up to it [bytes]; default 32
     # frame: set by sim.render for this render
     texture_sample_distribution_index: int  # Texture index of the sample-distribution texture (texture_sample_distribution), or -1; default -1
     table_has_lens: bool  # The sample table has lens coordinates (else u = v = 0 is exact); default True
     table_has_time: bool  # The sample table has time coordinates (else t = 0 is exact); default True
-    record_timing: bool  # Record one timing work record per (triangle, bin) visit (docs/timing.md); default True
+    record_timing: bool  # Run the timing and memory model on the render's work records (docs/timing.md); default True
     table_lines: bool  # The sample table holds line samples (SampleTable.lines): (x, y) a screen point, (u, v) the line direction; default False
     timing_per_visit: bool  # Timing records per shading visit instead of per (triangle, bin) (hardware.timing.granularity 'visit'); default False
     query_first: int  # Occlusion query: triangles from this index are the query (no writes); -1 none; default -1

@@ -29,7 +29,8 @@ HOROWITZ = ("M. Horowitz, 'Computing's energy problem (and what we can do about 
             "Fig. 1.1.9 (45 nm, 0.9 V)")
 
 # The entries every table must have.
-KEYS = ("op.robust", "op.hardware", "sram.depth_byte", "sram.hiz_byte", "cache.tex_access", "dram.byte")
+KEYS = ("op.robust", "op.hardware", "sram.depth_byte", "sram.hiz_byte", "sram.color_byte", "cache.tex_access",
+        "cache.tile_access", "dram.byte")
 
 
 @dataclass(frozen=True)
@@ -82,13 +83,18 @@ DEFAULT = EnergyTable("horowitz45", {
     # bound for the adds and compares.
     "op.robust": EnergyEntry(0.9 + 3.7, "op", f"32-bit float add 0.9 pJ + multiply 3.7 pJ; {HOROWITZ}"),
     "op.hardware": EnergyEntry(0.1 + 3.1, "op", f"32-bit integer add 0.1 pJ + multiply 3.1 pJ; {HOROWITZ}"),
-    # On-chip buffers: the bin's depth buffer (32 KB class SRAM) and the HiZ tiles (8 KB class).
+    # On-chip buffers: the depth-tile cache's samples (32 KB class SRAM), the HiZ tiles (8 KB class) and
+    # the colour-tile cache's samples (32 KB class).
     "sram.depth_byte": EnergyEntry(20.0 / 8, "byte", f"32 KB SRAM, 20 pJ per 64-bit access; {HOROWITZ}"),
     "sram.hiz_byte": EnergyEntry(10.0 / 8, "byte", f"8 KB SRAM, 10 pJ per 64-bit access; {HOROWITZ}"),
+    "sram.color_byte": EnergyEntry(20.0 / 8, "byte", f"32 KB SRAM, 20 pJ per 64-bit access; {HOROWITZ}"),
+    # A tag lookup of the depth- or colour-tile cache (64 KB default): one 64-bit access of a 32 KB SRAM
+    # (the smallest array of the figure at or below the tag store's size is an upper bound).
+    "cache.tile_access": EnergyEntry(20.0, "access", f"32 KB SRAM, 20 pJ per 64-bit access; {HOROWITZ}"),
     # Texture cache (16 KB default): one access between the 8 KB (10 pJ) and 32 KB (20 pJ) figures.
     "cache.tex_access": EnergyEntry(15.0, "access", f"16 KB cache, interpolated from 8 KB 10 pJ / 32 KB 20 pJ "
                                                     f"per 64-bit access; {HOROWITZ}"),
-    # Off-chip: texture cache misses fetch lines from DRAM.
+    # Off-chip: every DRAM client (depth and colour lines, texture lines, HiZ).
     "dram.byte": EnergyEntry(1950.0 / 8, "byte", f"DRAM 1.3-2.6 nJ per 64-bit access (midpoint); {HOROWITZ}"),
 })
 
@@ -100,12 +106,16 @@ FIGURES = (
      [("ops.sample_region", None), ("ops.sample_inside", None)]),
     ("energy.interp", "depth, depth-test and colour operations of covered samples", [("ops.interp", None)]),
     ("energy.zhat", "depth-interval operations", [("ops.zhat", None)]),
-    ("energy.depth", "depth-buffer traffic (on-chip SRAM)",
-     [("depth.bytes_read", "sram.depth_byte"), ("depth.bytes_written", "sram.depth_byte")]),
+    ("energy.depth", "depth samples read and written in the depth-tile cache (on-chip SRAM) and its tag lookups",
+     [("depth.bytes_read", "sram.depth_byte"), ("depth.bytes_written", "sram.depth_byte"),
+      ("depth.cache.accesses", "cache.tile_access")]),
+    ("energy.color", "colour samples written in the colour-tile cache (on-chip SRAM) and its tag lookups",
+     [("color.bytes_written", "sram.color_byte"), ("color.cache.accesses", "cache.tile_access")]),
     ("energy.hiz", "HiZ traffic (on-chip SRAM)",
      [("hiz.bytes_read", "sram.hiz_byte"), ("hiz.bytes_written", "sram.hiz_byte")]),
-    ("energy.tex", "texture-cache accesses and DRAM line fills",
-     [("tex.cache.accesses", "cache.tex_access"), ("tex.cache.bytes_fetched", "dram.byte")]),
+    ("energy.tex", "texture-cache accesses", [("tex.cache.accesses", "cache.tex_access")]),
+    ("energy.dram", "DRAM traffic of every client (dram.bytes: depth, colour, texture, HiZ)",
+     [("dram.bytes", "dram.byte")]),
 )
 
 
@@ -117,12 +127,22 @@ def docs() -> dict[str, tuple[str, str]]:
     return out
 
 
+def _with_memory_events(stats: dict) -> dict:
+    """The DRAM bytes without the timing and memory model: the texture-cache line fills, the only DRAM
+    traffic counted then."""
+    out = dict(stats)
+    if "dram.bytes" not in stats:
+        out["dram.bytes"] = float(stats.get("tex.cache.bytes_fetched", 0))
+    return out
+
+
 def estimate(stats: dict, table: EnergyTable = DEFAULT, cost_model: str = "robust") -> dict[str, float]:
     """energy.* figures (pJ) from a flat counter dict (Result.flat_stats), with the table's operation
     entry for the cost model the counts were made under ('robust' or 'hardware')."""
     if cost_model not in ("robust", "hardware"):
         raise ConfigError(f"energy: cost_model = {cost_model!r}: expected 'robust' or 'hardware'")
     op = table.entries[f"op.{cost_model}"].pj
+    stats = _with_memory_events(stats)
     out: dict[str, float] = {}
     for name, _what, terms in FIGURES:
         out[name] = float(sum(float(stats.get(c, 0)) * (op if key is None else table.entries[key].pj)

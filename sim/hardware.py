@@ -1,8 +1,8 @@
-"""HardwareConfig: the modelled hardware (units of the timing model, caches, memory), validated on
-construction. Every parameter is declared once, with a unit and a description: the texture cache,
-which the engine reads, in params.def (sim/engine/core/params.def), the timing model's units and
-memory here; the YAML ``hardware:`` section (experiments/config/schema.py) and docs/config.md are
-generated from them.
+"""HardwareConfig: the modelled hardware (units of the timing model, caches, the sample buffers and
+DRAM), validated on construction. Every parameter is declared once, with a unit and a description:
+the texture cache, the depth and colour buffers and DRAM in params.def (sim/engine/core/params.def),
+the timing model's pipeline units here; the YAML ``hardware:`` section (experiments/config/schema.py)
+and docs/config.md are generated from them.
 
 Throughputs are work items per clock in each unit's own currency (triangles, tile tests, sample
 tests, depth tests, quads, texel fetches); latencies are in clocks; FIFO depths in entries.
@@ -67,19 +67,71 @@ class TextureCacheConfig:
                               f"{self.ways} x {self.line_bytes}-byte lines")
 
 
+@_declared_section("depth_buffer")
+class DepthBufferConfig:
+    """The per-sample depth buffer in DRAM behind a depth-tile cache (docs/memory.md). Fields: the
+    ``depth_buffer`` rows of params.def (sim/engine/core/params.def)."""
+
+    def _check_across_fields(self, owner: str) -> None:
+        """A power-of-two line, whole sets, and compression only of the cache's lines."""
+        if self.line_bytes & (self.line_bytes - 1):
+            raise ConfigError(f"{owner}.line_bytes: expected a power of two, got {self.line_bytes}")
+        if self.cache_bytes % (self.line_bytes * (self.cache_ways or 1)):
+            raise ConfigError(f"{owner}.cache_bytes: {self.cache_bytes} is not a whole number of sets of "
+                              f"{self.cache_ways} x {self.line_bytes}-byte lines")
+        if self.compression != "none" and not self.enabled:
+            raise ConfigError(f"{owner}.compression: {self.compression!r} compresses the depth-tile cache's lines, "
+                              f"and {owner}.enabled is false (every sample goes to DRAM uncompressed): set "
+                              "compression 'none' or enable the depth buffer")
+
+
+@_declared_section("color_buffer")
+class ColorBufferConfig:
+    """The per-sample colour (MSAA) buffer in DRAM behind a colour-tile cache, resolved per screen bin
+    (docs/memory.md). Fields: the ``color_buffer`` rows of params.def. Its lines hold the samples of
+    one depth-buffer line (HardwareConfig checks the cache's sets against depth_buffer.line_bytes)."""
+
+    def _check_across_fields(self, owner: str) -> None:
+        pass
+
+
+@_declared_section("dram")
+class DramConfig:
+    """DRAM, shared by every client: depth, colour, texture and HiZ traffic (docs/memory.md,
+    docs/timing.md). Fields: the ``dram`` rows of params.def."""
+
+    def _check_across_fields(self, owner: str) -> None:
+        pass
+
+
 TIMING_GRANULARITIES = ("bin", "visit")
+IDLE_UNITS = ("bypass", "traverse")
 
 
 @dataclass(frozen=True)
 class TimingRecordsConfig:
-    """What one work record of the timing model covers (docs/timing.md)."""
+    """Whether the timing and memory model runs, and what one of its work records covers
+    (docs/timing.md)."""
 
+    enabled: bool = field(default=True, metadata={
+        "doc": "Run the timing and memory model on every render (sim.render(timing=...) and the command "
+               "line's --no-timing override it); off, the timing.*, dram.*, depth.cache.* and color.* "
+               "figures are absent"})
     granularity: str = field(default="visit", metadata={
         "doc": "Timing records: 'bin' (one per triangle and 64-px screen bin) or 'visit' (one per shading "
                "visit: per triangle and tile for tile and laine, per pass for interval and interleave, per "
                "triangle and bin for bruteforce); finer records cost simulator time"})
 
+    idle_units: str = field(default="bypass", metadata={
+        "doc": "A record with no work for a unit: 'bypass' (passes it at once, in order: no latency, no FIFO "
+               "slot, as a visit with no quads sends nothing to the shader) or 'traverse' (passes through "
+               "every unit's latency and FIFO, carrying the triangle's state down the pipe)"})
+
     def validate(self, owner: str) -> None:
+        if self.idle_units not in IDLE_UNITS:
+            raise ConfigError(f"{owner}.idle_units: expected 'bypass' or 'traverse', got {self.idle_units!r}")
+        if not isinstance(self.enabled, bool):
+            raise ConfigError(f"{owner}.enabled: expected a bool, got {self.enabled!r}")
         if self.granularity not in TIMING_GRANULARITIES:
             raise ConfigError(f"{owner}.granularity: expected 'bin' or 'visit', got {self.granularity!r}")
 
@@ -126,16 +178,15 @@ class HardwareConfig:
     texture: UnitConfig = _unit("texture")
     tex_cache: TextureCacheConfig = field(default_factory=TextureCacheConfig, metadata={
         "doc": TextureCacheConfig.section_doc, "section": True})
-    memory_bytes_per_clock: float = field(default=32.0, metadata={
-        "unit": "bytes/clock", "doc": "Memory bandwidth shared by texture misses and depth traffic"})
-    memory_latency_cycles: int = field(default=0, metadata={
-        "unit": "clocks", "doc": "Timing model: clocks from the memory unit accepting a record's traffic to "
-                                 "its completion (texture read latency is tex_cache.miss_latency_cycles)"})
-    memory_fifo_entries: int = field(default=64, metadata={
-        "unit": "entries", "doc": "Timing model: depth of the memory unit's input FIFO"})
+    depth_buffer: DepthBufferConfig = field(default_factory=DepthBufferConfig, metadata={
+        "doc": DepthBufferConfig.section_doc, "section": True})
+    color_buffer: ColorBufferConfig = field(default_factory=ColorBufferConfig, metadata={
+        "doc": ColorBufferConfig.section_doc, "section": True})
+    dram: DramConfig = field(default_factory=DramConfig, metadata={
+        "doc": DramConfig.section_doc, "section": True})
     cores: int = field(default=1, metadata={
         "unit": "pipelines", "doc": "Timing model: parallel pipelines; screen bins are dealt round-robin, "
-                                    "memory bandwidth is split evenly (docs/timing.md)"})
+                                    "DRAM bandwidth is split evenly (docs/timing.md)"})
     timing: TimingRecordsConfig = field(default_factory=TimingRecordsConfig, metadata={
         "doc": TimingRecordsConfig.__doc__, "section": True})
 
@@ -153,11 +204,14 @@ class HardwareConfig:
                 raise ConfigError(f"{owner}: expected a {f.name} section, got {value!r}")
             value.validate(owner)
         check_float("HardwareConfig", "clock_ghz", self.clock_ghz, lo=0.0, lo_open=True, hi=1e3)
-        check_float("HardwareConfig", "memory_bytes_per_clock", self.memory_bytes_per_clock, lo=0.0,
-                    lo_open=True, hi=1e9)
-        check_int("HardwareConfig", "memory_latency_cycles", self.memory_latency_cycles, 0, 1_000_000)
-        check_int("HardwareConfig", "memory_fifo_entries", self.memory_fifo_entries, 1, 1_000_000)
         check_int("HardwareConfig", "cores", self.cores, 1, 4096)
+        # A colour line holds the samples of a depth-buffer line: whole sets of those.
+        c, samples = self.color_buffer, self.depth_buffer.line_bytes // 4
+        line = samples * c.bytes_per_sample
+        if c.cache_bytes % (line * (c.cache_ways or 1)):
+            raise ConfigError(f"HardwareConfig.color_buffer.cache_bytes: {c.cache_bytes} is not a whole number of "
+                              f"sets of {c.cache_ways} x {line}-byte lines ({samples} samples of "
+                              f"{c.bytes_per_sample} bytes: depth_buffer.line_bytes / 4)")
 
     @classmethod
     def from_dict(cls, d: dict | None) -> "HardwareConfig":

@@ -16,7 +16,8 @@ from . import pixel_stats as _pixel_stats
 from .pipeline import PipelineConfig
 from .texturing import texture_inputs
 from .energy import estimate as energy_estimate
-from .timing import estimate as timing_estimate
+from .timing import config as timing_config
+from .timing import derive as timing_derive
 from .timing import docs as timing_docs
 from . import sampling as _sampling
 from .stats import flat_stats, nest
@@ -33,9 +34,9 @@ class Result:
         flat_stats  flat dict: {"raster.samples_tested": ..., "ops.total": ..., "time.wall_s": ...}
         sample_depth, sample_triangle  (H, W, spp) per-sample depth z = 1 - near/w (+inf empty) and
                     winning triangle index (-1 empty), only with render(..., export_samples=True)
-        timing_records  the timing model's work records (sim.timing.RECORD_DTYPE), None with
-                    render(..., timing=False); sim.timing.estimate(result.timing_records, hw) re-times
-                    the same render on other hardware
+        timing_records  the timing model's work records (sim.timing.RECORD_DTYPE), only with
+                    render(..., keep_timing_records=True), else None; sim.timing.estimate(
+                    result.timing_records, hw) re-times the same render on other hardware
         ci95        sampled simulation (PipelineConfig.sample_fraction < 1): {figure: 95% confidence
                     half-width} of every counter and derived figure in flat_stats, which then hold
                     frame estimates; NaN for figures not estimable under sampling (sim.sampling).
@@ -121,35 +122,47 @@ def _scene_alpha(scene, n: int) -> np.ndarray | None:
     return np.ascontiguousarray(a, dtype=np.float32)
 
 
+# One work record (sim.timing.RECORD_DTYPE), and the records the bin stream lets wait per worker.
+_RECORD_BYTES = 144
+_STREAM_BUDGET = 1 << 15
+
+
 def memory_parts(camera: Camera, spp: int, n_triangles: int, config: PipelineConfig, threads: int,
                  export_samples: bool = False, timing: bool = True, period: int = 0,
                  timing_per_visit: bool | None = None, pixel_maps: int = 0,
-                 visit_records: int | None = None) -> dict[str, int]:
+                 visit_records: int | None = None, keep_timing_records: bool = False,
+                 hardware: HardwareConfig | None = None) -> dict[str, int]:
     """Bytes the engine will allocate, by part: {part: bytes}; ``memory_estimate`` is their sum.
     Each part's name says what it grows with (docs/errors.md, tests/test_memory.py).
     ``timing_per_visit`` None: the default ``hardware.timing.granularity``; ``visit_records``: the
-    records that granularity makes (``visit_record_estimate``; None: 16 per (triangle, bin))."""
+    records that granularity makes over the frame (``visit_record_estimate``; None: 16 per (triangle,
+    bin)); they are held only for the bins in flight unless ``keep_timing_records``."""
     if timing_per_visit is None:
         timing_per_visit = TimingRecordsConfig().granularity == "visit"
+    hw = HardwareConfig() if hardware is None else hardware
     b = config.bin_size
     bins_x = -(-camera.width // b)
     bins_y = -(-camera.height // b)
     grid = config.resolved_lens_grid(spp)
+    frame_records = (visit_records if visit_records is not None else n_triangles * 4 * 16) if timing_per_visit \
+        else n_triangles * 4
+    # The bin stream holds at most its budget of records in finished bins waiting for their turn, and
+    # as many in each worker's bin (frame/bin_stream.h, frame/render.cpp kStreamBudget = 2^15).
+    in_flight = min(frame_records, (threads + 1) * _STREAM_BUDGET)
+    lines_per_bin = -(-min(b, camera.width) * min(b, camera.height) * spp * 4 // hw.depth_buffer.line_bytes)
     return {
         "image (width x height)": camera.width * camera.height * 3 * 4 * 2,  # engine buffer + numpy copy
         "bin buffers (threads x bin_size^2 x spp)": threads * b * b * spp * (4 + 12 + 4),
         "triangle setup (triangles)": n_triangles * (224 + 1 + 4),
         "bin lists (triangles, bins)": n_triangles * 4 * 4 + bins_x * bins_y * 32,
         "sample export (width x height x spp)": camera.width * camera.height * spp * 8 * 2 if export_samples else 0,
-        # One 96-byte record per (triangle, bin) visit (about 4 bins per triangle, as for the bin
-        # lists), held per bin, concatenated and copied to numpy: three copies.
-        "timing records (triangles)": n_triangles * 4 * 96 * 3 if timing else 0,
-        # hardware.timing.granularity 'visit': one record per (triangle, tile) visit, at most the
-        # tiles of the triangles' bounds (visit_record_estimate); without the scene, 16 tiles per
-        # (triangle, bin).
-        "timing records per visit (triangles x tiles of their bounds)":
-            (visit_records if visit_records is not None else n_triangles * 4 * 16) * 104 * 3  # a record is 104 bytes
-            if timing and timing_per_visit else 0,
+        # The records in flight in the bin stream (and each worker's open bin); vectors grow by doubling.
+        "timing records in flight (threads)": in_flight * _RECORD_BYTES * 2 if timing else 0,
+        # keep_timing_records: every record of the frame, held and copied to numpy (two copies).
+        "kept timing records (triangles x tiles of their bounds)":
+            frame_records * _RECORD_BYTES * 2 if timing and keep_timing_records else 0,
+        # The memory model's per-bin line state per thread: marks, stored sizes, cache slots.
+        "memory model (threads x lines per bin)": threads * lines_per_bin * 24 if timing else 0,
         "sample index (period^2 x lens cells x time strata)":
             period * period * (grid * grid * config.time_strata + 1 + spp) * 4,
         "per-pixel statistics (width x height x maps)": camera.width * camera.height * pixel_maps * 8 * 2,
@@ -181,11 +194,14 @@ def _segment_buffer_bytes(camera: Camera, n_lines: int, config: PipelineConfig, 
 
 def memory_estimate(camera: Camera, spp: int, n_triangles: int, config: PipelineConfig, threads: int,
                     export_samples: bool = False, timing: bool = True, period: int = 0,
-                    timing_per_visit: bool | None = None, pixel_maps: int = 0, visit_records: int | None = None) -> int:
+                    timing_per_visit: bool | None = None, pixel_maps: int = 0, visit_records: int | None = None,
+                    keep_timing_records: bool = False, hardware: HardwareConfig | None = None) -> int:
     """Bytes the engine will allocate (image, per-thread bin buffers, setup, bin lists, exports,
-    timing records, and with the table's period the (lens cell, time stratum) sample index)."""
+    timing records in flight or kept, the memory model, and with the table's period the (lens cell,
+    time stratum) sample index)."""
     return int(sum(memory_parts(camera, spp, n_triangles, config, threads, export_samples, timing,
-                                period, timing_per_visit, pixel_maps, visit_records).values()))
+                                period, timing_per_visit, pixel_maps, visit_records, keep_timing_records,
+                                hardware).values()))
 
 
 def visit_record_estimate(camera: Camera, v0: np.ndarray, v1: np.ndarray, config: PipelineConfig) -> int:
@@ -254,8 +270,8 @@ def _memory_message(need: int, parts: dict, camera: Camera, spp: int, n: int, co
     return (f"memory: estimated {need / gib:.2f} GiB exceeds PipelineConfig.memory_limit_bytes="
             f"{config.memory_limit_bytes / gib:.2f} GiB (width={camera.width}, height={camera.height}, "
             f"spp={spp}, triangles={n}, threads={threads}); largest: {largest}. Lower what the largest "
-            f"parts grow with (spp, the frame size, pipeline.bin_size or pipeline.threads; export_samples "
-            f"and timing=False where they apply{'; n_lines and pipeline.lines.buffer_size' if spp_is_lines else ''}"
+            f"parts grow with (spp, the frame size, pipeline.bin_size or pipeline.threads; export_samples, "
+            f"keep_timing_records and timing=False where they apply{'; n_lines and pipeline.lines.buffer_size' if spp_is_lines else ''}"
             f"), or raise the limit if the machine has the memory: "
             f"PipelineConfig(memory_limit_bytes={_round_up_gib(need)}) or pipeline.memory_limit_bytes in a config")
 
@@ -314,13 +330,17 @@ def check_combination(config: PipelineConfig, table, lens: str = "disk", *, movi
 
 
 def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *,
-           export_samples: bool = False, hardware: HardwareConfig | None = None, timing: bool = True,
-           query: tuple[int, str] | None = None, pixel_stats=False, progress=None,
-           _trace: tuple[int, int] | None = None, _bins: np.ndarray | None = None) -> Result:
+           export_samples: bool = False, hardware: HardwareConfig | None = None, timing: bool | None = None,
+           keep_timing_records: bool = False, query: tuple[int, str] | None = None, pixel_stats=False,
+           progress=None, _trace: tuple[int, int] | None = None, _bins: np.ndarray | None = None) -> Result:
     """Render ``scene`` through ``camera`` with sample ``table``. Raises ConfigError/SceneInputError
     (ValueErrors naming the field and value) for bad input; KeyboardInterrupt on Ctrl-C.
-    ``hardware`` (default HardwareConfig()) supplies the texture-cache geometry and feeds the timing
-    model (docs/timing.md), whose figures are in ``stats["timing"]``; ``timing=False`` skips it.
+    ``hardware`` (default HardwareConfig()) supplies the caches' geometry and the units of the timing
+    and memory model (docs/timing.md, docs/memory.md), which runs inside the engine as the bins
+    complete: its figures are ``timing.*``, ``dram.*``, ``depth.cache.*``, ``color.*``.
+    ``timing`` (None: ``hardware.timing.enabled``) switches it; off, those figures are absent.
+    ``keep_timing_records=True`` keeps the work records in ``Result.timing_records`` (for
+    ``sim.timing.estimate`` on other hardware; they grow with the frame's visits).
     ``pixel_stats=True`` (or a list of counter names) fills ``Result.pixel_stats`` (sim.pixel_stats).
     ``progress(done_bins, total_bins)`` is called every few milliseconds while the engine runs."""
     if config is None:
@@ -333,6 +353,13 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
         raise ConfigError(f"camera: expected sim.Camera, got {type(camera).__name__}")
     if not isinstance(config, PipelineConfig):
         raise ConfigError(f"config: expected sim.PipelineConfig, got {type(config).__name__}")
+    if timing is None:
+        timing = hardware.timing.enabled
+    if not isinstance(timing, bool) or not isinstance(keep_timing_records, bool):
+        raise ConfigError(f"timing, keep_timing_records: expected bools, got {timing!r}, {keep_timing_records!r}")
+    if keep_timing_records and not timing:
+        raise ConfigError("keep_timing_records: the work records are the timing model's; timing is off "
+                          "(timing=False or hardware.timing.enabled false)")
     if pixel_stats is False or pixel_stats is None:
         map_names, derived_maps = [], []
     else:
@@ -354,10 +381,13 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     with np.errstate(over="ignore", invalid="ignore"):  # overflow is reported just below, by triangle
         v0, v1 = camera.engine_vertices(p0, p1)
     per_visit = hardware.timing.granularity == "visit" and timing and config.sample_fraction == 1
-    parts = memory_parts(camera, spp, p0.shape[0], config, threads, export_samples, timing,
+    sampled = config.sample_fraction < 1
+    timed = timing and not sampled  # the timing model needs the whole frame (sim.sampling)
+    parts = memory_parts(camera, spp, p0.shape[0], config, threads, export_samples, timed,
                          period=samples.shape[0], timing_per_visit=per_visit,
                          pixel_maps=len(map_names) + len(derived_maps),
-                         visit_records=visit_record_estimate(camera, v0, v1, config) if per_visit else None)
+                         visit_records=visit_record_estimate(camera, v0, v1, config) if per_visit else None,
+                         keep_timing_records=keep_timing_records, hardware=hardware)
     need = int(sum(parts.values()))
     if need > config.memory_limit_bytes:
         raise MemoryLimitError(_memory_message(need, parts, camera, spp, p0.shape[0], config, threads))
@@ -375,16 +405,16 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     # lens) or t = 0 (no time). A constant non-zero t still places moving triangles at that t.
     params.table_has_lens = bool(np.any(samples[..., 2:4] != 0))
     params.table_has_time = bool(np.any(samples[..., 4] != 0))
-    params.record_timing = bool(timing)
+    params.record_timing = timed
     params.table_lines = is_lines
     params.timing_per_visit = hardware.timing.granularity == "visit"
-    sampled = config.sample_fraction < 1
-    if sampled:
-        if query is not None:
-            raise ConfigError(f"PipelineConfig.sample_fraction: {config.sample_fraction!r}: an occlusion query "
-                              "stops at the frame's first visible sample and is not estimable from sampled bins; "
-                              "use sample_fraction=1")
-        params.record_timing = False  # the timing model needs the whole frame (sim.sampling)
+    if sampled and query is not None:
+        raise ConfigError(f"PipelineConfig.sample_fraction: {config.sample_fraction!r}: an occlusion query "
+                          "stops at the frame's first visible sample and is not estimable from sampled bins; "
+                          "use sample_fraction=1")
+    if sampled and keep_timing_records:
+        raise ConfigError(f"keep_timing_records: PipelineConfig.sample_fraction={config.sample_fraction!r} renders "
+                          "sampled bins only; the timing model needs the whole frame")
     if getattr(table, "n_lens", 0):
         lens_index = np.ascontiguousarray(table.lens_index, dtype=np.int32)
         lens_uv = np.ascontiguousarray(table.lens_positions(camera.lens), dtype=np.float32)
@@ -408,7 +438,9 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
         out = _core.render(params, v0, v1, col32, samples_in, lens_index, lens_uv, export_samples,
                            uvs=uvs, tex_slots=slots, textures=textures, alpha=alpha, pixel_stats=map_names,
                            trace_pixel=_trace, progress=progress,
-                           bins=None if _bins is None else np.ascontiguousarray(_bins, dtype=np.int32))
+                           bins=None if _bins is None else np.ascontiguousarray(_bins, dtype=np.int32),
+                           timing=timing_config(hardware) if timed else None,
+                           keep_timing_records=keep_timing_records and timed)
     except ValueError as e:  # invalid_argument from the engine: name it as a config error
         msg = str(e)
         raise ConfigError(f"PipelineConfig.{msg}" if msg.startswith("sample_fraction:") else msg) from None
@@ -428,8 +460,8 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
         flat.update(lod_report.stats if lod_report else {})
         flat = dict(sorted(flat.items()))
     records = out.get("timing_records")
-    if records is not None:
-        flat = dict(sorted({**flat, **timing_estimate(records, hardware)}.items()))
+    if "timing" in out:  # the timing and memory model's raw figures, and the derived ones
+        flat = dict(sorted({**flat, **timing_derive(out["timing"]), **out["memory"]}.items()))
     flat = dict(sorted({**flat, **energy_estimate(flat, cost_model=config.cost_model)}.items()))  # sim.energy
     desc = {"camera": camera.describe(), "pipeline": config.describe(),
             "table": table.describe() if hasattr(table, "describe") else {}, "lens_grid": grid,

@@ -3,11 +3,11 @@
 ``PipelineConfig(sample_fraction=f, sample_seed=s)`` with f < 1: the engine sorts the K screen bins that
 hold triangles by their brute-force work (the pixels of their triangles' bounds in the bin times spp),
 cuts them into H = round(f * K) // 2 strata of similar work and draws 2 bins per stratum
-(traversal/bin_sample.h, seeded with s). Only those bins are traversed; bins without triangles do no
+(sampled/bin_sample.h, seeded with s). Only those bins are traversed; bins without triangles do no
 traversal work (their counters are exactly 0). Bins heavier than a stratum's share of the work form a
 take-all stratum (all traversed, no variance).
 
-Per-triangle work runs only where it is needed (traversal/sampled_setup.h): a bounds pre-pass over
+Per-triangle work runs only where it is needed (sampled/sampled_setup.h): a bounds pre-pass over
 every triangle (setup's own screen bounds, nothing charged) gives each bin's work and the frame totals
 of the auxiliaries below; full triangle setup and binning run only for the triangles whose bounds
 reach a drawn bin. setup.triangles and the setup of the triangles culled behind the near plane or off
@@ -16,7 +16,7 @@ of the top-left corner of its bounds, where traversals charge their per-triangle
 estimated with that bin's counters.
 
 Every counter a bin owns is estimated by the stratified regression (GREG) estimator on four auxiliary
-variables whose frame totals the engine knows before traversing any bin (traversal/bin_covariates.h):
+variables whose frame totals the engine knows before traversing any bin (sampled/bin_covariates.h):
 brute-force work x1, the triangles' lens-centre coverage x2, their lens-swept footprint x3 and their
 lens-centre perimeter x4 spread over their bounds (edge) (the bins' own x2 ... x4 are computed for the
 drawn bins only):
@@ -128,7 +128,7 @@ def check_fraction(fraction, owner: str = "PipelineConfig") -> None:
 
 
 def choose_bins(work, fraction: float, seed: int, aux=None) -> BinSample:
-    """The engine's draw (traversal/bin_sample.h) for per-bin brute-force work ``work``: the bins
+    """The engine's draw (sampled/bin_sample.h) for per-bin brute-force work ``work``: the bins
     with work sorted by it, cut into round(fraction * K) // 2 strata, 2 bins drawn per stratum.
     ConfigError when fewer than 2 strata remain (no interval can be given)."""
     check_fraction(fraction)

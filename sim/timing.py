@@ -1,13 +1,17 @@
 """The cycle-approximate timing model (docs/timing.md), on the engine's work records or on synthetic
-ones. The model itself is C++ (sim/engine/timing/timing.cpp); this module maps a HardwareConfig
-onto it, declares the derived timing figures and documents every figure.
+ones. The model itself is C++ (sim/engine/timing/timing.cpp): ``sim.render`` runs it inside the
+engine on the records as the bins complete; this module maps a HardwareConfig onto it
+(``config``), re-times kept records (``estimate``), declares the derived timing figures and
+documents every figure.
 
     recs = sim.timing.records(3)                 # zeroed structured array, RECORD_DTYPE
     recs["sample_tests"] = [64, 128, 0]
     sim.timing.estimate(recs, sim.HardwareConfig())["timing.cycles"]
 
-``sim.render`` runs the same model on the records of the render (``Result.timing_records``), so a
-hardware sweep can re-run ``estimate`` on one render's records without rendering again.
+``sim.render(..., keep_timing_records=True)`` keeps the render's records (``Result.timing_records``),
+so a hardware sweep can re-run ``estimate`` on one render's records without rendering again (the
+unit throughputs, latencies, FIFOs, cores and DRAM bandwidth change; the caches' misses and the DRAM
+bytes are those of the render's own caches).
 """
 from __future__ import annotations
 
@@ -49,34 +53,52 @@ def _as_records(recs) -> np.ndarray:
     return out
 
 
-def _unit_params(hw: HardwareConfig) -> tuple[list[float], list[float], list[int]]:
+def config(hw: HardwareConfig):
+    """The engine's timing configuration (``_core.TimingConfig``) of a HardwareConfig: per unit its
+    throughput, latency and FIFO depth (the DRAM unit's from ``hardware.dram``), the texture hit and
+    miss latencies, the depth-line fill latency (``dram.latency_cycles``), the cores and whether a record
+    bypasses the units it has no work for (``timing.idle_units``)."""
     tp, lat, fifo = [], [], []
     for name in UNITS:
-        if name == "memory":
-            tp.append(float(hw.memory_bytes_per_clock))
-            lat.append(float(hw.memory_latency_cycles))
-            fifo.append(int(hw.memory_fifo_entries))
+        if name == "dram":
+            tp.append(float(hw.dram.bytes_per_clock))
+            lat.append(0.0)  # the DRAM unit ends the pipe; its latency is the clients' fill latency
+            fifo.append(int(hw.dram.fifo_entries))
         else:
             u = getattr(hw, name)
             tp.append(float(u.throughput))
             lat.append(float(u.latency_cycles))
             fifo.append(int(u.fifo_entries))
-    return tp, lat, fifo
+    try:
+        return _core.TimingConfig(tp, lat, fifo, float(hw.tex_cache.hit_latency_cycles),
+                                  float(hw.tex_cache.miss_latency_cycles), float(hw.dram.latency_cycles),
+                                  int(hw.cores), hw.timing.idle_units == "bypass")
+    except ValueError as e:
+        raise ConfigError(f"hardware: {e}") from None
 
 
 def estimate(recs, hardware: HardwareConfig | None = None) -> dict:
     """Run the timing model on work records; flat {'timing.cycles': ..., 'timing.<unit>.busy_cycles':
-    ..., 'timing.bottleneck': name, ...} with the derived figures (docs: ``docs()``)."""
+    ..., 'timing.bottleneck': name, 'dram.bytes': ..., ...} with the derived figures (docs: ``docs()``)."""
     hw = HardwareConfig() if hardware is None else hardware
     if not isinstance(hw, HardwareConfig):
         raise ConfigError(f"hardware: expected sim.HardwareConfig, got {type(hw).__name__}")
-    tp, lat, fifo = _unit_params(hw)
-    try:
-        raw = _core.timing_estimate(_as_records(recs), tp, lat, fifo, float(hw.tex_cache.hit_latency_cycles),
-                                    float(hw.tex_cache.miss_latency_cycles), int(hw.cores))
-    except ValueError as e:
-        raise ConfigError(f"hardware: {e}") from None
+    raw = _core.timing_estimate(_as_records(recs), config(hw))
     return derive(raw)
+
+
+def reference(recs, hardware: HardwareConfig | None = None) -> dict:
+    """The timing model's cycle-stepped reference on the same records (docs/timing.md, "The model's own
+    error"): the same units simulated clock by clock on per-quad items with real FIFO occupancy. Flat
+    {'timing.cycles', 'timing.items', 'timing.steps', 'timing.<unit>.busy_cycles', ...,
+    'timing.bottleneck'}; it costs simulator time in proportion to the frame's clocks, so it is meant
+    for small frames."""
+    hw = HardwareConfig() if hardware is None else hardware
+    if not isinstance(hw, HardwareConfig):
+        raise ConfigError(f"hardware: expected sim.HardwareConfig, got {type(hw).__name__}")
+    raw = _core.timing_reference(_as_records(recs), config(hw))
+    raw["timing.bottleneck"] = _bottleneck(raw)
+    return raw
 
 
 def _bottleneck(s: dict) -> str:
@@ -119,7 +141,7 @@ def derive(raw: dict) -> dict:
 
 
 def docs() -> dict[str, tuple[str, str]]:
-    """{name: (unit, description)} of every timing figure, raw and derived."""
+    """{name: (unit, description)} of every figure of the timing and memory model, raw and derived."""
     d = dict(_core.timing_docs())
     d.update(derived_docs(DERIVED))
     return d

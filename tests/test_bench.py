@@ -61,3 +61,18 @@ def test_bench_report_points(tmp_path):
     assert len(got["rows"]) == len(bench_report_points.POINTS)
     if base:
         assert all(r["same"] for r in got["rows"]), [r["point"] for r in got["rows"] if not r["same"]]
+
+
+def test_bench_timing(tmp_path):
+    """experiments/bench/bench_timing.py: the timing and memory model's CPU time over the untimed
+    render, the peak memory of a timed 1080p frame, and the renders the memory guard used to refuse
+    (reports/bench/bench_timing.md). Checks no time: the sections, and that none is refused."""
+    from experiments.bench import bench_timing
+
+    quick = os.environ.get("RAST5D_BENCH_QUICK", "") not in ("", "0")
+    out = tmp_path if quick else bench_core.REPO / "reports" / "bench"
+    got = bench_timing.run(quick=quick, out=out)
+    page = got["page"].read_text()
+    for section in ("## CPU time, timed over untimed", "## Peak memory of a frame", "## Renders the memory guard"):
+        assert section in page
+    assert all(r["estimate"] <= r["limit"] for r in got["refusals"])

@@ -1,6 +1,6 @@
 """Dimension specialisation: the 2D/3D/4D kernels chosen in setup hit exactly (bitwise) the samples the general 5D kernel hits, triangles are classified as documented, and tables without a lens or time dimension classify triangles down.
 
-Exactness is what sample_test.h promises: with a zero shear coefficient or a static vertex the
+Exactness is what sampletest/kernels.h promises: with a zero shear coefficient or a static vertex the
 skipped steps are IEEE identities, so covered/hit/depth/w_hit must be bit-identical between
 ``probe(force_general=False)`` and ``probe(force_general=True)`` (no tolerance).
 """

@@ -43,10 +43,13 @@ def test_energy_is_linear_in_the_counted_events(result):
     op = DEFAULT.entries["op.robust"].pj
     ops = sum(st[c] for c in ("ops.setup", "ops.tile", "ops.sample_region", "ops.sample_inside", "ops.interp",
                               "ops.zhat"))
-    mem = ((st["depth.bytes_read"] + st["depth.bytes_written"]) * 2.5 + (st["hiz.bytes_read"] + st["hiz.bytes_written"])
-           * 1.25 + st["tex.cache.accesses"] * 15.0 + st["tex.cache.bytes_fetched"] * 243.75)
+    mem = ((st["depth.bytes_read"] + st["depth.bytes_written"]) * 2.5 + st["depth.cache.accesses"] * 20.0
+           + st["color.bytes_written"] * 2.5 + st["color.cache.accesses"] * 20.0
+           + (st["hiz.bytes_read"] + st["hiz.bytes_written"]) * 1.25 + st["tex.cache.accesses"] * 15.0
+           + st["dram.bytes"] * 243.75)
     assert e1["energy.frame"] == pytest.approx(ops * op + mem, rel=1e-12)
     assert st["tex.cache.accesses"] > 0 and st["hiz.bytes_read"] > 0 and st["depth.bytes_read"] > 0
+    assert st["dram.bytes"] > st["tex.cache.bytes_fetched"] > 0 and st["color.bytes_written"] > 0
     # render adds the default table's figures
     for k in e1:
         assert result.flat_stats[k] == pytest.approx(e1[k], rel=1e-12), k
@@ -61,8 +64,10 @@ def test_tables_are_pluggable_and_validated(tmp_path):
     path.write_text(json.dumps(d))
     t = EnergyTable.load(path)
     st = {"tex.cache.bytes_fetched": 1000, "tex.cache.accesses": 10}
-    assert estimate(st, t)["energy.tex"] == 150.0
-    assert estimate(st)["energy.tex"] == 150.0 + 243750.0
+    assert estimate(st, t)["energy.tex"] == 150.0 and estimate(st, t)["energy.dram"] == 0.0
+    # without the memory model's dram.bytes, the texture-cache line fills are the DRAM traffic
+    assert estimate(st)["energy.tex"] == 150.0 and estimate(st)["energy.dram"] == 243750.0
+    assert estimate({**st, "dram.bytes": 2000})["energy.dram"] == 487500.0
     bad = DEFAULT.to_dict()
     del bad["entries"]["op.robust"]
     with pytest.raises(sim.ConfigError, match="op.robust"):

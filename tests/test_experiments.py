@@ -369,7 +369,7 @@ def test_retime_point_is_timing_estimate_on_one_stored_render(tmp_path, store):
     import sim
 
     text = (BASE.replace("quad}", "quad, params: {translation_t1: [0.2, 0, 0]}}") + "point: {kind: retime}\n"
-            "sweep:\n  point.hardware: [{}, {memory_bytes_per_clock: 4}, {sample_test: {throughput: 1}}]\n")
+            "sweep:\n  point.hardware: [{}, {dram: {bytes_per_clock: 4}}, {sample_test: {throughput: 1}}]\n")
     df = runner.run_sweep(xc.load_config(write(tmp_path, "r.yaml", text)), workers=2, progress=False)
     assert (df["status"] == "ok").all(), df["error"].tolist()
     assert len(list((store / "records").glob("*.npz"))) == 1  # one render for the three variants
@@ -378,8 +378,8 @@ def test_retime_point_is_timing_estimate_on_one_stored_render(tmp_path, store):
     cam = sim.Camera(width=24, height=24, fov_y_deg=hint["fov_y_deg"], focus_distance=hint["focus_distance"],
                      coc_px=4)
     res = sim.render(scene, cam, sim.SampleTable.create("stratified", spp=4, seed=1),
-                     sim.PipelineConfig(algorithm="tile"))
-    variants = [sim.HardwareConfig(), sim.HardwareConfig(memory_bytes_per_clock=4.0),
+                     sim.PipelineConfig(algorithm="tile"), keep_timing_records=True)
+    variants = [sim.HardwareConfig(), sim.HardwareConfig(dram={"bytes_per_clock": 4.0}),
                 sim.HardwareConfig.from_dict({"sample_test": {"throughput": 1.0}})]
     expected = [sim.timing.estimate(res.timing_records, hw)["timing.cycles"] for hw in variants]
     assert df["timing.cycles"].tolist() == pytest.approx(expected)

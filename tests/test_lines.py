@@ -212,7 +212,8 @@ def test_composite_is_timed():
     cam = sim.Camera(width=80, height=72, focus_distance=5.0, coc_px=6.0, fov_y_deg=30.0)
     hw = sim.HardwareConfig(depth={"throughput": 0.25})
     r = sim.render(_layered_scene(), cam, sim.SampleTable.lines(n_lines=8, seed=7),
-                   sim.PipelineConfig(algorithm="lines", threads=2, bin_size=32), hardware=hw)
+                   sim.PipelineConfig(algorithm="lines", threads=2, bin_size=32), hardware=hw,
+                   keep_timing_records=True)
     s, recs = r.flat_stats, r.timing_records
     assert s["lines.composite_steps"] > 0
     assert recs["depth_tests"].sum() == s["lines.segments"] + s["lines.composite_steps"]
@@ -327,7 +328,7 @@ def test_segment_texture_fetches_go_through_the_shading_model(texels, levels):
     _, _, _, scene = _textured_square(texels=texels)
     table = sim.SampleTable.lines(n_lines=8, seed=3)
     cfg = sim.PipelineConfig(algorithm="lines", threads=1, texture_count=1, shading="per_sample")
-    r = sim.render(scene, cam, table, cfg)
+    r = sim.render(scene, cam, table, cfg, keep_timing_records=True)
     s, recs = r.flat_stats, r.timing_records
     assert s["shade.lanes_live"] == s["lines.segments"] - s["lines.rejected_occluded"] > 0
     assert s["shade.invocations"] == 4 * s["shade.quad_requests"] == s["shade.lanes_live"] + s["shade.lanes_helper"]
@@ -338,7 +339,8 @@ def test_segment_texture_fetches_go_through_the_shading_model(texels, levels):
     assert recs["quads"].sum() == s["shade.quad_requests"]
     assert recs["texel_fetches"].sum() == s["tex.fetches"]
     assert recs["tex_misses"].sum() == s["tex.cache.misses"]
-    visit = sim.render(scene, cam, table, cfg, hardware=sim.HardwareConfig(timing={"granularity": "visit"}))
+    visit = sim.render(scene, cam, table, cfg, hardware=sim.HardwareConfig(timing={"granularity": "visit"}),
+                       keep_timing_records=True)
     assert visit.timing_records["tex_misses"].sum() == s["tex.cache.misses"]
     assert visit.timing_records["texel_fetches"].sum() == s["tex.fetches"]
     none = sim.render(scene, cam, table, cfg.replace(shading="none"), timing=False)

@@ -65,18 +65,25 @@ def test_choice_registries():
             assert list(s.choices) == params.choices(s.registry)
 
 
+SECTIONS = {"tex_cache": sim.TextureCacheConfig, "depth_buffer": sim.DepthBufferConfig,
+            "color_buffer": sim.ColorBufferConfig, "dram": sim.DramConfig}
+
+
 def test_hardware_rows_match_hardware_config():
-    """The texture-cache rows are sim.TextureCacheConfig's fields (names, defaults, units, docs) and
-    are set from sim.HardwareConfig by their nested names, so their engine defaults are its."""
+    """The hardware rows of params.def (texture cache, depth and colour buffers, DRAM) are the fields
+    of their sim.HardwareConfig sections (names, defaults, units, docs) and are set from
+    sim.HardwareConfig by their nested names, so their engine defaults are its."""
     hw = sim.HardwareConfig().describe()
-    (group,) = [s for s in params.layer("hardware") if s.kind == "group"]
-    assert group.name == "tex_cache"
-    assert [f.name for f in dataclasses.fields(sim.TextureCacheConfig)] == [m.key for m in group.members]
-    docs = sim.HardwareConfig.field_docs()["tex_cache"]
-    assert docs["doc"] == group.doc
-    for m in group.members:
-        assert hw["tex_cache"][m.key] == m.default, m.name
-        assert docs["fields"][m.key] == {"default": m.default, "unit": m.unit, "doc": m.doc}, m.name
+    groups = {s.name: s for s in params.layer("hardware") if s.kind == "group"}
+    assert set(groups) == set(SECTIONS)
+    for name, group in groups.items():
+        assert [f.name for f in dataclasses.fields(SECTIONS[name])] == [m.key for m in group.members]
+        docs = sim.HardwareConfig.field_docs()[name]
+        assert docs["doc"] == group.doc
+        for m in group.members:
+            default = m.default
+            assert hw[name][m.key] == default, m.name
+            assert docs["fields"][m.key] == {"default": default, "unit": m.unit, "doc": m.doc}, m.name
     with pytest.raises(sim.ConfigError, match=r"HardwareConfig.tex_cache.count: expected an integer in 1..1024"):
         sim.HardwareConfig(tex_cache={"count": 0})
     with pytest.raises(sim.ConfigError, match=r"tex_cache.line_bytes: expected a power of two"):

@@ -1,4 +1,4 @@
-"""The motion tile tests in pipeline.precision.tile (tiletest/precision_5d.h; docs/precision.md): the time
+"""The motion tile tests in pipeline.precision.tile (intervals/precision_5d.h; docs/precision.md): the time
 intervals t̂, the 5D lens sets and the H5 cells of a moving triangle computed in float32 or fixed point stay
 conservative against the independent float64 ray caster (no sample the triangle covers lies outside a tile's
 (lens, time) region in the format) on moving hard cases and random moving triangles at several bit widths;

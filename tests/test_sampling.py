@@ -1,4 +1,4 @@
-"""Sampled simulation (sim/sampling.py, traversal/bin_sample.h, PipelineConfig.sample_fraction): the
+"""Sampled simulation (sim/sampling.py, sampled/bin_sample.h, PipelineConfig.sample_fraction): the
 engine renders exactly the chosen bins and reports their own counters; the draw is stratified by
 brute-force work; the stratified estimator's 95% intervals cover the whole-frame value at the stated
 rate over many seeds; figures that need the whole frame are NaN; bad fractions are errors naming
@@ -232,7 +232,7 @@ def _hard_scene(moving: bool):
 @pytest.mark.parametrize("moving, op_count, backface", [(False, "documented", True), (True, "documented", False),
                                                         (True, "exact", True)])
 def test_every_bin_listed_equals_the_whole_frame_on_every_setup_path(moving, op_count, backface):
-    """Setup restricted to the drawn bins after a bounds pre-pass (traversal/sampled_setup.h): with every
+    """Setup restricted to the drawn bins after a bounds pre-pass (sampled/sampled_setup.h): with every
     bin listed, the counters and the image equal the whole frame's, on triangles culled behind the near
     plane, off screen, degenerate and back-facing, near-clipped, moving and crossing the near plane
     while moving; a sampled render's setup rows are its home bins' share (setup.triangles exact)."""
@@ -337,7 +337,7 @@ def test_an_auxiliary_with_zero_total_leaves_the_fit_and_the_degrees_of_freedom(
 
 @pytest.mark.parametrize("moving", [False, True])
 def test_auxiliary_totals_are_the_sums_over_every_bin(moving):
-    """The pre-pass sums each triangle's auxiliaries over the union of its bins (traversal/sampled_setup.h);
+    """The pre-pass sums each triangle's auxiliaries over the union of its bins (sampled/sampled_setup.h);
     the drawn bins' values are computed per bin (shares of the bounds, areas clipped to the bin). With
     every bin listed, the per-bin values (coverage, footprint, edge) add up to the pre-pass's totals,
     on triangles larger than a bin, moving, near-clipped and culled."""

@@ -191,6 +191,8 @@ def timing_needed(config: RenderConfig) -> bool:
     (``outputs.page``) whose outputs do not read it (reads_timing): with records per shading visit the
     model can cost as much as the render, and those pages do not read it. Such points hash apart
     (config_hash), so a row without timing figures never serves a config that reads them."""
+    if config.point.kind == "render" and not config.hardware_config().timing.enabled:
+        return False  # switched off (hardware.timing.enabled false, the command line's --no-timing)
     if config.point.kind != "render" or not config.outputs.page:
         return True
     return reads_timing(config.outputs)

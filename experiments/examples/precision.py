@@ -505,7 +505,7 @@ def _probe_5d(ref, cam, v0, v1, tiles, pts, prec):
 
 def rows_5d(V, seed=7):
     """The render's motion tile tests (t̂ and 5D lens sets per time sub-interval, H5 cells; tile with
-    motion_test intervals, time_splits 4, a 4x4 lens grid; sim._core.precision_probe_5d, tiletest/precision_5d.h)
+    motion_test intervals, time_splits 4, a 4x4 lens grid; sim._core.precision_probe_5d, intervals/precision_5d.h)
     on moving triangles at viewport V, per class (3D: in focus, 5D: blurred), in float32 and fixed point at 2, 4
     and 8 fraction bits: N_POINTS_5D samples per triangle (half aimed at it at their lens point and time), each
     asked against the 2x2 tile holding it; samples the float64 ray caster hits that the format's region
@@ -787,7 +787,7 @@ def markdown(data):
            "so the edge set-up and the edge functions are exact on the snapped inputs) instantiating the 2D tile "
            "test (`tiletest/edges_2d.h`) and the sample test (`sampletest/precision.h`), and the 4D tile test's "
            "and motion tile tests' format forms with running error bounds (`tiletest/precision_4d.h`, "
-           "`tiletest/precision_5d.h`). cudaraster (Laine & "
+           "`intervals/precision_5d.h`). cudaraster (Laine & "
            "Karras 2011) snaps to 4 sub-pixel bits; 8 is shown beside it. Total bits = 1 + int_bits + 2 frac_bits.",
            "",
            "## The choice in a render",
@@ -808,7 +808,7 @@ def markdown(data):
            "bounds, ẑ) in float32 or fixed point is conservative by construction: its inputs are the lens "
            "vertices (snapped in fixed point, within the widening), every value carries a bound of its error "
            "and every decision moves inward by it; so are the motion tile tests (t̂, 5D lens sets, H5: "
-           "`tiletest/precision_5d.h`), whose homogeneous inputs carry their rounding. The 2D float32 tile test "
+           "`intervals/precision_5d.h`), whose homogeneous inputs carry their rounding. The 2D float32 tile test "
            "gets no extra margin and may lose samples (the float32 rows below). Values reaching 2^int_bits are "
            "counted (`precision.sample_overflows`, `precision.tile_overflows`, `precision.tile4d_overflows`, "
            "`precision.tile5d_overflows`); the render keeps the unwrapped decision, "
@@ -935,7 +935,7 @@ def markdown(data):
             "",
             "## Motion tile tests (t̂, 5D lens sets, H5): fewest bits per viewport",
             "",
-            "The render's motion tile tests in the format (`tiletest/precision_5d.h`, `sim._core.precision_probe_5d`): "
+            "The render's motion tile tests in the format (`intervals/precision_5d.h`, `sim._core.precision_probe_5d`): "
             "`tile` with `motion_test: intervals`, 4 time sub-intervals, H5 on, a 4x4 lens grid; per sub-interval the "
             "time interval t̂ (002 §2, intervals/time_interval.h), the 5D lens sets (h_i lines over the six end "
             "vertices) and the H5 cells (001's H_j lines extended to time). Workload per viewport: every hard case "

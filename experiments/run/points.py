@@ -69,8 +69,11 @@ def _rendered(config, row: dict, threads, options: dict | None = None, timing: b
     scene, camera, table, pipeline = _build(config, row, threads)
     # Sweep points of pages that never read timing skip the model (timing_needed); a render from the
     # command line (`rast5d render`) asks for every figure with timing=True.
-    result = sim.render(scene, camera, table, pipeline, hardware=config.hardware_config(),
-                        timing=timing_needed(config) if timing is None else timing, **(options or {}))
+    timing = timing_needed(config) if timing is None else timing
+    opts = dict(options or {})
+    if opts.get("keep_timing_records") and not timing:
+        opts.pop("keep_timing_records")
+    result = sim.render(scene, camera, table, pipeline, hardware=config.hardware_config(), timing=timing, **opts)
     row["resolved.lens_grid"] = result.config.get("lens_grid")
     row.update(result.flat_stats)
     if result.ci95 is not None:  # sampled simulation: 95% half-widths beside the estimates
@@ -135,7 +138,7 @@ def stored_render(config: RenderConfig, threads: int | None = None):
         return cached
     stats: dict = {}
     with tracking_reads() as reads:
-        result = _rendered(base, stats, threads)
+        result = _rendered(base, stats, threads, {"keep_timing_records": True}, timing=True)
     stats["inputs.files"] = json.dumps(input_digests(reads))
     store_records(h, result.timing_records, stats)
     return result.timing_records, stats
@@ -207,6 +210,8 @@ def run_point(config_json: str, image_path: str | None = None, threads: int | No
     t0 = time.perf_counter()
     result = None
     options = picture_options(pictures) if config.point.kind == "render" else None
+    if records_hash is not None and config.point.kind == "render":  # the retime points re-time its records
+        options = {**(options or {}), "keep_timing_records": True}
     with tracking_reads() as reads:
         try:
             try:

@@ -13,6 +13,8 @@
 #include <string>
 
 #include "core/counters.h"
+#include "memory/sample_buffers.h"
+#include "timing/timing.h"
 #include "core/sample_table.h"
 
 namespace rast5d::bindings {
@@ -107,6 +109,9 @@ inline py::dict counters_to_dict(const Counters& c) {
 void register_params(py::module_& m);        // params.cpp: RenderParams, param_specs, choices
 void register_render(py::module_& m);        // render.cpp: render, sample-table buckets, registries
 void register_timing(py::module_& m);        // timing.cpp: timing records and the timing model
+// The raw figures of the timing model and of the memory model (timing.cpp).
+py::dict timing_to_dict(const TimingResult& r);
+py::dict memory_to_dict(const memory::MemoryTotals& m, bool depth, bool color, std::uint64_t color_bytes_written);
 void register_conservative(py::module_& m);  // conservative.cpp: conservative rasterization mode
 void register_selftest(py::module_& m);      // selftest.cpp: probes and unit checks for the tests
 void register_gpu(py::module_& m);           // gpu.cpp: the conventional-GPU geometry shader probe

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "conservative/conservative.h"
-#include "traversal/render.h"
+#include "frame/render.h"
 
 namespace rast5d::bindings {
 

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "gpu/geometry_shader.h"
+#include "setup/setup.h"
 
 namespace rast5d::bindings {
 

@@ -14,7 +14,7 @@
 #include <type_traits>
 
 #include "core/params.h"
-#include "traversal/render.h"
+#include "frame/render.h"
 
 namespace rast5d::bindings {
 

@@ -12,9 +12,9 @@
 
 #include "backend/shading.h"
 #include "timing/timing.h"
-#include "traversal/bin_covariates.h"
-#include "traversal/bin_sample.h"
-#include "traversal/render.h"
+#include "frame/render.h"
+#include "sampled/bin_covariates.h"
+#include "sampled/bin_sample.h"
 
 namespace rast5d::bindings {
 
@@ -45,7 +45,8 @@ void register_render(py::module_& m) {
          const IArr& lens_index, const FArr& lens_uv, bool export_samples, std::optional<FArr> uvs,
          std::optional<IArr> tex_slots, std::vector<FArr> textures, std::optional<IArr> bins,
          std::optional<FArr> alpha, std::vector<std::string> pixel_stats,
-         std::optional<std::pair<int, int>> trace_pixel, std::optional<py::function> progress) {
+         std::optional<std::pair<int, int>> trace_pixel, std::optional<py::function> progress,
+         std::optional<TimingConfig> timing, bool keep_timing_records) {
         require_shape(v0, {-1, 3, 3}, "v0");
         const py::ssize_t n = v0.shape(0);
         require_shape(v1, {n, 3, 3}, "v1");
@@ -101,7 +102,11 @@ void register_render(py::module_& m) {
         }
         // Per-pixel statistics: the named counters' maps (core/pixel_stats.h).
         PixelStats pstats;
-        RenderObservers obs;
+        RenderOptions obs;
+        obs.export_samples = export_samples;
+        obs.bins = bin_list ? &*bin_list : nullptr;
+        obs.timing = timing ? &*timing : nullptr;
+        obs.keep_timing_records = keep_timing_records;
         if (!pixel_stats.empty() || trace_pixel) {
           std::vector<int> ids;
           for (const auto& name : pixel_stats) {
@@ -147,7 +152,7 @@ void register_render(py::module_& m) {
                 }
                 return false;
               },
-              export_samples, bin_list ? &*bin_list : nullptr, obs);
+              obs);
         }
         if (pending) throw *pending;
         py::array_t<float> image({p.height, p.width, 3});
@@ -155,23 +160,27 @@ void register_render(py::module_& m) {
         py::dict out;
         out["image"] = image;
         out["counters"] = counters_to_dict(res.counters);
-        if (!res.bin_work.empty()) {  // a bin list or sampled simulation
-          const auto n_rows = static_cast<py::ssize_t>(res.sampled_bins.size());
+        if (!res.sampled.empty()) {  // a bin list or sampled simulation
+          const SampledBins& sb = res.sampled;
+          const auto n_rows = static_cast<py::ssize_t>(sb.bins.size());
           py::array_t<std::uint64_t> bc({n_rows, static_cast<py::ssize_t>(kNumCounters)});
-          std::copy(res.bin_counters.begin(), res.bin_counters.end(), bc.mutable_data());
+          std::copy(sb.bin_counters.begin(), sb.bin_counters.end(), bc.mutable_data());
           out["bin_counters"] = bc;  // (len(bins), counters) in counter_docs() order
-          out["bins"] = py::array_t<int>(n_rows, res.sampled_bins.data());
-          out["bin_stratum"] = py::array_t<int>(static_cast<py::ssize_t>(res.sampled_stratum.size()),
-                                                res.sampled_stratum.data());
-          out["strata_sizes"] = py::array_t<int>(static_cast<py::ssize_t>(res.strata_sizes.size()),
-                                                 res.strata_sizes.data());
-          out["bin_work"] = py::array_t<std::int64_t>(static_cast<py::ssize_t>(res.bin_work.size()),
-                                                      res.bin_work.data());
-          out["bin_aux"] = py::array_t<double>({static_cast<py::ssize_t>(res.bin_work.size()), py::ssize_t{kBinAux}},
-                                               res.bin_aux.data());  // (bins, [coverage, footprint, edge])
-          out["bin_aux_total"] = py::array_t<double>(kBinAux, res.bin_aux_total.data());
+          out["bins"] = py::array_t<int>(n_rows, sb.bins.data());
+          out["bin_stratum"] = py::array_t<int>(static_cast<py::ssize_t>(sb.stratum.size()), sb.stratum.data());
+          out["strata_sizes"] = py::array_t<int>(static_cast<py::ssize_t>(sb.strata_sizes.size()), sb.strata_sizes.data());
+          out["bin_work"] = py::array_t<std::int64_t>(static_cast<py::ssize_t>(sb.bin_work.size()), sb.bin_work.data());
+          out["bin_aux"] = py::array_t<double>({static_cast<py::ssize_t>(sb.bin_work.size()), py::ssize_t{kBinAux}},
+                                               sb.bin_aux.data());  // (bins, [coverage, footprint, edge])
+          out["bin_aux_total"] = py::array_t<double>(kBinAux, sb.bin_aux_total.data());
         }
-        if (p.record_timing) {
+        if (res.timed) {
+          out["timing"] = timing_to_dict(res.timing);
+          out["memory"] = memory_to_dict(res.memory, res.memory_depth, res.memory_color,
+                                         res.counters[Counter::depth_passes] *
+                                             static_cast<std::uint64_t>(p.color_buffer_bytes_per_sample));
+        }
+        if (keep_timing_records && res.timed) {
           py::array_t<TileWork> recs(static_cast<py::ssize_t>(res.timing_records.size()));
           std::copy(res.timing_records.begin(), res.timing_records.end(), recs.mutable_data());
           out["timing_records"] = recs;
@@ -209,11 +218,11 @@ void register_render(py::module_& m) {
       py::arg("tex_slots") = py::none(), py::arg("textures") = std::vector<FArr>(), py::arg("bins") = py::none(),
       py::arg("alpha") = py::none(),
       py::arg("pixel_stats") = std::vector<std::string>(), py::arg("trace_pixel") = py::none(),
-      py::arg("progress") = py::none(),
-      "Render pixel-homogeneous triangles; returns {'image', 'counters'[, 'timing_records'][, "
+      py::arg("progress") = py::none(), py::arg("timing") = py::none(), py::arg("keep_timing_records") = false,
+      "Render pixel-homogeneous triangles; returns {'image', 'counters'[, 'timing', 'memory'][, 'timing_records'][, "
       "'sample_depth', 'sample_triangle'][, 'bin_counters', 'bins', 'bin_stratum', 'strata_sizes', "
       "'bin_work', 'bin_aux', 'bin_aux_total'][, 'pixel_stats' (k, H, W)][, 'trace_events', 'trace_samples']}. samples: "
-      "the (P, P, spp, 5) table, or a SampleTableIndex built once for it (then lens_index and lens_uv empty). bins (or params.sample_fraction < 1: a stratified draw): render only these screen bins "
+      "the (P, P, spp, 5) table, or a SampleTableIndex built once for it (then lens_index and lens_uv empty). With params.record_timing the timing and memory model runs on the render (timing: the units, a TimingConfig) and its raw figures are in 'timing' and 'memory'; keep_timing_records keeps the work records. bins (or params.sample_fraction < 1: a stratified draw): render only these screen bins "
       "(row-major) and return their counters, one row per bin in counter_docs() order. The GIL is "
       "released; Ctrl-C interrupts; progress(done_bins, total_bins) is called while it runs.");
 
@@ -224,7 +233,7 @@ void register_render(py::module_& m) {
         return py::make_tuple(s.bins, s.stratum, s.sizes);
       },
       py::arg("work"), py::arg("fraction"), py::arg("seed"),
-      "The sampled bins of pipeline.sample_fraction (traversal/bin_sample.h) for per-bin brute-force work: "
+      "The sampled bins of pipeline.sample_fraction (sampled/bin_sample.h) for per-bin brute-force work: "
       "(bins, stratum of each, strata sizes); sizes empty when every bin with work is drawn.");
 
   m.def(

@@ -19,7 +19,7 @@
 #include "tiletest/box_bounds.h"
 #include "tiletest/edges_2d.h"
 #include "tiletest/precision_4d.h"
-#include "tiletest/precision_5d.h"
+#include "intervals/precision_5d.h"
 #include "traversal/algorithms/tile/hj_cells.h"
 #include "selftest/kernel_costs.h"
 #include "selftest/probe.h"
@@ -509,7 +509,7 @@ void register_selftest(py::module_& m) {
       },
       py::arg("params"), py::arg("v0"), py::arg("v1"), py::arg("tiles"), py::arg("points"),
       "The render's motion tile tests (tile with motion_test intervals: t̂ and 5D lens sets per time sub-interval, "
-      "and with params.halfspace_H5 the H5 cells over the whole lens grid; tiletest/precision_5d.h in "
+      "and with params.halfspace_H5 the H5 cells over the whole lens grid; intervals/precision_5d.h in "
       "params.precision_tile, tiles widened as a render widens them) of one triangle moving from v0 to v1 (3, 3) "
       "(pixel-homogeneous): per row r the tile tiles[r] = (x0, x1, y0, y1) and the sample points[r] = (x, y, u, v, "
       "t); kept64 / kept (N,): the sample passes the tile's (lens, time) region in float64 / in the precision; "

@@ -1,5 +1,5 @@
 // Test-only: the explicit-SIMD batch sample tests (sampletest/simd_batch.h) beside the scalar
-// batch kernels of sampletest/sample_test.h, on the same inputs, for the bit-equality test.
+// batch kernels of sampletest/kernels.h, on the same inputs, for the bit-equality test.
 #include "bindings.h"
 
 #include <algorithm>

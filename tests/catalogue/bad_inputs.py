@@ -301,6 +301,45 @@ def hardware_line(d):
     _render(hardware=sim.HardwareConfig(tex_cache=sim.TextureCacheConfig(line_bytes=48)))
 
 
+@case("Python API", "HardwareConfig depth-tile cache of 100000 bytes (not whole sets of 4 x 1024-byte lines)",
+      "ConfigError", r"HardwareConfig\.depth_buffer\.cache_bytes: 100000 is not a whole number of sets of 4 x 1024-byte lines",
+      "the field, the value and the set it must divide into")
+def hardware_depth_cache(d):
+    _sim().HardwareConfig(depth_buffer={"cache_bytes": 100000})
+
+
+@case("Python API", "HardwareConfig colour-tile cache of 40000 bytes", "ConfigError",
+      r"HardwareConfig\.color_buffer\.cache_bytes: 40000 is not a whole number of sets of 4 x 1024-byte lines "
+      r"\(256 samples of 4 bytes", "the field, the value, the line and where its size comes from")
+def hardware_color_cache(d):
+    _sim().HardwareConfig(color_buffer={"cache_bytes": 40000})
+
+
+@case("Python API", "HardwareConfig depth line of 1000 bytes (not a power of two)", "ConfigError",
+      r"depth_buffer\.line_bytes: expected a power of two, got 1000", "the field and the value")
+def hardware_depth_line(d):
+    _sim().HardwareConfig(depth_buffer={"line_bytes": 1000})
+
+
+@case("Python API", "HardwareConfig with depth compression and the depth-tile cache off", "ConfigError",
+      r"HardwareConfig\.depth_buffer\.compression: 'plane' compresses the depth-tile cache's lines, and "
+      r"HardwareConfig\.depth_buffer\.enabled is false", "the two fields and what to change")
+def hardware_compression_without_cache(d):
+    _sim().HardwareConfig(depth_buffer={"enabled": False, "compression": "plane"})
+
+
+@case("Python API", "HardwareConfig with a DRAM bandwidth of 0 bytes per clock", "ConfigError",
+      r"HardwareConfig\.dram\.bytes_per_clock: expected .*got 0", "the field, its range and the value")
+def hardware_dram_zero(d):
+    _sim().HardwareConfig(dram={"bytes_per_clock": 0})
+
+
+@case("Python API", "sim.render(keep_timing_records=True) with timing off", "ConfigError",
+      r"keep_timing_records: the work records are the timing model's; timing is off", "the keyword and why")
+def keep_records_untimed(d):
+    _render(timing=False, keep_timing_records=True)
+
+
 @case("Python API", "SampleTable.create('blue')", "ValueError", r"blue.*(known|expected)", "the kind and the known kinds")
 def table_unknown_kind(d):
     _sim().SampleTable.create("blue", spp=4)
@@ -572,11 +611,10 @@ def core_wrong_type(d):
                         np.zeros((0, 2), np.float32))
 
 
-@case("bindings", "_core.timing_estimate with 2 throughputs for 8 units", "ValueError",
+@case("bindings", "_core.TimingConfig with 2 throughputs for 11 units", "ValueError",
       r"throughput, latency, fifo: expected one value per unit", "the arguments and the unit count")
 def core_timing_units(d):
-    sim = _sim()
-    sim._core.timing_estimate(np.zeros(0, sim._core.timing_record_dtype()), [1.0, 1.0], [1.0, 1.0], [1, 1], 1.0, 1.0)
+    _sim()._core.TimingConfig([1.0, 1.0], [1.0, 1.0], [1, 1], 1.0, 1.0)
 
 
 @case("bindings", "_core.simulate_cache with 3 ways over 8 lines", "ValueError", r"ways: expected 0 or a divisor of n_lines",
@@ -591,13 +629,36 @@ def core_cache_lines(d):
     _sim()._core.simulate_cache(np.zeros(4, np.uint64), 2**31 - 1, 0)
 
 
-@case("bindings", "_core.timing_estimate with an infinite texture-miss latency (found by fuzzing)", "ValueError",
+@case("bindings", "_core.TimingConfig with an infinite texture-miss latency (found by fuzzing)", "ValueError",
       r"tex_hit_latency, tex_miss_latency: expected finite numbers", "the arguments")
 def core_timing_latency(d):
     sim = _sim()
     k = len(sim._core.timing_units())
-    sim._core.timing_estimate(np.zeros(0, sim._core.timing_record_dtype()), [1.0] * k, [1.0] * k, [4] * k,
-                              4.0, float("inf"))
+    sim._core.TimingConfig([1.0] * k, [1.0] * k, [4] * k, 4.0, float("inf"))
+
+
+@case("bindings", "_core.TimingConfig with a zero DRAM bandwidth", "ValueError",
+      r"dram\.bytes_per_clock: expected > 0 and finite, got 0", "the field and the value")
+def core_timing_dram(d):
+    sim = _sim()
+    k = len(sim._core.timing_units())
+    sim._core.TimingConfig([1.0] * (k - 1) + [0.0], [0.0] * k, [4] * k)
+
+
+@case("bindings", "RenderParams with a 100000-byte depth-tile cache of 1024-byte lines in 4 ways", "ValueError",
+      r"depth_buffer_cache_bytes: 100000 is not a whole number of sets of 4 x 1024-byte lines",
+      "the parameter, the value and the set it must divide into")
+def core_depth_cache_geometry(d):
+    p, _ = _params(depth_buffer_cache_bytes=100000)
+    _core_render(params=p)
+
+
+@case("bindings", "RenderParams compressing depth with the depth-tile cache off", "ValueError",
+      r"depth_buffer_compression: 'time_predictor' compresses the depth-tile cache's lines, and "
+      r"depth_buffer_enabled is false", "the two parameters and what to change")
+def core_depth_compression_without_cache(d):
+    p, _ = _params(depth_buffer_enabled=False)
+    _core_render(params=p)
 
 
 @case("bindings", "_core.texel_address of a 2^31 - 1 x 8 texture (found by fuzzing: allocated 64 GiB)", "ValueError",

@@ -81,9 +81,9 @@ VARIANTS = {
 LINE_VARIANTS = {"tile_clip": {"lines": {"tile_clip": True}},
                  # textured segments: a shader lane per segment, texel fetches, the texture cache
                  "per_sample_tex": {"shading": "per_sample", "texture_count": 1}}
-# Timing-model figures kept in the golden file (rounded to whole clocks), so a change to the timing
-# model or to the work it is fed shows up in review like an operation count.
-TIMING_FIGURES = ("timing.cycles",)
+# Figures of the timing and memory model kept in the golden file (rounded to whole units), so a change
+# to the model or to the work it is fed shows up in review like an operation count.
+TIMING_FIGURES = ("timing.cycles", "dram.bytes", "depth.cache.misses")
 
 
 @dataclass(frozen=True)

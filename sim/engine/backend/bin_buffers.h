@@ -12,6 +12,7 @@
 
 #include "backend/hiz.h"
 #include "core/bin_rect.h"
+#include "memory/sample_buffers.h"
 
 namespace rast5d {
 
@@ -27,6 +28,13 @@ class BinBuffers {
     tri_.assign(n, -1);
     if (hiz_.enabled()) hiz_.begin(r);
   }
+
+  // The memory model's line marks (memory/sample_buffers.h), or nullptr when it does not run: the
+  // backend marks the lines each depth test and colour write touches.
+  void set_line_marks(memory::LineMarks* m) { marks_ = m; }
+  memory::LineMarks* line_marks() const { return marks_; }
+  // The bin's depth samples, row-major pixels of spp samples (read by the memory model's compressor).
+  const std::vector<float>& depth_samples() const { return depth_; }
 
   // The bin's HiZ (backend/hiz.h; enabled by set_tile before begin()).
   HiZBuffer& hiz() { return hiz_; }
@@ -74,6 +82,7 @@ class BinBuffers {
   std::vector<float> depth_, color_;
   std::vector<std::int32_t> tri_;
   HiZBuffer hiz_;
+  memory::LineMarks* marks_ = nullptr;
 };
 
 }  // namespace rast5d

@@ -22,8 +22,8 @@
 #include "core/counters.h"
 #include "core/sample_table.h"
 #include "intervals/clip.h"
-#include "sampletest/sample_test.h"
-#include "setup/setup.h"
+#include "sampletest/kernels.h"
+#include "core/triangle.h"
 
 namespace rast5d {
 
@@ -71,6 +71,8 @@ class SampleBackend {
     ++c_[Counter::depth_tests];
     if (skip_depth_reads_) ++c_[Counter::depth_reads_skipped];
     else c_[Counter::depth_bytes_read] += 4;
+    memory::LineMarks* const marks = buf_.line_marks();  // the memory model's tile caches, when it runs
+    const std::uint32_t line = marks ? marks->mark(px, py, s) : 0;
     const std::size_t slot = buf_.slot(px, py, s);
     float& zbuf = buf_.depth(slot);
     const bool pass = z < G(zbuf);
@@ -82,6 +84,7 @@ class SampleBackend {
     }
     ++c_[Counter::depth_passes];
     c_[Counter::depth_bytes_written] += 4;
+    if (marks) marks->add(line, memory::kDepthWrite | memory::kColorWrite);
     G c0[3], c1[3], c2[3], out[3];
     for (int ch = 0; ch < 3; ++ch)
       c0[ch] = G(tri.color[0][ch]), c1[ch] = G(tri.color[1][ch]), c2[ch] = G(tri.color[2][ch]);

@@ -27,7 +27,7 @@
 //                    cache per screen bin processor, emptied at the start of each bin.
 //  - Texture cache: each shaded lane (live or helper: helpers fetch too, as in hardware) fetches
 //    its footprint in every texture of the triangle; the line addresses go to a per-bin stream,
-//    and after the render the streams are run through the cache model in bin raster order (bin b
+//    and the streams are run through the cache model in bin raster order as the bins complete (bin b
 //    to cache b mod count). That is the modelled hardware order, and it makes the counts
 //    independent of the thread count.
 #pragma once
@@ -249,37 +249,43 @@ class ShadeState {
   std::vector<Key> keys_;
 };
 
-// Run the per-bin texture-cache line streams through `count` caches in bin raster order (bin b to
-// cache b mod count); returns the summed statistics. With `segment_ends` (per bin, the stream length
-// after each of the bin's timing records), `segment_misses` receives the misses of each segment, so
-// the timing model can charge every record its own texture misses.
-inline CacheStats simulate_texture_caches(const std::vector<std::vector<std::uint32_t>>& streams, int count,
-                                          std::uint64_t lines, std::uint64_t ways,
-                                          const std::vector<std::vector<std::uint32_t>>* segment_ends = nullptr,
-                                          std::vector<std::vector<std::uint32_t>>* segment_misses = nullptr) {
-  std::vector<SetAssocCache> caches;
-  for (int i = 0; i < count; ++i) caches.emplace_back(lines, ways);
-  if (segment_misses) segment_misses->assign(streams.size(), {});
-  for (std::size_t b = 0; b < streams.size(); ++b) {
-    SetAssocCache& cache = caches[b % count];
-    const std::vector<std::uint32_t>& stream = streams[b];
-    std::size_t i = 0;
-    auto run_to = [&](std::size_t end) {  // accesses [i, end): their misses
-      std::uint32_t misses = 0;
-      for (; i < end; ++i) misses += !cache.access(stream[i]);
-      return misses;
+// The texture caches, replayed over the bins' line streams in bin raster order (bin b to cache b mod
+// count): the modelled hardware order, independent of the thread count. The frame hands it each bin's
+// stream as the bins complete in order (frame/bin_stream.h), and frees the stream after.
+class TextureCacheReplay {
+ public:
+  TextureCacheReplay(int count, std::uint64_t lines, std::uint64_t ways) {
+    for (int i = 0; i < count; ++i) caches_.emplace_back(lines, ways);
+  }
+  // Run bin b's stream from `begin` up to `end`; with ends (stream lengths after each record, within
+  // [begin, end]), each record's own misses into misses (one per end).
+  void consume(int bin, const std::vector<std::uint32_t>& stream, std::size_t begin, std::size_t end,
+               const std::vector<std::uint32_t>* ends, std::vector<std::uint32_t>* misses) {
+    SetAssocCache& cache = caches_[static_cast<std::size_t>(bin) % caches_.size()];
+    std::size_t i = begin;
+    auto run_to = [&](std::size_t stop) {  // accesses [i, stop): their misses
+      std::uint32_t m = 0;
+      for (; i < stop; ++i) m += !cache.access(stream[i]);
+      return m;
     };
-    if (segment_ends)
-      for (std::uint32_t end : (*segment_ends)[b]) (*segment_misses)[b].push_back(run_to(end));
-    run_to(stream.size());
+    if (ends) {
+      misses->clear();
+      for (std::uint32_t e : *ends) misses->push_back(run_to(e));
+    }
+    run_to(end);
   }
-  CacheStats s;
-  for (const auto& cache : caches) {
-    const CacheStats& t = cache.stats();
-    s.accesses += t.accesses, s.hits += t.hits, s.misses += t.misses;
-    s.cold += t.cold, s.capacity += t.capacity, s.conflict += t.conflict;
+  CacheStats stats() const {
+    CacheStats s;
+    for (const auto& cache : caches_) {
+      const CacheStats& t = cache.stats();
+      s.accesses += t.accesses, s.hits += t.hits, s.misses += t.misses;
+      s.cold += t.cold, s.capacity += t.capacity, s.conflict += t.conflict;
+    }
+    return s;
   }
-  return s;
-}
+
+ private:
+  std::vector<SetAssocCache> caches_;
+};
 
 }  // namespace rast5d

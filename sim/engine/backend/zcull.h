@@ -22,7 +22,7 @@
 #include "core/counters.h"
 #include "intervals/depth_interval.h"
 #include "tiletest/precision_4d.h"
-#include "setup/setup.h"
+#include "core/triangle.h"
 
 namespace rast5d {
 

@@ -9,11 +9,12 @@
 #include "intervals/depth_interval.h"
 #include "intervals/time_interval.h"
 #include "setup/footprint.h"
+#include "core/validate.h"
 #include "tiletest/edges_2d.h"
 #include "sampletest/precision.h"
 #include "tiletest/halfspace_lens.h"
 #include "tiletest/precision_4d.h"
-#include "tiletest/precision_5d.h"
+#include "intervals/precision_5d.h"
 
 namespace rast5d {
 

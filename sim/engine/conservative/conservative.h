@@ -13,7 +13,7 @@
 
 #include "core/counters.h"
 #include "core/params.h"
-#include "traversal/render.h"
+#include "core/scene.h"
 
 namespace rast5d {
 

@@ -45,7 +45,7 @@ inline constexpr std::uint64_t kBoxBoundsAxisPoint = 1;
 inline constexpr std::uint64_t kBoxBoundsAxisBox = 2;
 // LAINE's per-sample lens-region test against an empty region (u_min > u_max): 4 CMP that fail.
 inline constexpr std::uint64_t kSampleRegionEmpty = 4;
-// H5: H_j lines extended to time for moving triangles (tiletest/halfspace_5d.h).
+// H5: H_j lines extended to time for moving triangles (intervals/halfspace_5d.h).
 // Setup per sub-interval with every vertex in front: 2 MUL (K F); per edge 2 x the 7 constants
 // (Q 6, d 3, a0 2, a1 1, b0 2, b1 1), Δq and Δr 6 SUB, Q2 = Δq x Δr 6, 2 MUL, 7 SUB (f1 - f0).
 inline constexpr std::uint64_t kH5EdgeFields = 15;
@@ -100,7 +100,7 @@ inline constexpr std::uint64_t kTimeStrata = 2;
 inline constexpr std::uint64_t kSampleTime = 2;
 inline constexpr std::uint64_t kSampleClipAxis = 2;
 
-// ---- sample test (sampletest/sample_test.h) ----
+// ---- sample test (sampletest/kernels.h) ----
 inline constexpr std::uint64_t kEdges = 18;      // 6 MADD relative coords, 3x(2 MUL + SUB), det 3
 inline constexpr std::uint64_t kSigns = 4;       // sign(det), 3 sign(e_i)
 inline constexpr std::uint64_t kShear = 6;       // 6 MADD
@@ -155,7 +155,7 @@ inline constexpr std::uint64_t zhat_plane_cost(bool lens) { return lens ? kZhatP
 // ẑ against the HiZ tile (backend/zcull.h): 2 CMP (zmax, zmin).
 inline constexpr std::uint64_t kHiZCompare = 2;
 
-// ---- line samples (lines/line_test.h, lines/segment_buffer.h; 004 §3-4) ----
+// ---- line samples (lines/coverage.h, lines/segment_buffer.h; 004 §3-4) ----
 // Per (screen point, triangle): 6 MADD relative coordinates; per edge e 2 MUL + SUB, d/du and d/dv
 // MUL + MADD each; det, d/du, d/dv MUL + 2 MADD each; sum and its gradients 2 ADD each; the near
 // function and its gradients 3 MADD.
@@ -168,7 +168,7 @@ inline constexpr std::uint64_t line_interval_cost(int n_fns, int n_flat) {
          2 * static_cast<std::uint64_t>(n_flat) + 2;
 }
 // Tile clip: per uv-box and tile the pseudo-angle interval of its corners (data dependent, counted
-// in lines/line_test.h box_angles()); per line and box tested 2 CMP against the interval.
+// in lines/coverage.h box_angles()); per line and box tested 2 CMP against the interval.
 inline constexpr std::uint64_t kLineAngleTest = 2;
 inline constexpr std::uint64_t kLineBoxWiden = 4;  // per uv-box and tile: 2 SUB, 2 ADD
 inline constexpr std::uint64_t kLineBoxCentre = 4;  // per uv-box and tile: 4 CMP (does it hold the lens centre?)

@@ -177,6 +177,19 @@ struct ChoiceTraits<GpuConstants> {
   }};
 };
 
+// The depth buffer's compression scheme (hardware.depth_buffer.compression; memory/compression.h).
+enum class DepthCompression : int { kNone = 0, kPlane = 1, kTimePredictor = 2 };
+template <>
+struct ChoiceTraits<DepthCompression> {
+  static constexpr std::string_view registry = "depth_compressions";
+  static constexpr std::array<ChoiceInfo, 3> table = {{
+      {"none", "raw: 4 bytes per sample"},
+      {"plane", "static-plane baseline: one plane over the line's written samples, delta residuals"},
+      {"time_predictor",
+       "up to two depth layers, each with a time-dependent plane predictor, delta residuals [Andersson 2011]"},
+  }};
+};
+
 struct RenderParams {
 #define RAST5D_PARAM(layer, group, key, type, def, unit, domain, doc) type group##key = def;
 #define RAST5D_PY_PARAM(layer, group, key, type, def, unit, domain, doc)

@@ -5,8 +5,10 @@
 // rectangle (a triangle's pixel bounds in a bin, a screen tile, or one pixel). When the target
 // changes, the counter deltas since the snapshot are spread over the old target's pixels: every
 // pixel gets delta / area and the first delta % area pixels in raster order one more, so each map
-// sums exactly to its frame counter. The traversal sets targets through SamplePipeline::at_pixel /
-// at_rect (which flush the pending batch first); without a cursor those are one pointer test.
+// sums exactly to its frame counter. A worker's PixelStatsObserver (core/visit_observer.h) aims its
+// cursor at each triangle's pixels in the bin and at the targets the traversal announces through
+// SamplePipeline::at_pixel / at_rect (which flush the pending batch first); without it those are one
+// flag test.
 // Per-triangle counters (ops.setup, setup.*, trav.*) are charged to the triangle's pixel bounds in
 // its bin whenever they are counted. Work with no pixel bounds (triangles culled at the near plane
 // or off screen) is spread over the whole frame. Targets never leave the current bin, and bins
@@ -22,6 +24,7 @@
 #include <vector>
 
 #include "core/counters.h"
+#include "core/visit_observer.h"
 
 namespace rast5d {
 
@@ -129,6 +132,41 @@ struct PixelCursor {
     const std::string_view n = kCounterInfo[static_cast<std::size_t>(i)].name;
     return n == "ops.setup" || n.substr(0, 6) == "setup." || n.substr(0, 5) == "trav.";
   }
+};
+
+// A worker's per-pixel statistics as an observer of its traversal.
+class PixelStatsObserver final : public VisitObserver {
+ public:
+  PixelStatsObserver(PixelStats* s, const Counters& c) : c_(c) { cur.attach(s); }
+  bool wants_targets() const override { return true; }
+
+  void begin_triangle(std::uint32_t tri, int x0, int y0, int x1, int y1, bool) override {
+    rx0_ = x0, ry0_ = y0, rx1_ = x1, ry1_ = y1;  // the triangle's pixels in this bin, until aimed finer
+    cur.target(c_, x0, y0, x1, y1, 0);
+    cur.triangle = tri;
+  }
+  void target(int x0, int y0, int x1, int y1, int kind) override { cur.target(c_, x0, y0, x1, y1, kind); }
+  bool aims_at(int x0, int y0, int x1, int y1) const override {
+    return cur.x0 == x0 && cur.y0 == y0 && cur.x1 == x1 && cur.y1 == y1;
+  }
+  void end_triangle() override {
+    cur.target(c_, rx0_, ry0_, rx1_, ry1_, 0);
+    cur.commit(c_, true);  // the per-triangle counters, to the triangle's pixels in the bin
+  }
+  void end_bin() override {
+    cur.commit(c_);
+    cur.triangle = -1;
+  }
+  bool traces(int px, int py) const override { return cur.stats->tracing() && cur.traces_pixel(px, py); }
+  void traced_sample(std::int64_t tri, int s, bool covered, bool hit) override {
+    cur.samples.push_back({tri, s, covered, hit});
+  }
+
+  PixelCursor cur;
+
+ private:
+  const Counters& c_;
+  int rx0_ = 0, ry0_ = 0, rx1_ = 0, ry1_ = 0;
 };
 
 }  // namespace rast5d

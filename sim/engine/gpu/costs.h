@@ -55,7 +55,7 @@ inline constexpr std::uint64_t kRasterEdgeSetup = 2;  // 2 CMP: the pixel corner
 inline constexpr std::uint64_t kRasterScanVertex = 4; // 2 MIN, 2 MAX: scan box of the output vertices
 inline constexpr std::uint64_t kRasterEdge = 3;       // per pixel and edge: MUL + MADD, CMP
 
-// ---- pixel shader (gpu/gpu_pipeline.h; ops.ps_setup) ----
+// ---- pixel shader (traversal/algorithms/gpu_pipeline.h; ops.ps_setup) ----
 // Sample-kernel constants the pixel shader re-derives per fragment without triangle constants
 // (000 §9.6): static shear coefficients 6 MADD (core kSetupShear); motion deltas 9 SUB.
 inline constexpr std::uint64_t kRederiveShear = 6;

@@ -47,7 +47,7 @@
 
 #include "core/arith.h"
 #include "gpu/costs.h"
-#include "setup/setup.h"
+#include "core/triangle.h"
 
 namespace rast5d::gpu {
 

@@ -15,7 +15,7 @@
 #include "core/arith.h"
 #include "core/costs.h"
 #include "intervals/clip.h"
-#include "setup/setup.h"
+#include "core/triangle.h"
 
 namespace rast5d::iv {
 
@@ -30,7 +30,7 @@ struct ZHat {
 };
 
 // Bound rho on the relative error of the view depth W_hit = det / sum(e) that the float32 sample
-// kernels compute (sample_test.h: vertex placement, edge_functions, hit_depth) for any sample of
+// kernels compute (sampletest/kernels.h: vertex placement, edge_functions, hit_depth) for any sample of
 // the (x, y, u, v, t) box whose exact hit lies at W_hit <= whi: |W_float - W_hit| <= rho W_hit.
 // First-order forward error analysis with unit roundoff u = 2^-24 over interval bounds of every
 // intermediate on the box (each operation adds at most u times its result's magnitude):

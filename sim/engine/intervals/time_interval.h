@@ -31,7 +31,7 @@
 #include "core/costs.h"
 #include "core/counters.h"
 #include "intervals/clip.h"
-#include "setup/setup.h"
+#include "core/triangle.h"
 #include "tiletest/halfspace_lens.h"
 #include "tiletest/lens_vertex.h"
 

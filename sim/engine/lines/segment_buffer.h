@@ -27,7 +27,7 @@
 #include "core/arith.h"
 #include "core/costs.h"
 #include "core/counters.h"
-#include "lines/line_test.h"
+#include "lines/coverage.h"
 
 namespace rast5d {
 

@@ -2,7 +2,7 @@
 // hardware; costs in core/costs.h, "sample test, hardware cost model").
 //
 // Contract: these kernels count the hardware model's operations on the counting path; the
-// render's decisions stay those of the robust kernels (sample_test.h). In a fixed-point datapath
+// render's decisions stay those of the robust kernels (sampletest/kernels.h). In a fixed-point datapath
 // with vertices snapped to the sub-pixel grid every edge function is an exact integer, so its
 // decisions are the exact ones, which the robust float kernels reproduce (watertight, top-left
 // rule); the two forms differ in what they cost, not in which samples they cover, and the image
@@ -19,8 +19,8 @@
 
 #include "core/costs.h"
 #include "core/params.h"
-#include "sampletest/sample_test.h"
-#include "setup/setup.h"
+#include "sampletest/kernels.h"
+#include "core/triangle.h"
 #include "tiletest/edges_2d.h"
 
 namespace rast5d {

@@ -4,8 +4,8 @@
 #pragma once
 
 #include "core/costs.h"
-#include "sampletest/sample_test.h"
-#include "setup/setup.h"
+#include "sampletest/kernels.h"
+#include "core/triangle.h"
 
 namespace rast5d {
 

@@ -24,7 +24,7 @@
 
 namespace rast5d {
 
-// Widening of every tile test's tile (tiletest/tile_test.h) that keeps it conservative against the
+// Widening of every tile test's tile (tiletest/common.h) that keeps it conservative against the
 // snapped triangle of a fixed-point sample test: each snapped vertex and the snapped sample move at
 // most 2^-(frac_bits+1) px per axis, so the snapped triangle lies within 2^-frac_bits px of the exact
 // one relative to the sample; twice that is used.

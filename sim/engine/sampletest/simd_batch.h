@@ -1,4 +1,4 @@
-// Explicit-SIMD batch sample tests: the 4D and 5D batch kernels of sample_test.h (batch_edges_4d /
+// Explicit-SIMD batch sample tests: the 4D and 5D batch kernels of sampletest/kernels.h (batch_edges_4d /
 // batch_edges_5d followed by batch_flags) fused into one pass over the batch, with AVX-512 or AVX2
 // intrinsics where the compiler targets them and the scalar kernels otherwise. With AVX-512 (VL) a
 // batch's last n % 16 samples are one masked vector; elsewhere they take the scalar kernels.
@@ -18,7 +18,7 @@
 #include <immintrin.h>
 #endif
 
-#include "sampletest/sample_test.h"
+#include "sampletest/kernels.h"
 
 namespace rast5d::simd {
 

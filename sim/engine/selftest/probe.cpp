@@ -1,6 +1,7 @@
 #include "selftest/probe.h"
 
 #include "sampletest/inside.h"
+#include "setup/setup.h"
 
 namespace rast5d {
 

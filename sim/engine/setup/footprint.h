@@ -4,7 +4,7 @@
 //
 // Contract: the footprint's lens vertices bound the triangle's projection from every lens point
 // (and, for a moving triangle, every time), so the h_i and H_j lines built on them are
-// conservative (tiletest/tile_test.h).
+// conservative (tiletest/common.h).
 #pragma once
 
 #include <algorithm>

@@ -1,7 +1,7 @@
 // Screen bounds of the footprint over a lens box (INTERVAL, INTERLEAVE): the pixels a triangle can
 // cover from any lens point of the box.
 //
-// Contract (tile_test.h): the bounds contain the footprint's projection from every lens point of
+// Contract (tiletest/common.h): the bounds contain the footprint's projection from every lens point of
 // the box, and pixel_range the pixels they touch.
 #pragma once
 
@@ -11,7 +11,7 @@
 #include "core/arith.h"
 #include "core/costs.h"
 #include "tiletest/lens_vertex.h"
-#include "tiletest/tile_test.h"
+#include "tiletest/common.h"
 
 namespace rast5d::tiletest {
 

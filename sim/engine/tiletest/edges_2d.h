@@ -1,7 +1,7 @@
 // The standard 2D tile test of static, in-focus triangles (TILE's 2D class, HINTERLEAVE): the
 // triangle's edge functions evaluated at each tile's most inside corner.
 //
-// Contract (tile_test.h): tile_outside_2d is true only if no point of the (expanded) tile is inside
+// Contract (tiletest/common.h): tile_outside_2d is true only if no point of the (expanded) tile is inside
 // the triangle.
 #pragma once
 
@@ -11,8 +11,7 @@
 #include "core/costs.h"
 #include "core/fixed.h"
 #include "core/params.h"
-#include "sampletest/sample_test.h"
-#include "tiletest/tile_test.h"
+#include "tiletest/common.h"
 
 namespace rast5d::tiletest {
 
@@ -73,7 +72,7 @@ namespace rast5d::tiletest {
 //    products and the evaluation are exact in core/fixed.h's registers (C keeps its 2 frac_bits
 //    fraction bits), values reaching 2^int_bits set overflow. The snapped triangle lies within
 //    sampletest/precision.h's snap_margin_px of the exact one, by which every tile is widened
-//    (tile_test.h t_snap_margin_px): the fixed-point test stays conservative.
+//    (tiletest/common.h t_snap_margin_px): the fixed-point test stays conservative.
 template <class D>
 inline Edges2D edges_2d_in(const Precision& p, const float* X, const float* Y, const float* W) {
   Edges2D e = edges_2d<D>(X, Y, W);

@@ -16,7 +16,7 @@
 // including the one where both candidates separate.) Region 5 (v inside the tile) gives no line;
 // edges with q_w = r_w = F are ignored (001 §4.3); d_w = 0 edges take the corners from (d_x, d_y).
 //
-// Contract (tile_test.h): line_cells marks a lens cell only where the line is negative over the
+// Contract (tiletest/common.h): line_cells marks a lens cell only where the line is negative over the
 // whole cell, so an edge culls only cells from which the expanded tile is outside the edge.
 #pragma once
 
@@ -24,7 +24,7 @@
 
 #include "core/arith.h"
 #include "core/costs.h"
-#include "tiletest/tile_test.h"
+#include "tiletest/common.h"
 
 namespace rast5d::tiletest {
 

@@ -18,7 +18,7 @@
 // interior gap leaves two intervals. (001 describes two boxes, A and B; the product of the
 // per-axis sets also keeps A's u-range with B's v-range, from which the triangle can be visible.)
 //
-// Contract (tile_test.h): a lens coordinate is cut only if every footprint vertex seen from it lies
+// Contract (tiletest/common.h): a lens coordinate is cut only if every footprint vertex seen from it lies
 // beyond the same edge of the expanded tile; axis_pass and axis_cells keep every float sample and
 // every lens cell that is not inside a cut.
 #pragma once
@@ -29,7 +29,7 @@
 #include "core/arith.h"
 #include "core/costs.h"
 #include "tiletest/lens_vertex.h"
-#include "tiletest/tile_test.h"
+#include "tiletest/common.h"
 
 namespace rast5d::tiletest {
 

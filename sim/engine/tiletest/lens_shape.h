@@ -1,13 +1,13 @@
 // The lens shape against uv-boxes and lens-grid cells: a box of the lens square that misses the
 // lens (disk or hexagon) holds no sample.
 //
-// Contract (tile_test.h): box_overlaps_lens is false only if the box misses the lens shape.
+// Contract (tiletest/common.h): box_overlaps_lens is false only if the box misses the lens shape.
 #pragma once
 
 #include "core/arith.h"
 #include "core/params.h"
 #include "core/sample_table.h"
-#include "tiletest/tile_test.h"
+#include "tiletest/common.h"
 
 namespace rast5d::tiletest {
 

@@ -10,7 +10,7 @@
 //    snap to the 2^-frac_bits sub-pixel grid (exact from then on). Seen from any lens point |u|, |v| <= 1
 //    the snapped vertex lies within 2^-(frac_bits+1) (1 + 1) = 2^-frac_bits px of the exact one per axis,
 //    and so does every point of the snapped footprint (convex combinations); every tile is already widened
-//    by 2^(1-frac_bits) px when a stage is fixed (tile_test.h t_snap_margin_px), so a tile the exact
+//    by 2^(1-frac_bits) px when a stage is fixed (tiletest/common.h t_snap_margin_px), so a tile the exact
 //    footprint overlaps is overlapped by the snapped footprint: a test exact on the snapped inputs is
 //    conservative. The tile edges themselves snap outward (a larger tile). float32: a, b round to nearest
 //    and their rounding |x - fl(x)| is carried as an error bound (no widening is assumed).
@@ -50,7 +50,7 @@
 #include "core/params.h"
 #include "tiletest/halfspace_lens.h"
 #include "tiletest/lens_vertex.h"
-#include "tiletest/tile_test.h"
+#include "tiletest/common.h"
 
 namespace rast5d::tiletest {
 

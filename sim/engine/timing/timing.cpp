@@ -1,4 +1,4 @@
-// The timing model (docs/timing.md). A record i visits units k = 0..K-1 in order. With s(i,k) =
+// The timing model (docs/timing.md), streamed: TimingModel::feed() takes one record at a time. A record i visits units k = 0..K-1 in order. With s(i,k) =
 // work / throughput, L(i,k) the latency, F(k) the input FIFO depth of unit k:
 //   A(i,0)   = 0                                      (the bin lists in memory never run dry)
 //   S(i,k)   = max(A(i,k), D(i-1,k))                  start: input present and the unit free
@@ -21,41 +21,12 @@
 
 namespace rast5d {
 
-std::uint64_t TileWork::amount(Unit u) const {
-  switch (u) {
-    case Unit::geometry_shader: return gs_ops;
-    case Unit::gs_output: return gs_floats;
-    case Unit::raster2d: return raster_pixels;
-    case Unit::pixel_shader: return ps_ops;
-    case Unit::setup: return triangles;
-    case Unit::tile_test: return tile_tests;
-    case Unit::sample_test: return sample_tests;
-    case Unit::depth: return depth_tests;
-    case Unit::shader: return quads;
-    case Unit::texture: return texel_fetches;
-    case Unit::memory: return memory_bytes;
-    case Unit::kCount: break;
-  }
-  return 0;
+bool TileWork::empty() const {
+  return !(gs_ops || gs_floats || raster_pixels || ps_ops || tile_tests || sample_tests || depth_tests ||
+           depth_fills || quads || texel_fetches || tex_misses || dram_bytes);
 }
 
-TileWork TileWork::since(const TileWork& b) const {
-  TileWork w;
-  w.gs_ops = gs_ops - b.gs_ops;
-  w.gs_floats = gs_floats - b.gs_floats;
-  w.raster_pixels = raster_pixels - b.raster_pixels;
-  w.ps_ops = ps_ops - b.ps_ops;
-  w.tile_tests = tile_tests - b.tile_tests;
-  w.sample_tests = sample_tests - b.sample_tests;
-  w.depth_tests = depth_tests - b.depth_tests;
-  w.quads = quads - b.quads;
-  w.texel_fetches = texel_fetches - b.texel_fetches;
-  w.tex_misses = tex_misses - b.tex_misses;
-  w.memory_bytes = memory_bytes - b.memory_bytes;
-  return w;
-}
-
-TileWork work_from_counters(const Counters& c) {
+TileWork work_from_counters(const Counters& c, const MemoryTotalsView& mem) {
   auto d = [&](Counter k) { return c[k]; };
   TileWork w;
   w.tile_tests = d(Counter::tile_visited);
@@ -73,11 +44,14 @@ TileWork work_from_counters(const Counters& c) {
   w.depth_tests = d(Counter::depth_tests) + d(Counter::lines_segments) + d(Counter::lines_composite_steps);
   w.quads = d(Counter::shade_quad_requests);
   w.texel_fetches = d(Counter::tex_fetches) + d(Counter::gpu_perturb_fetches);  // + the GPU's perturbation texture
-  // Memory: per-sample depth traffic and HiZ traffic (depth.*, hiz.*). Texture-cache misses and
-  // the line bytes they fetch are added per record by the cache replay after the render
-  // (traversal/render.cpp), since the cache is simulated in bin order once all bins are done.
-  w.memory_bytes = d(Counter::depth_bytes_read) + d(Counter::depth_bytes_written) + d(Counter::hiz_bytes_read) +
-                   d(Counter::hiz_bytes_written);
+  // DRAM: with the depth-tile cache, its line fills and write-backs; without it every per-sample depth
+  // read and write (depth.bytes_*). Colour lines only with the colour buffer modelled. HiZ traffic goes
+  // to DRAM as counted (hiz.bytes_*).
+  w.dram_depth = mem.depth ? mem.depth_dram : d(Counter::depth_bytes_read) + d(Counter::depth_bytes_written);
+  w.depth_fills = mem.depth ? mem.depth_fills : 0;
+  w.dram_color = mem.color ? mem.color_dram : 0;
+  w.dram_hiz = d(Counter::hiz_bytes_read) + d(Counter::hiz_bytes_written);
+  w.dram_bytes = w.dram_depth + w.dram_color + w.dram_hiz;
   return w;
 }
 
@@ -87,96 +61,119 @@ void check(bool ok, const std::string& what) {
   if (!ok) throw std::invalid_argument(what);
 }
 
-// One pipeline consuming its record stream (indices into records) in order.
-double run_pipeline(const TileWork* records, const std::vector<std::uint32_t>& stream,
-                    const TimingConfig& cfg, double memory_throughput, std::array<UnitStats, kNumUnits>& st) {
-  const std::size_t n = stream.size();
-  if (n == 0) return 0.0;
-  std::array<double, kNumUnits> inv_tp{}, prev_depart{};
-  std::array<std::size_t, kNumUnits> fifo{};
-  std::array<std::vector<double>, kNumUnits> starts;  // ring: S(i, k) of the last F(k) records
-  for (int k = 0; k < kNumUnits; ++k) {
-    const double tp = k == static_cast<int>(Unit::memory) ? memory_throughput : cfg.units[k].throughput;
-    inv_tp[k] = 1.0 / tp;
-    // A FIFO at least as deep as the stream never refuses a record: no ring needed.
-    fifo[k] = static_cast<std::uint64_t>(cfg.units[k].fifo) >= n ? 0 : static_cast<std::size_t>(cfg.units[k].fifo);
-    if (k > 0 && fifo[k]) starts[k].assign(fifo[k], 0.0);
-  }
-  constexpr int kTex = static_cast<int>(Unit::texture);
-  std::array<double, kNumUnits> busy{}, blocked{};
-  double end = 0.0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const TileWork& w = records[stream[i]];
-    double arrive = 0.0;
-    for (int k = 0; k < kNumUnits; ++k) {
-      const double start = std::max(arrive, prev_depart[k]);
-      const double service = static_cast<double>(w.amount(static_cast<Unit>(k))) * inv_tp[k];
-      const double done = start + service;
-      double depart = done;
-      if (k + 1 < kNumUnits && fifo[k + 1] && i >= fifo[k + 1])
-        depart = std::max(done, starts[k + 1][i % fifo[k + 1]]);  // S(i - F(k+1), k+1)
-      if (k > 0 && fifo[k]) starts[k][i % fifo[k]] = start;
-      busy[k] += service;
-      blocked[k] += depart - done;
-      prev_depart[k] = depart;
-      double latency = cfg.units[k].latency;
-      if (k == kTex && w.texel_fetches) latency += w.tex_misses ? cfg.tex_miss_latency : cfg.tex_hit_latency;
-      arrive = depart + latency;
-    }
-    end = std::max(end, arrive);
-  }
-  for (int k = 0; k < kNumUnits; ++k) {
-    st[k].busy += busy[k];
-    st[k].blocked += blocked[k];
-    st[k].starved += std::max(0.0, end - busy[k] - blocked[k]);
-  }
-  return end;
-}
+constexpr int kTex = static_cast<int>(Unit::texture);
+constexpr int kDepth = static_cast<int>(Unit::depth);
+constexpr int kDram = static_cast<int>(Unit::dram);
 
 }  // namespace
 
-TimingResult simulate_timing(const TileWork* records, std::size_t n, const TimingConfig& cfg) {
+void TimingConfig::validate() const {
   for (int k = 0; k < kNumUnits; ++k) {
     const std::string name(kUnitInfo[k].name);
-    const UnitTiming& u = cfg.units[k];
+    const UnitTiming& u = units[k];
+    const std::string tp = k == kDram ? "dram.bytes_per_clock" : name + ".throughput";
     check(u.throughput > 0 && u.throughput < std::numeric_limits<double>::infinity(),
-          name + ".throughput: expected > 0 and finite, got " + std::to_string(u.throughput));
+          tp + ": expected > 0 and finite, got " + std::to_string(u.throughput));
     check(u.latency >= 0 && u.latency < std::numeric_limits<double>::infinity(),
           name + ".latency_cycles: expected >= 0, got " + std::to_string(u.latency));
     check(u.fifo >= 1, name + ".fifo_entries: expected >= 1, got " + std::to_string(u.fifo));
   }
-  check(cfg.tex_hit_latency >= 0 && cfg.tex_miss_latency >= 0, "tex_cache latencies: expected >= 0");
-  check(cfg.cores >= 1 && cfg.cores <= 4096, "cores: expected 1..4096, got " + std::to_string(cfg.cores));
+  check(tex_hit_latency >= 0 && tex_miss_latency >= 0, "tex_cache latencies: expected >= 0");
+  check(fill_latency >= 0 && fill_latency < std::numeric_limits<double>::infinity(),
+        "dram.latency_cycles: expected >= 0, got " + std::to_string(fill_latency));
+  check(cores >= 1 && cores <= 4096, "cores: expected 1..4096, got " + std::to_string(cores));
+}
 
-  TimingResult r;
-  r.records = n;
-  r.cores = cfg.cores;
-  // Bins are dealt round-robin to the cores by bin index; unbinned records (bin < 0) in turn.
-  std::vector<std::vector<std::uint32_t>> streams(cfg.cores);
-  std::uint64_t unbinned = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::int32_t b = records[i].bin;
-    const std::uint64_t core = b >= 0 ? static_cast<std::uint64_t>(b) % cfg.cores : unbinned++ % cfg.cores;
-    streams[core].push_back(static_cast<std::uint32_t>(i));
-    for (int k = 0; k < kNumUnits; ++k) r.units[k].work += static_cast<double>(records[i].amount(static_cast<Unit>(k)));
+TimingModel::TimingModel(const TimingConfig& cfg) : cfg_(cfg), cores_(static_cast<std::size_t>(cfg.cores)) {
+  cfg_.validate();
+  r_.cores = cfg.cores;
+  for (int k = 0; k < kNumUnits; ++k) {
+    // The DRAM bandwidth is split evenly between the cores (a static partition).
+    const double tp = k == kDram ? cfg.units[k].throughput / cfg.cores : cfg.units[k].throughput;
+    inv_tp_[k] = 1.0 / tp;
   }
-  const double memory_throughput = cfg.units[static_cast<int>(Unit::memory)].throughput / cfg.cores;
-  std::vector<double> ends(cfg.cores);
-  for (int c = 0; c < cfg.cores; ++c) {
-    ends[c] = run_pipeline(records, streams[c], cfg, memory_throughput, r.units);
-    r.cycles = std::max(r.cycles, ends[c]);
+}
+
+// One record through one core's units (the recursion of docs/timing.md). With bypass_idle a record
+// occupies only the units it has work for: elsewhere it waits for its predecessor (in order) and
+// passes at once, without latency and without a FIFO slot; a FIFO of F entries then holds the last F
+// records that have work for its unit.
+void TimingModel::feed(const TileWork& w) {
+  ++r_.records;
+  std::array<double, kNumUnits> amount;
+  for (int k = 0; k < kNumUnits; ++k) {
+    amount[k] = static_cast<double>(w.amount(static_cast<Unit>(k)));
+    r_.units[k].work += amount[k];
+  }
+  r_.dram_depth += w.dram_depth, r_.dram_color += w.dram_color;
+  r_.dram_texture += w.dram_texture, r_.dram_hiz += w.dram_hiz;
+  // Bins are dealt round-robin to the cores by bin index; unbinned records (bin < 0) in turn.
+  const std::uint64_t core = w.bin >= 0 ? static_cast<std::uint64_t>(w.bin) % cfg_.cores : unbinned_++ % cfg_.cores;
+  Pipeline& pl = cores_[core];
+  std::array<bool, kNumUnits> occupies;
+  for (int k = 0; k < kNumUnits; ++k) occupies[k] = !cfg_.bypass_idle || amount[k] > 0;
+  double arrive = 0.0;
+  for (int k = 0; k < kNumUnits; ++k) {
+    const double start = std::max(arrive, pl.prev_depart[k]);
+    const double service = amount[k] * inv_tp_[k];
+    const double done = start + service;
+    double depart = done;
+    if (k + 1 < kNumUnits && occupies[k + 1]) {  // a credit in unit k+1's FIFO: S(i - F(k+1), k+1)
+      const std::uint64_t f = static_cast<std::uint64_t>(cfg_.units[k + 1].fifo);
+      const std::uint64_t i = pl.n[k + 1];
+      if (i >= f) depart = std::max(done, pl.starts[k + 1][i % f]);
+    }
+    if (k > 0 && occupies[k]) {  // remember S(i, k) for the records F(k) behind
+      const std::uint64_t f = static_cast<std::uint64_t>(cfg_.units[k].fifo);
+      const std::uint64_t i = pl.n[k];
+      auto& ring = pl.starts[k];
+      if (ring.size() < f && ring.size() == i) ring.push_back(start);  // grows to F entries
+      else ring[i % f] = start;
+    }
+    if (occupies[k]) ++pl.n[k];
+    pl.busy[k] += service;
+    pl.blocked[k] += depart - done;
+    pl.prev_depart[k] = depart;
+    double latency = occupies[k] ? cfg_.units[k].latency : 0.0;
+    if (k == kTex && w.texel_fetches) latency += w.tex_misses ? cfg_.tex_miss_latency : cfg_.tex_hit_latency;
+    if (k == kDepth && w.depth_fills) latency += cfg_.fill_latency;
+    arrive = depart + latency;
+  }
+  pl.end = std::max(pl.end, arrive);
+}
+
+TimingResult TimingModel::finish() {
+  TimingResult r = r_;
+  for (const Pipeline& pl : cores_) {
+    for (int k = 0; k < kNumUnits; ++k) {
+      r.units[k].busy += pl.busy[k];
+      r.units[k].blocked += pl.blocked[k];
+      r.units[k].starved += std::max(0.0, pl.end - pl.busy[k] - pl.blocked[k]);
+    }
+    r.cycles = std::max(r.cycles, pl.end);
   }
   // A core that finishes early idles until the frame ends: starved.
-  for (int c = 0; c < cfg.cores; ++c)
-    for (auto& u : r.units) u.starved += r.cycles - ends[c];
+  for (const Pipeline& pl : cores_)
+    for (auto& u : r.units) u.starved += r.cycles - pl.end;
   return r;
+}
+
+TimingResult simulate_timing(const TileWork* records, std::size_t n, const TimingConfig& cfg) {
+  TimingModel m(cfg);
+  for (std::size_t i = 0; i < n; ++i) m.feed(records[i]);
+  return m.finish();
 }
 
 std::vector<TimingFigure> timing_figures() {
   std::vector<TimingFigure> out = {
       {"timing.cycles", "clocks", "Estimated clocks per frame: the last work record leaves the last unit (docs/timing.md)"},
-      {"timing.records", "records", "Work records fed to the timing model (one per triangle and screen bin visited, one per culled triangle, one per bin with end-of-bin work)"},
+      {"timing.records", "records", "Work records fed to the timing model (one per visit, or per triangle and screen bin with hardware.timing.granularity 'bin'; one per culled triangle; one per bin with end-of-bin work)"},
       {"timing.cores", "pipelines", "Parallel pipelines modelled (hardware.cores); per-unit clocks are summed over them"},
+      {"dram.bytes", "bytes", "DRAM traffic of every client: dram.bytes_depth + dram.bytes_color + dram.bytes_texture + dram.bytes_hiz"},
+      {"dram.bytes_depth", "bytes", "DRAM traffic of the depth buffer: line fills and write-backs of the depth-tile cache (with hardware.depth_buffer.enabled false: 4 bytes per depth read and write)"},
+      {"dram.bytes_color", "bytes", "DRAM traffic of the colour sample buffer: line fills and write-backs, and the per-bin resolve (0 with hardware.color_buffer.enabled false)"},
+      {"dram.bytes_texture", "bytes", "DRAM traffic of the texture caches: line fills (tex.cache.bytes_fetched)"},
+      {"dram.bytes_hiz", "bytes", "DRAM traffic of HiZ: hiz.bytes_read + hiz.bytes_written"},
   };
   for (const auto& u : kUnitInfo)
     for (const auto& f : kUnitFigures)

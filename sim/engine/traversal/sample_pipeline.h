@@ -27,7 +27,7 @@
 #include "sampletest/hardware.h"
 #include "sampletest/inside.h"
 #include "sampletest/precision.h"
-#include "sampletest/sample_test.h"
+#include "sampletest/kernels.h"
 #include "sampletest/simd_batch.h"
 #include "setup/setup.h"
 #include "tiletest/candidates.h"
@@ -35,19 +35,13 @@
 
 namespace rast5d {
 
-// Per worker thread: counters, the screen bin's buffers, the shading state.
+// Per worker thread: counters, the screen bin's buffers, the shading state, and the observers of its
+// traversal (the memory model, the timing recorder, per-pixel statistics: core/visit_observer.h).
 struct ThreadState {
   Counters counters;
   BinBuffers buffers;
   ShadeState shade;  // the open shading visit, shading cache, texture stream (backend/shading.h)
-  // Timing records per shading visit (hardware.timing.granularity 'visit', traversal/render.cpp):
-  // while visit_records is set, every end_visit() appends the work since visit_mark (and, with a
-  // texture stream, its length after the visit to visit_stream_ends).
-  std::vector<TileWork>* visit_records = nullptr;
-  const std::vector<std::uint32_t>* visit_stream = nullptr;
-  std::vector<std::uint32_t>* visit_stream_ends = nullptr;
-  TileWork visit_mark;
-  PixelCursor* cursor = nullptr;  // per-pixel statistics (core/pixel_stats.h), when asked for
+  Observers observers;
 };
 
 // Two ways in: test() / test_sheared() for one sample, or the batch protocol
@@ -65,7 +59,7 @@ class SamplePipeline {
       : f_(f), c_(ts.counters), sh_(ts.shade), ts_(ts), backend_(f, ts.counters, ts.buffers, ts.shade), cap_(std::max(kBatch, f.table.spp())),
         model_(f.p.cost_model),
         precise_(f.p.precision_sample.kind != PrecisionKind::kFloat32),
-        cur_(ts.cursor) {
+        obs_(ts.observers), visits_(ts.observers.wants_visits()), targets_(ts.observers.wants_targets()) {
     // Two regions: the batch at 0 and, from pixel_at(), one pixel evaluated while a batch is pending
     // (run_pixel() when the test order is free).
     const std::size_t len = 2 * static_cast<std::size_t>(pixel_at());
@@ -94,12 +88,12 @@ class SamplePipeline {
   }
 
   // Per-pixel statistics (core/pixel_stats.h): the work from here on is done for pixel (px, py), or
-  // for the pixels [x0, x1) x [y0, y1) (a tile). Without statistics: one pointer test.
+  // for the pixels [x0, x1) x [y0, y1) (a tile). Without an observer of targets: one flag test.
   inline void at_pixel(int px, int py) {
-    if (cur_) [[unlikely]] retarget(px, py, px + 1, py + 1, 2);
+    if (targets_) [[unlikely]] retarget(px, py, px + 1, py + 1, 2);
   }
   inline void at_rect(int x0, int y0, int x1, int y1) {
-    if (cur_) [[unlikely]] retarget(x0, y0, x1, y1, 1);
+    if (targets_) [[unlikely]] retarget(x0, y0, x1, y1, 1);
   }
 
   // ---- batch protocol ----
@@ -354,10 +348,11 @@ class SamplePipeline {
   }
 
   // Nothing observes the order in which one triangle's samples are tested: no shading visits or
-  // texture stream are recorded (shading none), no per-visit timing records, no per-pixel
-  // statistics. Then depth slots, colours and every counter depend only on the set of samples
-  // pushed (each sample is tested once per triangle and owns its depth slot).
-  bool order_free() const { return !sh_.counting() && !ts_.visit_records && !cur_; }
+  // texture stream are recorded (shading none), no observer of visits (timing records, the memory
+  // model) or of pixel targets (per-pixel statistics). Then depth slots, colours and every counter
+  // depend only on the set of samples pushed (each sample is tested once per triangle and owns its
+  // depth slot).
+  bool order_free() const { return !sh_.counting() && !visits_ && !targets_; }
 
   // sel arrays for push_flagged(): spp flags and this many more, zero.
   static constexpr int flags_padding() { return 16; }
@@ -381,14 +376,10 @@ class SamplePipeline {
   // screen tile (or finish a pass) for the current triangle, and always before rasterize() returns.
   // Without a shading model (mode none) it does nothing, not even flush(): callers still flush.
   inline void end_visit() {
-    if (ts_.visit_records) {  // the per-visit timing hook: close the visit, then record its work
+    if (visits_) {  // observers of visits: close the visit, then tell them
       flush();
       if (sh_.counting()) sh_.close_visit();
-      const TileWork now = work_from_counters(c_);
-      ts_.visit_records->push_back(now.since(ts_.visit_mark));
-      ts_.visit_mark = now;
-      if (ts_.visit_stream_ends)
-        ts_.visit_stream_ends->push_back(static_cast<std::uint32_t>(ts_.visit_stream ? ts_.visit_stream->size() : 0));
+      obs_.end_visit();
       return;
     }
     if (!sh_.counting()) return;
@@ -436,9 +427,9 @@ class SamplePipeline {
   }
 
   void retarget(int x0, int y0, int x1, int y1, int kind) {
-    if (cur_->x0 == x0 && cur_->y0 == y0 && cur_->x1 == x1 && cur_->y1 == y1) return;
-    flush();
-    cur_->target(c_, x0, y0, x1, y1, kind);
+    if (obs_.aims_at(x0, y0, x1, y1)) return;
+    flush();  // the pending samples' work belongs to the current target
+    obs_.target(x0, y0, x1, y1, kind);
   }
 
   inline void test_values(const TriSetup& tri, F sx, F sy, F u, F v, F t, int px, int py, int s) {
@@ -699,10 +690,10 @@ class SamplePipeline {
     charge<A>(c_[Counter::ops_sample_inside], test_cost);
     if (n_ties) ++c_[Counter::raster_tie_breaks];
     if constexpr (A::counting) {  // pixel trace (sim.trace_pixel renders on the counting path)
-      if (cur_ && cur_->stats->tracing() && cur_->traces_pixel(px, py)) [[unlikely]] {
+      if (targets_ && obs_.traces(px, py)) [[unlikely]] {
         const std::uint64_t hits = c_[Counter::raster_samples_hit];
         if (covered) shade(tri, e, det, px, py, s);
-        cur_->samples.push_back({tri.index, s, covered, c_[Counter::raster_samples_hit] != hits});
+        obs_.traced_sample(tri.index, s, covered, c_[Counter::raster_samples_hit] != hits);
         return;
       }
     }
@@ -740,7 +731,8 @@ class SamplePipeline {
   std::vector<int> bpx_, bpy_, bs_, bl_;
   std::vector<int> sel_index_;  // push_flagged() without SIMD compression
   std::vector<std::uint8_t> flags_;
-  PixelCursor* cur_;
+  Observers& obs_;
+  const bool visits_, targets_;  // an observer wants visit ends / pixel targets
 };
 
 }  // namespace rast5d

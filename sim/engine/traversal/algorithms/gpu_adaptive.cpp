@@ -1,5 +1,5 @@
-// GPU_ADAPTIVE: the conventional-GPU pipeline (gpu/gpu_pipeline.h) with the 000 §4.7 per-triangle choice: parallel-edge triangle for small blur bound.
-#include "gpu/gpu_pipeline.h"
+// GPU_ADAPTIVE: the conventional-GPU pipeline (traversal/algorithms/gpu_pipeline.h) with the 000 §4.7 per-triangle choice: parallel-edge triangle for small blur bound.
+#include "traversal/algorithms/gpu_pipeline.h"
 
 namespace rast5d {
 namespace {

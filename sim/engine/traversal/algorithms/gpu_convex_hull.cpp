@@ -1,5 +1,5 @@
-// GPU_CONVEX_HULL: the conventional-GPU pipeline (gpu/gpu_pipeline.h) with the 003 bound.
-#include "gpu/gpu_pipeline.h"
+// GPU_CONVEX_HULL: the conventional-GPU pipeline (traversal/algorithms/gpu_pipeline.h) with the 003 bound.
+#include "traversal/algorithms/gpu_pipeline.h"
 
 namespace rast5d {
 namespace {

@@ -1,5 +1,5 @@
-// GPU_HEXAGON3D: the conventional-GPU pipeline (gpu/gpu_pipeline.h) with the 000 §4.4 3D hexagonal bounding volume bound.
-#include "gpu/gpu_pipeline.h"
+// GPU_HEXAGON3D: the conventional-GPU pipeline (traversal/algorithms/gpu_pipeline.h) with the 000 §4.4 3D hexagonal bounding volume bound.
+#include "traversal/algorithms/gpu_pipeline.h"
 
 namespace rast5d {
 namespace {

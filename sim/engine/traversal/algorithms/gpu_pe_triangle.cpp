@@ -1,5 +1,5 @@
-// GPU_PE_TRIANGLE: the conventional-GPU pipeline (gpu/gpu_pipeline.h) with the 000 §4.5 parallel-edge bounding triangle bound.
-#include "gpu/gpu_pipeline.h"
+// GPU_PE_TRIANGLE: the conventional-GPU pipeline (traversal/algorithms/gpu_pipeline.h) with the 000 §4.5 parallel-edge bounding triangle bound.
+#include "traversal/algorithms/gpu_pipeline.h"
 
 namespace rast5d {
 namespace {

@@ -1,5 +1,5 @@
-// GPU_REDUCED_WEDGE: the conventional-GPU pipeline (gpu/gpu_pipeline.h) with the 000 §4.5 reduced bounding wedge bound.
-#include "gpu/gpu_pipeline.h"
+// GPU_REDUCED_WEDGE: the conventional-GPU pipeline (traversal/algorithms/gpu_pipeline.h) with the 000 §4.5 reduced bounding wedge bound.
+#include "traversal/algorithms/gpu_pipeline.h"
 
 namespace rast5d {
 namespace {

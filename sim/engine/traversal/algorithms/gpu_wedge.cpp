@@ -1,5 +1,5 @@
-// GPU_WEDGE: the conventional-GPU pipeline (gpu/gpu_pipeline.h) with the 000 §4.5 bounding wedge bound.
-#include "gpu/gpu_pipeline.h"
+// GPU_WEDGE: the conventional-GPU pipeline (traversal/algorithms/gpu_pipeline.h) with the 000 §4.5 bounding wedge bound.
+#include "traversal/algorithms/gpu_pipeline.h"
 
 namespace rast5d {
 namespace {

@@ -40,7 +40,7 @@ class Interleave final : public Traversal {
     if constexpr (kPassSetup) pass_times(f.table);
     // Without per-pixel statistics nothing is done for a pixel without samples of the pass's lens
     // coordinate (at_pixel() is a no-op): the passes visit only the pixels that hold some.
-    if (!ts.cursor) lens_rows(f.table);
+    if (!ts.observers.wants_targets()) lens_rows(f.table);
   }
 
   void rasterize(const TriSetup& tri, const BinRect& bin, bool charge_setup) override {

@@ -7,7 +7,7 @@
 
 #include "setup/footprint.h"
 #include "tiletest/candidates.h"
-#include "tiletest/exact_region.h"
+#include "traversal/exact_region.h"
 #include "tiletest/halfspace_lens.h"
 #include "tiletest/precision_4d.h"
 #include "traversal/traversal.h"

@@ -21,10 +21,10 @@
 #include "intervals/time_interval.h"
 #include "setup/footprint.h"
 #include "tiletest/candidates.h"
-#include "tiletest/exact_region.h"
+#include "traversal/exact_region.h"
 #include "tiletest/halfspace_lens.h"
 #include "tiletest/precision_4d.h"
-#include "tiletest/precision_5d.h"
+#include "intervals/precision_5d.h"
 #include "traversal/traversal.h"
 
 namespace rast5d {

@@ -3,7 +3,7 @@
 // a line direction (u, v) = (cos θ, sin θ) through the lens centre; consecutive lines with the same
 // screen point form a wagon wheel and share the lens-space setup (004 §3.1.1). For every pixel of
 // the triangle's bounds in the bin and every line, the analytic interval of the line inside the
-// triangle (lines/line_test.h) becomes a segment, shaded at its midpoint and offered to the line's
+// triangle (lines/coverage.h) becomes a segment, shaded at its midpoint and offered to the line's
 // segment buffer (lines/segment_buffer.h). When the bin's triangles are done, end_bin() composites
 // each line (κ-weighted, 004 §3.1.2) into the bin's sample colours, which resolve() averages.
 // With pipeline.lines.tile_clip the triangle's h_i lens region of each screen tile (001 §4.2)
@@ -29,7 +29,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "lines/line_test.h"
+#include "lines/coverage.h"
 #include "lines/segment_buffer.h"
 #include "setup/footprint.h"
 #include "tiletest/halfspace_lens.h"
@@ -293,17 +293,12 @@ class Lines final : public Traversal {
   }
 
   // The end of the triangle's shading visit in this bin (SamplePipeline::end_visit's protocol):
-  // its segments' shading work is counted now; with per-visit timing records, one record.
+  // its segments' shading work is counted now, and the observers of visits hear of it. Without a
+  // shading model a triangle's line tests in a bin are one visit (its end is the triangle's end).
   void end_visit() {
-    if (!sh_.counting()) return;  // no shading model: nothing to close, one record per (triangle, bin)
+    if (!sh_.counting()) return;
     sh_.close_visit();
-    if (ts_.visit_records) {
-      const TileWork now = work_from_counters(c_);
-      ts_.visit_records->push_back(now.since(ts_.visit_mark));
-      ts_.visit_mark = now;
-      if (ts_.visit_stream_ends)
-        ts_.visit_stream_ends->push_back(static_cast<std::uint32_t>(ts_.visit_stream ? ts_.visit_stream->size() : 0));
-    }
+    if (ts_.observers.wants_visits()) ts_.observers.end_visit();
   }
 
   static constexpr float kWiden = 1e-4f;

@@ -7,7 +7,7 @@
 #include <cstdint>
 
 #include "core/counters.h"
-#include "tiletest/tile_test.h"
+#include "tiletest/common.h"
 
 namespace rast5d {
 

@@ -14,7 +14,7 @@
 #include "core/costs.h"
 #include "tiletest/halfspace_lens.h"
 #include "tiletest/lens_vertex.h"
-#include "tiletest/tile_test.h"
+#include "tiletest/common.h"
 
 namespace rast5d {
 

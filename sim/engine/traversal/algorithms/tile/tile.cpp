@@ -22,13 +22,13 @@
 #include "setup/footprint.h"
 #include "tiletest/candidates.h"
 #include "tiletest/edges_2d.h"
-#include "tiletest/exact_region.h"
-#include "tiletest/halfspace_5d.h"
+#include "traversal/exact_region.h"
+#include "intervals/halfspace_5d.h"
 #include "tiletest/halfspace_edges.h"
 #include "tiletest/halfspace_lens.h"
 #include "tiletest/lens_shape.h"
 #include "tiletest/precision_4d.h"
-#include "tiletest/precision_5d.h"
+#include "intervals/precision_5d.h"
 #include "traversal/algorithms/tile/active_cells.h"
 #include "traversal/algorithms/tile/axis_cache.h"
 #include "traversal/algorithms/tile/hj_cells.h"
@@ -75,7 +75,7 @@ class Tile final : public Traversal {
     }
     if (tri.moving && f_.p.motion_test == MotionTest::kIntervals && !kInterleaved) {
       iv::motion_setup<A>(tri, f_.fc, f_.p.time_splits, ms_, setup_ops);
-      if (f_.p.halfspace_H5) {  // H5 planes per sub-interval (tiletest/halfspace_5d.h)
+      if (f_.p.halfspace_H5) {  // H5 planes per sub-interval (intervals/halfspace_5d.h)
         tiletest::h5_setup<A>(ms_, f_.fc, h5_oracle(tri), h5_, setup_ops);
         if (charge_setup) c_[Counter::tile_H5_sub_unoriented] += static_cast<std::uint64_t>(h5_.n_unoriented);
       }

@@ -12,7 +12,7 @@
 #include "core/sample_table.h"
 #include "setup/footprint.h"
 #include "setup/setup.h"
-#include "tiletest/tile_test.h"
+#include "tiletest/common.h"
 
 namespace rast5d::tiletest {
 

@@ -20,10 +20,9 @@
 #include <cstdint>
 
 #include "core/arith.h"
+#include "core/triangle.h"
 
 namespace rast5d {
-
-enum class DimClass : int { k2D = 0, k3D = 1, k4D = 2, k5D = 3 };
 
 // Homogeneous edge functions and determinant of a (sheared) triangle at the sample (sx, sy).
 // Cost: cost::kEdges (core/costs.h). The scalar-argument form is the single definition of the

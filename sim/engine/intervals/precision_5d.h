@@ -1,7 +1,7 @@
 // The motion tile tests in a chosen arithmetic (pipeline.precision.tile: float32 or fixed point;
 // docs/precision.md, docs/tile_tests.md "Precision"): the time intervals t̂ and the 5D lens sets of
 // `motion_test: intervals` (intervals/time_interval.h; TILE's moving triangles and LAINE5D) and the H5
-// planes (tiletest/halfspace_5d.h). The float64 kernels stay the render's counted form (precision changes
+// planes (intervals/halfspace_5d.h). The float64 kernels stay the render's counted form (precision changes
 // which (lens, time) regions are culled, not what a test costs); each *_in function below returns the
 // decision of the datapath in the format, conservative by construction, with the arithmetic of
 // precision_4d.h (PVal: a value of the format and a bound of its distance to the exact value; Arith4D):
@@ -42,7 +42,7 @@
 
 #include "intervals/clip.h"
 #include "intervals/time_interval.h"
-#include "tiletest/halfspace_5d.h"
+#include "intervals/halfspace_5d.h"
 #include "tiletest/precision_4d.h"
 
 namespace rast5d::tiletest {

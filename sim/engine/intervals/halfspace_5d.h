@@ -33,7 +33,7 @@
 // so for the whole sub-interval) for the projected triangle to be the hull of its projected
 // vertices. 3D triangles (no lens) use u = v = 0: H_c = C(s), a test per sub-interval.
 //
-// Contract (tile_test.h): conservative. The tile is the expanded tile, the constants are in double,
+// Contract (tiletest/common.h): conservative. The tile is the expanded tile, the constants are in double,
 // and a cell is culled only where the bound above is negative over the whole cell: it never
 // removes a (u, v, t) of t̂_k from which the float sample test could hit a sample of the tile.
 // tests/test_halfspace_5d.py checks it against brute force.
@@ -47,7 +47,7 @@
 #include "intervals/time_interval.h"
 #include "setup/footprint.h"
 #include "tiletest/halfspace_edges.h"
-#include "tiletest/tile_test.h"
+#include "tiletest/common.h"
 
 namespace rast5d::tiletest {
 

@@ -5,7 +5,7 @@
 //  * A line sample is a screen point (sx, sy) and a direction (c, s) = (cos θ, sin θ) through the
 //    lens centre; it covers the lens points p (c, s), p in [-1, 1] (the unit disk lens).
 //  * At a fixed screen point the homogeneous edge functions of the sheared triangle
-//    (sampletest/sample_test.h) are linear in (u, v): the u·v terms cancel because every vertex is
+//    (sampletest/kernels.h) are linear in (u, v): the u·v terms cancel because every vertex is
 //    sheared by the same K (W_j - F) (004 Eq. 2 in homogeneous form). So are det = Σ W_j e_j and
 //    sum = Σ e_j. line_point_setup() computes, once per (screen point, triangle), each function's
 //    value at the lens centre and its u and v gradients (004's C_i, A_i, B_i); line_interval()

@@ -3,8 +3,8 @@
 //
 // 1. Bounds pre-pass over every triangle (setup_bounds(): setup's own bounds and culls, without the
 //    kernel constants, nothing charged). From it, for every bin: the brute-force work (the
-//    stratification's sort key, traversal/bin_sample.h) and the frame totals of the regression
-//    estimator's auxiliaries (traversal/bin_covariates.h), summed per triangle.
+//    stratification's sort key, sampled/bin_sample.h) and the frame totals of the regression
+//    estimator's auxiliaries (sampled/bin_covariates.h), summed per triangle.
 // 2. The draw (or the given list).
 // 3. setup_triangle() for the live triangles whose bounds overlap a drawn bin, and for the culled ones
 //    (their counts are exact). The drawn bins' auxiliaries come from the same setup fields.
@@ -12,7 +12,7 @@
 // Setup counts: setup.triangles and the whole setup of the culled triangles are the frame's exactly.
 // Every live triangle's setup counters belong to its home bin (the bin holding the top-left corner of
 // its bounds, the bin where traversals charge their per-triangle setup too): they are added to that
-// bin's row of RenderResult::bin_counters when it is drawn, and estimated with the rest of the bin's
+// bin's row of SampledBins::bin_counters when it is drawn, and estimated with the rest of the bin's
 // counters; a triangle set up only because it reaches a drawn bin it is not homed in adds nothing to
 // the counters. With every bin listed, the counters equal the whole frame's.
 #pragma once
@@ -29,11 +29,26 @@
 #include <vector>
 
 #include "setup/setup.h"
-#include "traversal/bin_covariates.h"
-#include "traversal/bin_sample.h"
-#include "traversal/render.h"
+#include "sampled/bin_covariates.h"
+#include "sampled/bin_sample.h"
+#include "core/scene.h"
 
 namespace rast5d {
+
+// What a render of a bin list, or a sampled simulation, returns besides the frame's counters: the
+// traversed bins (the list, or the stratified draw of sampled/bin_sample.h) with each one's counters
+// (one row of kNumCounters per entry, in its order: its traversal work and the setup of the live
+// triangles homed in it), every bin's brute-force work (sum over its triangles of their bounds' pixels
+// in the bin, times spp), the stratum of each drawn bin and the strata sizes (empty: every bin with
+// triangles was drawn), and the regression estimator's auxiliaries (sampled/bin_covariates.h): kBinAux
+// per bin (NaN in bins not drawn when only the drawn bins' were computed) and their frame totals.
+struct SampledBins {
+  std::vector<int> bins, stratum, strata_sizes;
+  std::vector<std::uint64_t> bin_counters;
+  std::vector<std::int64_t> bin_work;
+  std::vector<double> bin_aux, bin_aux_total;
+  bool empty() const { return bin_work.empty(); }
+};
 
 // A bin list's entries are distinct bin indices in 0 .. n_bins - 1; std::invalid_argument otherwise.
 inline void require_bin_list(const std::vector<int>& bins, int n_bins) {
@@ -65,12 +80,11 @@ struct UnconstructedSetups {
 // UnconstructedSetups; only the set-up triangles' slots are read afterwards), frame_setup with the
 // frame's setup counters (those of the home bins included), homed[k] with the setup counters of the
 // triangles homed in drawn bin k, drawn with the bins to traverse (the list, or the stratified draw),
-// and result's bin_work, bin_aux (NaN for the bins not drawn), bin_aux_total, sampled_stratum and
-// strata_sizes.
+// and out's bin_work, bin_aux (NaN for the bins not drawn), bin_aux_total, stratum and strata_sizes.
 inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const SceneArrays& scene, int spp,
                           const std::vector<int>* list, TriSetup* setups, std::vector<char>& alive,
                           Counters& frame_setup, std::vector<Counters>& homed, std::vector<int>& drawn,
-                          RenderResult& result) {
+                          SampledBins& out) {
   const int B = p.bin_size;
   const int bins_x = (p.width + B - 1) / B, bins_y = (p.height + B - 1) / B;
   const int n_bins = bins_x * bins_y;
@@ -83,7 +97,7 @@ inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const Sce
     int culled;  // 0, or setup_bounds()'s cull
   };
   std::vector<Pre> pre(n);
-  result.bin_work.assign(static_cast<std::size_t>(n_bins), 0);
+  out.bin_work.assign(static_cast<std::size_t>(n_bins), 0);
   BinAux total;  // the frame's auxiliaries
   TriSetup t;
   for (std::size_t i = 0; i < n; ++i) {
@@ -94,7 +108,7 @@ inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const Sce
     for (int by = t.by0 / B; by <= (t.by1 - 1) / B; ++by) {
       const std::int64_t dy = std::min(t.by1, (by + 1) * B) - std::max(t.by0, by * B);
       for (int bx = t.bx0 / B; bx <= (t.bx1 - 1) / B; ++bx)
-        result.bin_work[by * bins_x + bx] += dy * (std::min(t.bx1, (bx + 1) * B) - std::max(t.bx0, bx * B));
+        out.bin_work[by * bins_x + bx] += dy * (std::min(t.bx1, (bx + 1) * B) - std::max(t.bx0, bx * B));
     }
     // The triangle's auxiliaries summed over its bins: bin_covariate_terms over the union of its bins
     // (its bounds lie inside, so the share is 1; clipped areas add up over the bins).
@@ -102,18 +116,18 @@ inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const Sce
     const double x1 = std::min(p.width, ((t.bx1 - 1) / B + 1) * B), y1 = std::min(p.height, ((t.by1 - 1) / B + 1) * B);
     bin_covariate_terms(t, triangle_covariates(t, B), x0, y0, x1, y1, total);
   }
-  for (auto& w : result.bin_work) w *= spp;
-  result.bin_aux_total.assign(kBinAux, 0.0);
-  total.store(result.bin_aux_total, 0, spp);
+  for (auto& w : out.bin_work) w *= spp;
+  out.bin_aux_total.assign(kBinAux, 0.0);
+  total.store(out.bin_aux_total, 0, spp);
 
   // ---- 2. the drawn bins ----
   if (list) {
     drawn = *list;
   } else {
-    BinSample s = stratify_bins(result.bin_work, p.sample_fraction, static_cast<std::uint64_t>(p.sample_seed));
+    BinSample s = stratify_bins(out.bin_work, p.sample_fraction, static_cast<std::uint64_t>(p.sample_seed));
     drawn = std::move(s.bins);
-    result.sampled_stratum = std::move(s.stratum);
-    result.strata_sizes = std::move(s.sizes);
+    out.stratum = std::move(s.stratum);
+    out.strata_sizes = std::move(s.sizes);
   }
   std::vector<int> k_of(static_cast<std::size_t>(n_bins), -1);
   for (std::size_t k = 0; k < drawn.size(); ++k) k_of[drawn[k]] = static_cast<int>(k);  // distinct: checked
@@ -165,7 +179,7 @@ inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const Sce
   }
 
   // ---- the drawn bins' auxiliaries ----
-  result.bin_aux.assign(static_cast<std::size_t>(n_bins) * kBinAux, std::numeric_limits<double>::quiet_NaN());
+  out.bin_aux.assign(static_cast<std::size_t>(n_bins) * kBinAux, std::numeric_limits<double>::quiet_NaN());
   std::vector<TriangleCovariates> cov;
   std::vector<int> cov_of(reach.empty() ? 0 : n, -1);
   for (std::size_t k = 0; k < drawn.size(); ++k) {
@@ -178,8 +192,31 @@ inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const Sce
       if (cov_of[i] < 0) cov_of[i] = static_cast<int>(cov.size()), cov.push_back(triangle_covariates(setups[i], B));
       bin_covariate_terms(setups[i], cov[cov_of[i]], x0, y0, x1, y1, a);
     }
-    a.store(result.bin_aux, static_cast<std::size_t>(b), spp);
+    a.store(out.bin_aux, static_cast<std::size_t>(b), spp);
   }
+}
+
+// Every bin's brute-force work and auxiliaries when the whole frame was set up (the bin list or the
+// sampled draw under per-pixel statistics or timing, which set up every triangle).
+inline void whole_frame_bins(const std::vector<TriSetup>& setups, const std::vector<std::vector<std::uint32_t>>& bin_lists,
+                             int bins_x, int B, int width, int height, int spp, SampledBins& out) {
+  const int n_bins = static_cast<int>(bin_lists.size());
+  out.bin_work.assign(static_cast<std::size_t>(n_bins), 0);
+  for (int b = 0; b < n_bins; ++b) {
+    const int bx = b % bins_x, by = b / bins_x;
+    const int x0 = bx * B, y0 = by * B, x1 = std::min(width, x0 + B), y1 = std::min(height, y0 + B);
+    std::int64_t w = 0;
+    for (std::uint32_t i : bin_lists[b]) {
+      const TriSetup& t = setups[i];
+      const std::int64_t dx = std::min(t.bx1, x1) - std::max(t.bx0, x0), dy = std::min(t.by1, y1) - std::max(t.by0, y0);
+      if (dx > 0 && dy > 0) w += dx * dy;
+    }
+    out.bin_work[b] = w * spp;
+  }
+  bin_covariates(setups, bin_lists, bins_x, B, width, height, spp, out.bin_aux);
+  out.bin_aux_total.assign(kBinAux, 0.0);  // every bin's auxiliaries computed: their sums
+  for (int b = 0; b < n_bins; ++b)
+    for (int j = 0; j < kBinAux; ++j) out.bin_aux_total[j] += out.bin_aux[kBinAux * b + j];
 }
 
 }  // namespace rast5d
