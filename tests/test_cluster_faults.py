@@ -1,0 +1,328 @@
+"""Sweeps on a real Dask cluster under faults: a scheduler and workers started as separate processes
+on 127.0.0.1 (tests/cluster.py), killed as an operator or the machine would kill them. In each case
+the sweep completes, or stops with an error naming the fault and a rerun completes it; every
+finished point stays in the store; no point file is written twice with different contents; and
+every row equals a clean in-process run's (all columns but the point's wall time).
+
+Test-only hooks (tests/faults/sitecustomize.py, switched on by RAST5D_TEST_FAULTS in the processes
+these tests start) make a point slow, hang or allocate memory. The soak (a few hundred points with
+workers killed at random for at least ten minutes) is in the slow tier: `pytest -m slow -k soak`."""
+import os
+import random
+import re
+import subprocess
+import sys
+import threading
+import time
+
+import pandas as pd
+import pytest
+
+from experiments import config as xc
+from experiments.run import runner, store as result_store
+from tests.cluster import ProcessCluster, fault_env, started, wait_until
+
+pytestmark = [pytest.mark.smoke,
+              pytest.mark.filterwarnings("ignore::DeprecationWarning", "ignore::ResourceWarning",
+                                         "ignore::pytest.PytestUnraisableExceptionWarning")]
+
+SWEEP = """\
+scene: {{name: quad}}
+camera: {{width: 32, height: 32, coc_px: 4}}
+samples: {{spp: 4}}
+pipeline: {{algorithm: tile}}
+sweep:
+  samples.seed: {seeds}
+"""
+
+
+def sweep_config(tmp_path, seeds, extra: str = "", name: str = "faults"):
+    p = tmp_path / f"{name}.yaml"
+    p.write_text(f"name: {name}\n" + SWEEP.format(seeds=list(seeds)) + extra)
+    return p
+
+
+def clean_rows(tmp_path, config_path, monkeypatch) -> dict:
+    """{config_hash: row} of the sweep run in-process into its own store, without any hook or fault."""
+    monkeypatch.setenv("RAST5D_RESULTS", str(tmp_path / "clean"))
+    df = runner.run_sweep(xc.load_config(config_path), workers=0, progress=False)
+    return {r["config_hash"]: r for r in df.to_dict("records")}
+
+
+def same_row(a: dict, b: dict) -> bool:
+    """Rows equal in every column but the point's own wall time (NaN equal to NaN)."""
+    keys = (set(a) | set(b)) - {"time.wall_s"}
+    return all(a.get(k) == b.get(k) or (pd.isna(a.get(k)) and pd.isna(b.get(k))) for k in keys)
+
+
+class Writes:
+    """Every point file the store puts in place (by hash), to check none is written twice."""
+
+    def __init__(self, monkeypatch):
+        self.rows: dict[str, list] = {}
+        real = result_store.write_point_file
+
+        def recording(df, path, keep=None):
+            installed = real(df, path, keep=keep)
+            if installed:
+                self.rows.setdefault(path.name, []).append(dict(df) if isinstance(df, dict) else df)
+            return installed
+
+        monkeypatch.setattr(result_store, "write_point_file", recording)
+
+    def twice(self) -> dict:
+        return {k: v for k, v in self.rows.items() if len(v) > 1}
+
+
+def in_thread(fn):
+    """Run fn() in a thread; returns (thread, box) where box gets 'result' or 'error'."""
+    box: dict = {}
+
+    def target():
+        try:
+            box["result"] = fn()
+        except BaseException as e:  # noqa: BLE001 - handed to the test
+            box["error"] = e
+
+    t = threading.Thread(target=target, daemon=True)
+    t.start()
+    return t, box
+
+
+def stored_rows(store) -> dict:
+    return {r["config_hash"]: r for r in (result_store.read_point_file(f) for f in (store / "points").glob("*.parquet"))}
+
+
+# ---- a worker SIGKILLed in the middle of a point ----------------------------------------------------
+
+def test_a_worker_killed_in_the_middle_of_a_point_loses_nothing(tmp_path, monkeypatch):
+    """The worker process running a point is SIGKILLed mid-point; Dask runs the point again on a live
+    worker (its nanny restarts the dead one) and the sweep completes with every row equal to a clean
+    run's, each point file written once."""
+    seeds = range(1, 7)
+    cfg = sweep_config(tmp_path, seeds)
+    clean = clean_rows(tmp_path, cfg, monkeypatch)
+    log = tmp_path / "log"
+    log.mkdir()
+    store = tmp_path / "results"
+    monkeypatch.setenv("RAST5D_RESULTS", str(store))
+    writes = Writes(monkeypatch)
+    with ProcessCluster(tmp_path / "cluster", 2, env=fault_env(log, {"*": "sleep:1.5"})) as cluster:
+        cluster.wait_for_workers(2)
+        thread, box = in_thread(lambda: runner.run_sweep(xc.load_config(cfg), scheduler=cluster.address,
+                                                         progress=False))
+        # the third point to start: kill its worker process 0.5 s into its 1.5 s
+        seed, pid, _ = wait_until(lambda: started(log)[2] if len(started(log)) >= 3 else None, 180,
+                                  "three points started", )
+        time.sleep(0.5)
+        cluster.kill(pid)
+        thread.join(300)
+        assert not thread.is_alive(), cluster.logs()
+    assert "error" not in box, box.get("error")
+    df = box["result"]
+    assert len(df) == 6 and (df["status"] == "ok").all(), df[["status", "error"]]
+    runs = [s for s, _, _ in started(log)]
+    assert runs.count(seed) == 2, f"the killed point ran {runs.count(seed)} times: {runs}"  # killed mid-point, re-run
+    assert len({p for _, p, _ in started(log)}) >= 3  # a third worker process: the nanny's restart
+    assert not writes.twice(), writes.twice()
+    rows = stored_rows(store)
+    assert set(rows) == set(clean) and all(same_row(rows[h], clean[h]) for h in clean)
+
+
+# ---- a point that hangs, with executor.point_timeout_s ---------------------------------------------
+
+@pytest.mark.slow
+def test_a_hanging_point_on_the_cluster_becomes_an_error_row_at_its_timeout(tmp_path, monkeypatch):
+    cfg = sweep_config(tmp_path, [1, 2, 3, 4], extra="executor: {point_timeout_s: 4}\n")
+    clean = clean_rows(tmp_path, cfg, monkeypatch)
+    log = tmp_path / "log"
+    log.mkdir()
+    store = tmp_path / "results"
+    monkeypatch.setenv("RAST5D_RESULTS", str(store))
+    with ProcessCluster(tmp_path / "cluster", 2, env=fault_env(log, {3: "hang"})) as cluster:
+        cluster.wait_for_workers(2)
+        t0 = time.monotonic()
+        df = runner.run_sweep(xc.load_config(cfg), scheduler=cluster.address, progress=False)
+        took = time.monotonic() - t0
+        hung = [p for s, p, _ in started(log) if s == 3]
+    assert df["status"].tolist() == ["ok", "ok", "error", "ok"], df[["status", "error"]]
+    assert "executor.point_timeout_s = 4" in df["error"].iloc[2] and took < 120
+    assert len(hung) == 1  # stopped once, not retried
+    with pytest.raises(ProcessLookupError):  # its process was killed
+        os.kill(hung[0], 0)
+    rows = stored_rows(store)
+    ok = [h for h in clean if rows[h]["status"] == "ok"]
+    assert len(ok) == 3 and all(same_row(rows[h], clean[h]) for h in ok)
+    assert rows[df["config_hash"].iloc[2]]["error"] == df["error"].iloc[2]  # stored: a rerun serves it as failed
+
+
+# ---- a point over the worker's memory_limit ------------------------------------------------------------
+
+@pytest.mark.slow
+def test_a_point_over_the_workers_memory_limit_is_an_error_row_naming_the_memory(tmp_path, monkeypatch):
+    """The point allocates 3 GiB on workers of 1 GiB: each worker it runs on is restarted by its nanny;
+    after the scheduler's allowed-failures (1 here) the point is an error row naming the memory, stored,
+    so a rerun serves it as failed instead of killing workers again."""
+    cfg = sweep_config(tmp_path, [1, 2, 3, 4])
+    clean = clean_rows(tmp_path, cfg, monkeypatch)
+    log = tmp_path / "log"
+    log.mkdir()
+    store = tmp_path / "results"
+    monkeypatch.setenv("RAST5D_RESULTS", str(store))
+    env = fault_env(log, {2: "alloc:3"})
+    with ProcessCluster(tmp_path / "cluster", 2, memory_limit="1GiB", env=env,
+                        scheduler_env={"DASK_DISTRIBUTED__SCHEDULER__ALLOWED_FAILURES": "1"}) as cluster:
+        cluster.wait_for_workers(2)
+        df = runner.run_sweep(xc.load_config(cfg), scheduler=cluster.address, progress=False)
+        assert df["status"].tolist() == ["ok", "error", "ok", "ok"], df[["status", "error"]]
+        error = df["error"].iloc[1]
+        assert "out of memory" in error and "memory_limit 1.00 GiB" in error and "2 attempts" in error, error
+        assert [s for s, _, _ in started(log)].count(2) == 2  # allowed-failures + 1 attempts, then no more
+        again = runner.run_sweep(xc.load_config(cfg), scheduler=cluster.address, progress=False)
+    assert again.attrs["summary"]["rendered"] == 0 and again.attrs["summary"]["failed_cached"] == 1
+    assert [s for s, _, _ in started(log)].count(2) == 2  # the rerun did not run it again
+    rows = stored_rows(store)
+    assert all(same_row(rows[h], clean[h]) for h in clean if rows[h]["status"] == "ok")
+
+
+# ---- the scheduler killed, then restarted ----------------------------------------------------------------
+
+@pytest.mark.slow
+def test_a_lost_scheduler_stops_the_run_naming_it_and_a_rerun_completes(tmp_path, monkeypatch):
+    seeds = list(range(1, 13))
+    cfg = sweep_config(tmp_path, seeds)
+    clean = clean_rows(tmp_path, cfg, monkeypatch)
+    log = tmp_path / "log"
+    log.mkdir()
+    store = tmp_path / "results"
+    env = {**fault_env(log, {"*": "sleep:1"}), "RAST5D_RESULTS": str(store)}
+    cmd = [sys.executable, "-m", "experiments.cli", "run", str(cfg), "--no-report", "--quiet"]
+    with ProcessCluster(tmp_path / "cluster", 2, env=env) as cluster:
+        cluster.wait_for_workers(2)
+        run = subprocess.Popen(cmd + ["--scheduler", cluster.address], env=env, stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True)
+        wait_until(lambda: len(list((store / "points").glob("*.parquet"))) >= 3 or run.poll() is not None, 300,
+                   "three points stored")
+        before = {f.name: f.read_bytes() for f in (store / "points").glob("*.parquet")}
+        cluster.kill_scheduler()
+        t0 = time.monotonic()
+        out, err = run.communicate(timeout=120)
+        stopped_after = time.monotonic() - t0
+        assert run.returncode == 3, (out, err)
+        assert f"lost the Dask scheduler at {cluster.address}" in err and "Traceback" not in err, err
+        assert stopped_after < 30, stopped_after
+        # the operator restarts the cluster (the workers left when their scheduler went)
+        cluster.start_scheduler()
+        for w in list(cluster.workers):
+            cluster.kill(w)
+        cluster.workers.clear()
+        cluster.start_worker()
+        cluster.start_worker()
+        cluster.wait_for_workers(2)
+        rerun = subprocess.run(cmd + ["--scheduler", cluster.address], env=env, capture_output=True, text=True,
+                               timeout=300)
+    assert rerun.returncode == 0, rerun.stderr
+    rows = stored_rows(store)
+    assert set(rows) == set(clean) and all(same_row(rows[h], clean[h]) for h in clean)
+    after = {f.name: f.read_bytes() for f in (store / "points").glob("*.parquet")}
+    assert all(after[k] == v for k, v in before.items())  # the points stored before the fault were not rewritten
+    table = pd.read_parquet(store / "faults.parquet")
+    assert len(table) == 12 and (table["status"] == "ok").all()
+
+
+# ---- a scheduler that does not answer ------------------------------------------------------------------
+
+def test_a_scheduler_that_does_not_answer_is_a_clear_error_within_the_connect_timeout(tmp_path, monkeypatch):
+    from tests.cluster import free_port
+
+    monkeypatch.setenv("RAST5D_RESULTS", str(tmp_path / "results"))
+    address = f"tcp://127.0.0.1:{free_port()}"  # nothing listens there
+    cfg = sweep_config(tmp_path, [1, 2], extra="executor: {connect_timeout_s: 2}\n")
+    t0 = time.monotonic()
+    r = subprocess.run([sys.executable, "-m", "experiments.cli", "run", str(cfg), "--scheduler", address,
+                        "--no-report"], capture_output=True, text=True, timeout=120,
+                       env={**os.environ, "RAST5D_RESULTS": str(tmp_path / "results")})
+    assert r.returncode == 3, r
+    assert re.search(rf"error: executor: the Dask scheduler at {address} did not answer within 2 s", r.stderr), r.stderr
+    assert "Traceback" not in r.stderr and time.monotonic() - t0 < 60
+    assert not list((tmp_path / "results" / "points").glob("*"))  # no lock or row left behind
+
+
+# ---- the soak --------------------------------------------------------------------------------------------
+
+SOAK_POINTS = int(os.environ.get("RAST5D_SOAK_POINTS", 300))
+SOAK_MIN_S = float(os.environ.get("RAST5D_SOAK_MIN_S", 600))
+
+
+@pytest.mark.slow
+def test_soak_a_long_sweep_with_workers_killed_at_random_equals_a_clean_run(tmp_path, monkeypatch):
+    """A few hundred small points on a 2-worker cluster for at least ten minutes, while a worker
+    process (its nanny restarts it) or a whole worker (nanny and all: the test starts a new one) is
+    SIGKILLed every 10-40 s at random, sometimes both workers at once. Each point sleeps 3-5 s in the
+    test hook before it renders, so the sweep is long without loading the machine. The sweep
+    completes; every point is present and equal to a clean in-process run's row, and no point file is
+    written twice. Prints its figures (points, faults, wall time, rows equal)."""
+    rng = random.Random(2024)
+    seeds = list(range(1000, 1000 + SOAK_POINTS))
+    pace = SOAK_MIN_S * 2 / SOAK_POINTS  # seconds per point on 2 workers
+    actions = {s: f"sleep:{pace * rng.uniform(0.8, 1.2):.2f}" for s in seeds}
+    cfg = sweep_config(tmp_path, seeds, name="soak")
+    t_clean = time.monotonic()
+    clean = clean_rows(tmp_path, cfg, monkeypatch)
+    t_clean = time.monotonic() - t_clean
+    log = tmp_path / "log"
+    log.mkdir()
+    store = tmp_path / "results"
+    monkeypatch.setenv("RAST5D_RESULTS", str(store))
+    writes = Writes(monkeypatch)
+    faults = {"worker process": 0, "whole worker": 0, "both workers": 0}
+    with ProcessCluster(tmp_path / "cluster", 2, env=fault_env(log, actions),
+                        scheduler_env={"DASK_DISTRIBUTED__SCHEDULER__ALLOWED_FAILURES": "20"}) as cluster:
+        cluster.wait_for_workers(2)
+        t0 = time.monotonic()
+        thread, box = in_thread(lambda: runner.run_sweep(xc.load_config(cfg), scheduler=cluster.address,
+                                                         progress=False))
+        while thread.is_alive():
+            thread.join(rng.uniform(10, 40))
+            if not thread.is_alive():
+                break
+            running = {}
+            for seed, pid, _ in started(log):
+                running[pid] = seed  # the latest point of each process
+            live = [pid for pid in running if _alive(pid)]
+            choice = rng.random()
+            if choice < 0.6 and live:  # the worker process in the middle of a point; its nanny restarts it
+                cluster.kill(rng.choice(live))
+                faults["worker process"] += 1
+            elif choice < 0.85:  # a whole worker (nanny and process); a new one joins 5 s later
+                alive = [w for w in cluster.workers if w.poll() is None]
+                if alive:
+                    cluster.kill(rng.choice(alive))
+                    faults["whole worker"] += 1
+                    time.sleep(5)
+                    cluster.start_worker()
+            else:  # both worker processes at once
+                for pid in live:
+                    cluster.kill(pid)
+                faults["both workers"] += 1 if live else 0
+        wall = time.monotonic() - t0
+    assert "error" not in box, box.get("error")
+    df = box["result"]
+    rows = stored_rows(store)
+    equal = sum(1 for h in clean if h in rows and same_row(rows[h], clean[h]))
+    starts = len(started(log))
+    print(f"\nsoak: {len(seeds)} points, {sum(faults.values())} faults injected {faults}, {starts} point starts "
+          f"({starts - len(seeds)} re-runs), wall {wall:.0f} s (clean in-process run {t_clean:.0f} s), "
+          f"{equal}/{len(clean)} rows equal to the clean run, {len(writes.twice())} point files written twice")
+    assert len(df) == len(seeds) and (df["status"] == "ok").all(), df[df["status"] != "ok"][["error"]]
+    assert equal == len(clean) == len(seeds)
+    assert not writes.twice()
+    assert wall >= SOAK_MIN_S * 0.9 and sum(faults.values()) >= 10
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+        return True
+    except ProcessLookupError:
+        return False
