@@ -317,7 +317,7 @@ def test_soak_a_long_sweep_with_workers_killed_at_random_equals_a_clean_run(tmp_
     assert len(df) == len(seeds) and (df["status"] == "ok").all(), df[df["status"] != "ok"][["error"]]
     assert equal == len(clean) == len(seeds)
     assert not writes.twice()
-    assert wall >= SOAK_MIN_S * 0.9 and sum(faults.values()) >= 10
+    assert wall >= SOAK_MIN_S * 0.9 and sum(faults.values()) >= SOAK_MIN_S / 60
 
 
 def _alive(pid: int) -> bool:

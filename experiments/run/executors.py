@@ -458,6 +458,10 @@ def dask(todo, address, finished, point_timeout_s: float | None = None, connect_
                         dropped.append(f"connection {client.status}")
                         continue
                     row = _failed_row(client, e, args[0], since)
+                # released at once: a result the client still held would be computed again when the worker
+                # keeping it dies
+                futures.pop(fut)
+                fut.release()
                 n_done += 1
                 finished(key, row)
             if dropped:
