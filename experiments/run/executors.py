@@ -343,27 +343,33 @@ def _address(client) -> str:
         return str(client)
 
 
-def _memory_kill(client, worker: str | None, since: float) -> tuple[float | None, float | None] | None:
-    """(resident bytes or None, the worker's memory_limit or None) if the nanny of ``worker`` restarted it
-    for exceeding its memory budget since ``since`` (the scheduler's event log; else the nannies' logs)."""
+def _memory_kill(client, worker: str | None, since: float, wait_s: float = 15.0) -> tuple[float | None] | None:
+    """(resident bytes or None,) if the nanny of ``worker`` restarted it for exceeding its memory budget
+    since ``since``, else None: from the scheduler's event log (distributed >= 2024.2), else from the
+    nannies' logs. A nanny answers for its logs only once its restarted worker has joined again: asked
+    for up to ``wait_s`` seconds."""
     if not worker:
         return None
-    try:
-        for t, event in client.get_events("worker-restart-memory"):
-            if isinstance(event, dict) and event.get("worker") == worker and t >= since - 1:
-                return float(event.get("rss") or 0) or None, None
-    except Exception:  # noqa: BLE001 - a scheduler without the event (distributed < 2024.2)
-        pass
-    try:
-        logs = client.get_worker_logs(nanny=True)
-    except Exception:  # noqa: BLE001
-        return None
-    for lines in logs.values():
-        for line in lines:
-            text = line[1] if isinstance(line, (tuple, list)) and len(line) > 1 else str(line)
-            if f"Worker {worker} (pid=" in text and "memory budget" in text:
-                return None, None
-    return None
+    deadline = time.monotonic() + wait_s
+    while True:
+        try:
+            for t, event in client.get_events("worker-restart-memory"):
+                if isinstance(event, dict) and event.get("worker") == worker and t >= since - 1:
+                    return (float(event.get("rss") or 0) or None,)
+        except Exception:  # noqa: BLE001 - a scheduler without the event
+            pass
+        try:
+            logs = client.get_worker_logs(nanny=True)
+        except Exception:  # noqa: BLE001 - a nanny restarting its worker
+            logs = {}
+        for lines in logs.values():
+            for line in lines:
+                text = line[1] if isinstance(line, (tuple, list)) and len(line) > 1 else str(line)
+                if f"Worker {worker} (pid=" in text and "memory budget" in text:
+                    return (None,)
+        if time.monotonic() > deadline or client.status != "running":
+            return None
+        time.sleep(0.5)
 
 
 def _failed_row(client, error: BaseException, config_json: str, since: float) -> dict:
@@ -377,12 +383,12 @@ def _failed_row(client, error: BaseException, config_json: str, since: float) ->
                       if isinstance(allowed, int) else "")
         memory = _memory_kill(client, address, since)
         if memory is not None:
-            rss, _ = memory
+            (rss,) = memory
             limit = getattr(last, "memory_limit", None)
-            used = f"{_gib(rss)} resident" if rss else "more than its memory budget"
-            of = f" of its memory_limit {_gib(limit)}" if limit else " (its memory_limit)"
+            over = f"its memory_limit of {_gib(limit)}" if limit else "its memory_limit"
+            size = f" ({_gib(rss)} resident)" if rss else ""
             return error_row(config_json, (
-                f"out of memory: the point's Dask worker was restarted by its nanny for using {used}{of}, "
+                f"out of memory: the point's Dask worker was restarted by its nanny for going over {over}{size}, "
                 f"on {attempts}{limit_note}: the point needs more memory than a worker has; give the workers more "
                 "(dask worker --memory-limit) or make the point smaller; `rast5d run --retry-failed` runs it again"))
         return error_row(config_json, (
