@@ -219,12 +219,14 @@ def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "c
         if client is not None:
             close_client(client)
     df = to_frame([rows[i] for i in sorted(rows)])
+    table = table_path(name)
     if len(df):
         try:
-            write_parquet(df, table_path(name))
+            write_parquet(df, table)
         except StoreError:
             if stopped is None:
                 raise  # the disk filled or turned read-only at the table: the points are stored
+            table = "no table written (the store cannot be written)"
     n_rendered = n_done + n_pooled
     n_cached = len(rows) - n_rendered - n_waited
     n_failed_stored = sum(1 for r in rows.values() if r.get("status") != "ok") - n_failed
@@ -239,7 +241,7 @@ def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "c
         stored = (f"; {n_failed_stored} failed point(s) served from the store (their error is kept: "
                   "`rast5d run --retry-failed` re-renders them)") if n_failed_stored else ""
         print(f"{name}: {len(rows)}/{len(points)} points ({n_rendered} rendered, {n_cached} cached{extra}, "
-              f"{n_failed} failed{stored}) in {summary['seconds']:.1f} s -> {table_path(name)}")
+              f"{n_failed} failed{stored}) in {summary['seconds']:.1f} s -> {table}")
     if interrupted:
         raise KeyboardInterrupt
     if stopped is not None:
