@@ -292,6 +292,7 @@ def _count(pattern, text):
     return int(m.group(1)) if m else 0
 
 
+@pytest.mark.slow  # the fast tier has two locked runs: test_store.py::test_two_runs_sharing_a_store_compute_each_point_once
 def test_concurrent_runs_with_locks_compute_each_point_once(tmp_path):
     """Three `rast5d run` processes on one store, over overlapping sweeps (seeds 1-8, 5-12, 1-12): the
     locks give each of the 12 points to one run; the others take its row. A reader meanwhile never
@@ -326,7 +327,7 @@ def test_a_point_computed_twice_without_locks_keeps_one_row_and_no_reader_sees_a
     log = tmp_path / "log"
     log.mkdir()
     env = {**fault_env(log, {"*": "sleep:0.4"}), "RAST5D_RESULTS": str(store)}
-    a, b = sweep_config(tmp_path, range(1, 9), name="a"), sweep_config(tmp_path, range(1, 9), name="b")
+    a, b = sweep_config(tmp_path, range(1, 7), name="a"), sweep_config(tmp_path, range(1, 7), name="b")
     reader = Reader(store)
     outs = _run_all(tmp_path, [[sys.executable, "-m", "experiments.cli", "run", str(a), "--workers", "1", "--no-report"],
                                [sys.executable, "-m", "experiments.cli", "run", str(b), "--workers", "1", "--no-report",
@@ -334,11 +335,11 @@ def test_a_point_computed_twice_without_locks_keeps_one_row_and_no_reader_sees_a
     reader.finish()
     rendered = [_count(r"\((\d+) rendered", o) for o in outs]
     kept = [_count(r"(\d+) also computed by another run", o) for o in outs]
-    twice = len(started(log)) - 8
-    assert twice > 0 and sum(rendered) == 8 + twice, outs  # some points were computed by both runs
+    twice = len(started(log)) - 6
+    assert twice > 0 and sum(rendered) == 6 + twice, outs  # some points were computed by both runs
     assert sum(kept) == twice, outs  # ... and each time the later one kept the row stored first
     rows, other = store_state(store)
-    assert len(rows) == 8 and not other, other
+    assert len(rows) == 6 and not other, other
     ta, tb = (pd.read_parquet(store / f"{n}.parquet") for n in "ab")
     for r in [*ta.to_dict("records"), *tb.to_dict("records")]:
         stored = rows[r["config_hash"]]
