@@ -129,7 +129,12 @@ def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "c
     def finished(i: int, row: dict):
         nonlocal n_failed, n_done, n_kept
         n_done += 1
-        stored = store_point(row, replace=force, replace_failed=retry_failed)
+        rows[i] = row  # in the table even if Ctrl-C comes while it is stored
+        try:
+            stored = store_point(row, replace=force, replace_failed=retry_failed)
+        except StoreError:
+            del rows[i]  # not stored: not in the table either
+            raise
         n_kept += stored is not row
         rows[i] = stored
         release(hashes[i])
