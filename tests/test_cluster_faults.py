@@ -1,5 +1,5 @@
 """Sweeps on a real Dask cluster under faults: a scheduler and workers started as separate processes
-on 127.0.0.1 (tests/cluster.py), killed as an operator or the machine would kill them. In each case
+on 127.0.0.1 (tests/faults_kit.py), killed as an operator or the machine would kill them. In each case
 the sweep completes, or stops with an error naming the fault and a rerun completes it; every
 finished point stays in the store; no point file is written twice with different contents; and
 every row equals a clean in-process run's (all columns but the point's wall time).
@@ -20,40 +20,12 @@ import pytest
 
 from experiments import config as xc
 from experiments.run import runner, store as result_store
-from tests.cluster import ProcessCluster, fault_env, started, wait_until
+from tests.faults_kit import (ProcessCluster, alive, clean_rows, fault_env, free_port, same_row, started,
+                              sweep_config, wait_until)
 
 pytestmark = [pytest.mark.smoke,
               pytest.mark.filterwarnings("ignore::DeprecationWarning", "ignore::ResourceWarning",
                                          "ignore::pytest.PytestUnraisableExceptionWarning")]
-
-SWEEP = """\
-scene: {{name: quad}}
-camera: {{width: 32, height: 32, coc_px: 4}}
-samples: {{spp: 4}}
-pipeline: {{algorithm: tile}}
-sweep:
-  samples.seed: {seeds}
-"""
-
-
-def sweep_config(tmp_path, seeds, extra: str = "", name: str = "faults"):
-    p = tmp_path / f"{name}.yaml"
-    p.write_text(f"name: {name}\n" + SWEEP.format(seeds=list(seeds)) + extra)
-    return p
-
-
-def clean_rows(tmp_path, config_path, monkeypatch) -> dict:
-    """{config_hash: row} of the sweep run in-process into its own store, without any hook or fault."""
-    monkeypatch.setenv("RAST5D_RESULTS", str(tmp_path / "clean"))
-    df = runner.run_sweep(xc.load_config(config_path), workers=0, progress=False)
-    return {r["config_hash"]: r for r in df.to_dict("records")}
-
-
-def same_row(a: dict, b: dict) -> bool:
-    """Rows equal in every column but the point's own wall time (NaN equal to NaN)."""
-    keys = (set(a) | set(b)) - {"time.wall_s"}
-    return all(a.get(k) == b.get(k) or (pd.isna(a.get(k)) and pd.isna(b.get(k))) for k in keys)
-
 
 class Writes:
     """Every point file the store puts in place (by hash), to check none is written twice."""
@@ -155,7 +127,7 @@ def test_with_a_point_timeout_a_hanging_point_and_one_over_the_memory_limit_are_
     for seed in (3, 4):
         pids = [p for s, p, _ in runs if s == seed]
         assert len(pids) == 1  # stopped once, not retried
-        wait_until(lambda: not _alive(pids[0]), 10, f"point {seed}'s process is gone")
+        wait_until(lambda: not alive(pids[0]), 10, f"point {seed}'s process is gone")
     rows = stored_rows(store)
     ok = [h for h in clean if rows[h]["status"] == "ok"]
     assert len(ok) == 3 and all(same_row(rows[h], clean[h]) for h in ok)
@@ -240,8 +212,6 @@ def test_a_lost_scheduler_stops_the_run_naming_it_and_a_rerun_completes(tmp_path
 # ---- a scheduler that does not answer ------------------------------------------------------------------
 
 def test_a_scheduler_that_does_not_answer_is_a_clear_error_within_the_connect_timeout(tmp_path, monkeypatch):
-    from tests.cluster import free_port
-
     monkeypatch.setenv("RAST5D_RESULTS", str(tmp_path / "results"))
     address = f"tcp://127.0.0.1:{free_port()}"  # nothing listens there
     cfg = sweep_config(tmp_path, [1, 2], extra="executor: {connect_timeout_s: 2}\n")
@@ -296,15 +266,15 @@ def test_soak_a_long_sweep_with_workers_killed_at_random_equals_a_clean_run(tmp_
             running = {}
             for seed, pid, _ in started(log):
                 running[pid] = seed  # the latest point of each process
-            live = [pid for pid in running if _alive(pid)]
+            live = [pid for pid in running if alive(pid)]
             choice = rng.random()
             if choice < 0.6 and live:  # the worker process in the middle of a point; its nanny restarts it
                 cluster.kill(rng.choice(live))
                 faults["worker process"] += 1
             elif choice < 0.85:  # a whole worker (nanny and process); a new one joins 5 s later
-                alive = [w for w in cluster.workers if w.poll() is None]
-                if alive:
-                    cluster.kill(rng.choice(alive))
+                up = [w for w in cluster.workers if w.poll() is None]
+                if up:
+                    cluster.kill(rng.choice(up))
                     faults["whole worker"] += 1
                     time.sleep(5)
                     cluster.start_worker()
@@ -328,10 +298,3 @@ def test_soak_a_long_sweep_with_workers_killed_at_random_equals_a_clean_run(tmp_
     assert not writes.twice()
     assert wall >= SOAK_MIN_S * 0.9 and sum(faults.values()) >= SOAK_MIN_S / 60
 
-
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-        return True
-    except ProcessLookupError:
-        return False

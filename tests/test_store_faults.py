@@ -24,37 +24,9 @@ import pytest
 
 from experiments import config as xc
 from experiments.run import runner, store as result_store
-from tests.cluster import fault_env, started, wait_until
+from tests.faults_kit import alive, clean_rows, fault_env, same_row, started, sweep_config, wait_until
 
 pytestmark = pytest.mark.smoke
-
-SWEEP = """\
-name: {name}
-scene: {{name: quad}}
-camera: {{width: 32, height: 32, coc_px: 4}}
-samples: {{spp: 4}}
-pipeline: {{algorithm: tile}}
-sweep:
-  samples.seed: {seeds}
-"""
-
-
-def sweep_config(tmp_path, seeds, name="disk", extra=""):
-    p = tmp_path / f"{name}.yaml"
-    p.write_text(SWEEP.format(name=name, seeds=list(seeds)) + extra)
-    return p
-
-
-def same_row(a: dict, b: dict) -> bool:
-    keys = (set(a) | set(b)) - {"time.wall_s"}
-    return all(a.get(k) == b.get(k) or (pd.isna(a.get(k)) and pd.isna(b.get(k))) for k in keys)
-
-
-def clean_rows(tmp_path, config_path, monkeypatch) -> dict:
-    monkeypatch.setenv("RAST5D_RESULTS", str(tmp_path / "clean"))
-    df = runner.run_sweep(xc.load_config(config_path), workers=0, progress=False)
-    return {r["config_hash"]: r for r in df.to_dict("records")}
-
 
 def store_state(store) -> tuple[dict, list]:
     """({hash: row} of every point file, [names of anything else in points/])."""
@@ -117,7 +89,7 @@ def test_a_disk_fault_mid_sweep_stops_with_a_clear_error_and_leaves_nothing_half
     rows, other = store_state(store)
     assert len(rows) == 3 and not other, other  # the three stored points read back whole; no temporary, no lock
     assert all(same_row(rows[h], clean[h]) for h in rows)
-    assert not (store / "disk.parquet").exists()  # the table could not be written either: none, not half of one
+    assert not (store / "faults.parquet").exists()  # the table could not be written either: none, not half of one
     disk.heal()
     df = runner.run_sweep(xc.load_config(cfg), workers=0, progress=False)
     assert df.attrs["summary"]["rendered"] == 3 and df.attrs["summary"]["cached"] == 3
@@ -235,7 +207,7 @@ def test_a_real_disk_that_fills_or_turns_read_only_mid_sweep(tmp_path, monkeypat
     rows, other = store_state(out / "after_fault")
     assert 2 <= len(rows) < 12 and all(same_row(rows[h], clean[h]) for h in rows)
     assert not [n for n in other if ".tmp-" in n], other  # no temporary file left
-    table = out / "after_fault" / "disk.parquet"
+    table = out / "after_fault" / "faults.parquet"
     if table.exists():  # a table, if one was written, is whole
         assert len(pd.read_parquet(table)) >= 2
     assert result["rerun_rc"] == 0, result["rerun_stderr"]
@@ -406,14 +378,7 @@ def test_a_hanging_point_is_stopped_at_its_timeout_in_the_local_pool(tmp_path, m
     assert df["error"].iloc[2].startswith("executor.point_timeout_s = 3: the point ran longer than 3 s")
     hung = [p for s, p, _ in started(log) if s == 3]
     assert len(hung) == 1
-    wait_until(lambda: not _alive(hung[0]), 10, "the hung point's process is gone")
+    wait_until(lambda: not alive(hung[0]), 10, "the hung point's process is gone")
     ok = df[df["status"] == "ok"].to_dict("records")
     assert len(ok) == 2 and all(same_row(r, clean[r["config_hash"]]) for r in ok)
 
-
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-        return True
-    except ProcessLookupError:
-        return False

@@ -1,10 +1,11 @@
-"""A real Dask cluster for the fault tests: a scheduler and workers (each a nanny and its worker
-process) started as separate processes on 127.0.0.1 from the `dask` command-line modules of the
-venv, as an operator starts them; killed and restarted by the tests, and torn down by their process
-ids (each in its own session) at the end.
+"""What the fault tests (tests/test_cluster_faults.py, tests/test_store_faults.py) share: a small sweep
+and its clean in-process run to compare rows with; the test-only fault hooks' environment and log; and
+a real Dask cluster, a scheduler and workers (each a nanny and its worker process) started as separate
+processes on 127.0.0.1 from the `dask` command-line modules of the venv, as an operator starts them,
+killed and restarted by the tests, and torn down by their process ids (each in its own session).
 
-The test-only fault hooks (tests/faults/sitecustomize.py) reach every process started here through
-PYTHONPATH and RAST5D_TEST_FAULTS; see ``fault_env``."""
+The test-only fault hooks (tests/faults/sitecustomize.py) reach every process started with
+``fault_env`` through PYTHONPATH and RAST5D_TEST_FAULTS."""
 from __future__ import annotations
 
 import json
@@ -17,6 +18,50 @@ import time
 from pathlib import Path
 
 HOOKS = Path(__file__).resolve().parent / "faults"
+
+SWEEP = """\
+name: {name}
+scene: {{name: quad}}
+camera: {{width: 32, height: 32, coc_px: 4}}
+samples: {{spp: 4}}
+pipeline: {{algorithm: tile}}
+sweep:
+  samples.seed: {seeds}
+"""
+
+
+def sweep_config(folder: Path, seeds, name: str = "faults", extra: str = "") -> Path:
+    """A small sweep over samples.seed (the fault hooks pick points by seed), written to folder/<name>.yaml."""
+    p = Path(folder) / f"{name}.yaml"
+    p.write_text(SWEEP.format(name=name, seeds=list(seeds)) + extra)
+    return p
+
+
+def clean_rows(folder: Path, config_path: Path, monkeypatch) -> dict:
+    """{config_hash: row} of the sweep run in-process into its own store (folder/clean), without hooks
+    or faults: the reference every faulted run's rows are compared with."""
+    from experiments import config as xc
+    from experiments.run import runner
+
+    monkeypatch.setenv("RAST5D_RESULTS", str(Path(folder) / "clean"))
+    df = runner.run_sweep(xc.load_config(config_path), workers=0, progress=False)
+    return {r["config_hash"]: r for r in df.to_dict("records")}
+
+
+def same_row(a: dict, b: dict) -> bool:
+    """Rows equal in every column but the point's own wall time (missing equal to missing)."""
+    import pandas as pd
+
+    keys = (set(a) | set(b)) - {"time.wall_s"}
+    return all(a.get(k) == b.get(k) or (pd.isna(a.get(k)) and pd.isna(b.get(k))) for k in keys)
+
+
+def alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+        return True
+    except ProcessLookupError:
+        return False
 
 
 def fault_env(log: Path | None = None, points: dict | None = None, base: dict | None = None) -> dict:
