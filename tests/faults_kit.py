@@ -117,13 +117,17 @@ class ProcessCluster:
             log.close()
 
     def start_scheduler(self) -> None:
+        # its HTTP server (health, metrics) runs even without the dashboard: on a free port, never 8787,
+        # which another cluster on the machine (a LocalCluster test) may want
         self.scheduler = self._spawn(["distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port",
-                                      str(self.port), "--no-dashboard"], "scheduler", self.scheduler_env)
+                                      str(self.port), "--no-dashboard", "--dashboard-address", "127.0.0.1:0"],
+                                     "scheduler", self.scheduler_env)
 
     def start_worker(self) -> subprocess.Popen:
         self._n += 1
         proc = self._spawn(["distributed.cli.dask_worker", self.address, "--nthreads", "1", "--nworkers", "1",
-                            "--memory-limit", self.memory_limit, "--no-dashboard", "--name", f"w{self._n}",
+                            "--memory-limit", self.memory_limit, "--no-dashboard", "--dashboard-address",
+                            "127.0.0.1:0", "--name", f"w{self._n}",
                             "--local-directory", str(self.folder / "scratch")], f"worker{self._n}", self.env)
         self.workers.append(proc)
         return proc

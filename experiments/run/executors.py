@@ -408,23 +408,22 @@ def _cancelled(fut) -> str | None:
 
 
 def dask(todo, address, finished, point_timeout_s: float | None = None, connect_timeout_s: float = 30.0,
-         poll_s: float = 0.5):
-    """Run todo on a Dask distributed cluster at ``address`` (or an existing Client). A lost scheduler
-    stops the run with a ClusterError naming it, at once (the scheduler dropped the points) or after
-    ``connect_timeout_s`` seconds without a connection; the points finished before are reported."""
-    import queue
+         poll_s: float = 0.1):
+    """Run todo on a Dask distributed cluster at ``address`` (or an existing Client). Each result is
+    fetched as soon as its point finishes (in the client's event loop, all at once) and then released,
+    so a worker that dies later holds none of them. A lost scheduler stops the run with a ClusterError
+    naming it, at once (the scheduler dropped the points) or after ``connect_timeout_s`` seconds without
+    a connection; the points finished before are reported."""
     from concurrent.futures import CancelledError
 
-    from distributed import Client
+    from distributed import Client, as_completed
 
     client = address if isinstance(address, Client) else connect(address, connect_timeout_s)
     where = _address(client)
     fn = _point_function(point_timeout_s)
     since = time.time()
     futures: dict = {}
-    pending: set = set()
     n_done = 0
-    finishing: queue.Queue = queue.Queue()  # futures as they finish (or are dropped), from their callbacks
 
     def lost(reason: str) -> ClusterError:
         return ClusterError(
@@ -437,44 +436,29 @@ def dask(todo, address, finished, point_timeout_s: float | None = None, connect_
             # pure=False: never reuse another submission's result; the store is the cache.
             fut = client.submit(fn, *args, pure=False, key=f"rast5d-{key}-{time.time_ns()}")
             futures[fut] = (key, args)
-            fut.add_done_callback(finishing.put)
-        pending = set(futures)
+        arriving = as_completed(list(futures), loop=client.loop, with_results=True, raise_errors=False)
         disconnected = None
         no_workers = _NoWorkers(where)
-        while pending:
-            done = set()
-            try:
-                done.add(finishing.get(timeout=poll_s))
-                while True:
-                    done.add(finishing.get_nowait())
-            except queue.Empty:
-                pass
-            done |= {f for f in pending if f.done()}  # a callback lost with the connection
-            done &= pending
-            pending -= done
+        while futures:
+            batch = arriving.next_batch(block=False) if arriving.has_ready() else []
             dropped = []
-            for fut in done:
-                key, args = futures[fut]
-                why = _cancelled(fut)
-                if why is not None:
-                    dropped.append(why)
+            for fut, result in batch:
+                key, args = futures.pop(fut)
+                status, why = fut.status, _cancelled(fut)
+                fut.release()
+                if status == "cancelled" or isinstance(result, CancelledError):
+                    dropped.append(why or "cancelled")
                     continue
-                try:
-                    row = fut.result()
-                except CancelledError as e:
-                    dropped.append(str(e) or "cancelled")
-                    continue
-                except RunStopped:
-                    raise
-                except Exception as e:  # noqa: BLE001 - a killed worker, serialisation, ...
+                if status == "error":
+                    error = result[1] if isinstance(result, tuple) and len(result) == 3 else result
+                    if isinstance(error, RunStopped):
+                        raise error
                     if client.status != "running":  # its result went with the scheduler
                         dropped.append(f"connection {client.status}")
                         continue
-                    row = _failed_row(client, e, args[0], since)
-                # released at once: a result the client still held would be computed again when the worker
-                # keeping it dies
-                futures.pop(fut)
-                fut.release()
+                    row = _failed_row(client, error, args[0], since)
+                else:
+                    row = result
                 n_done += 1
                 finished(key, row)
             if dropped:
@@ -486,10 +470,12 @@ def dask(todo, address, finished, point_timeout_s: float | None = None, connect_
             else:
                 disconnected = None
                 no_workers.check(client)
+            if not batch:
+                time.sleep(poll_s)
     except BaseException:
-        if client.status == "running" and pending:
+        if client.status == "running" and futures:
             try:
-                client.cancel(list(pending))
+                client.cancel(list(futures))
             except Exception:  # noqa: BLE001 - the connection is going
                 pass
         raise
@@ -524,12 +510,14 @@ _NO_WORKERS_NOTE_S = 60.0
 class _NoWorkers:
     """Says once (stderr) that the scheduler has had no worker for a minute: the sweep waits for one."""
 
-    def __init__(self, where: str):
+    def __init__(self, where: str, every_s: float = 5.0):
         self.where, self.since, self.said = where, None, False
+        self.every_s, self.last = every_s, time.monotonic()
 
     def check(self, client) -> None:
-        if self.said:
+        if self.said or time.monotonic() - self.last < self.every_s:  # asking the scheduler is a round trip
             return
+        self.last = time.monotonic()
         try:
             n = len(client.scheduler_info().get("workers", {}))
         except Exception:  # noqa: BLE001 - the connection is going; the caller sees it
