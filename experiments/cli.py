@@ -202,7 +202,8 @@ def cmd_run(args) -> int:
     data, lines = load_dict(args.config, overrides)
     config = validate(data, str(args.config), lines)
     df = run_sweep(config, source=str(args.config), workers=args.workers, scheduler=args.scheduler,
-                   force=args.force, lines=lines, retry_failed=args.retry_failed, progress=not args.quiet)
+                   force=args.force, lines=lines, retry_failed=args.retry_failed, progress=not args.quiet,
+                   locks=not args.no_lock)
     if not args.quiet and len(df):
         print("\n".join(main_table(config, df)))
     if config.outputs.plots and not args.no_report:
@@ -394,6 +395,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--no-timing", action="store_true",
                    help="do not run the timing and memory model (hardware.timing.enabled=false): faster, and no "
                         "timing.*, dram.*, depth.cache.* or color.* figures")
+    p.add_argument("--no-lock", action="store_true",
+                   help="take and honour no point locks in the store (a file system where locks fail): a point "
+                        "another run computes meanwhile may be computed twice; the row stored first is kept "
+                        "(docs/store.md)")
     p.add_argument("-q", "--quiet", action="store_true", help="print no progress bar, table or page path")
     _results_option(p)
     p.add_argument("--sample-fraction", type=float, metavar="F",
@@ -439,6 +444,8 @@ def main(argv: list[str] | None = None) -> int:
     warnings.showwarning = show_warning
     import sim
 
+    from .run.store import RunStopped
+
     try:
         return args.func(args)
     except sim.Error as e:  # every refused input (rast5d.Error)
@@ -447,6 +454,9 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as e:  # other input errors
         print(f"error: {e}", file=sys.stderr)
         return 2
+    except RunStopped as e:  # a full or read-only store, a lost or silent Dask scheduler (docs/store.md)
+        print(f"error: {e}", file=sys.stderr)
+        return 3
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130

@@ -275,6 +275,13 @@ class ExecutorSpec(_Strict):
     kind: Literal["local", "dask"] = Field("local", description="local process pool or a Dask distributed cluster")
     workers: Optional[int] = Field(None, description="local: worker processes (default: the core count)")
     address: Optional[str] = Field(None, description="dask: scheduler address, e.g. tcp://host:8786")
+    point_timeout_s: Optional[float] = Field(None, description=(
+        "seconds one point may run; a point running longer is stopped and stored as an error row naming this "
+        "key (each point then runs in a child process of its worker, killed at the timeout; docs/store.md). "
+        "Default: no limit"))
+    connect_timeout_s: float = Field(30.0, description=(
+        "dask: seconds to wait for the scheduler to answer (at the start, or after the connection is lost) "
+        "before the run stops with an error naming it"))
 
     @model_validator(mode="after")
     def _check(self):
@@ -282,6 +289,10 @@ class ExecutorSpec(_Strict):
             raise ValueError("executor.kind 'dask' needs executor.address (or --scheduler ADDRESS)")
         if self.workers is not None and self.workers < 1:
             raise ValueError(f"executor.workers: expected >= 1, got {self.workers}")
+        for key in ("point_timeout_s", "connect_timeout_s"):
+            v = getattr(self, key)
+            if v is not None and not v > 0:
+                raise ValueError(f"executor.{key}: expected a number of seconds > 0, got {v!r}")
         return self
 
 

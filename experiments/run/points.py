@@ -23,7 +23,7 @@ from pathlib import Path
 
 from ..config import RESULT_EXCLUDE, RenderConfig, build, build_scene, config_hash, flatten, point_columns, timing_needed
 from ..config.inputs import input_digests, tracking_reads
-from .store import cached_records, engine_id, git_rev, store_pictures, store_records
+from .store import cached_records, disk_fault, engine_id, git_rev, store_pictures, store_records
 from .uses import USE_KINDS
 
 
@@ -222,6 +222,9 @@ def run_point(config_json: str, image_path: str | None = None, threads: int | No
                 options = None
                 row, result = render_point(config, image_path, threads, h=h)
         except Exception as e:  # noqa: BLE001 - a failing point must not stop the sweep
+            fault = disk_fault(e)
+            if fault is not None:  # a full or read-only disk (its image): the run stops, the point is not failed
+                raise fault from e
             row = config_columns(config, h)
             row.update(status="error", error=f"{type(e).__name__}: {e}", traceback=traceback.format_exc(),
                        **{"engine.version": engine_id(), "engine.git_rev": git_rev(),

@@ -12,11 +12,12 @@ compute what is left, isolating the crash as they do.
 """
 from __future__ import annotations
 
+import functools
 import heapq
 import itertools
 
 from ..config import RenderConfig
-from .executors import worker_init
+from .executors import timed_point, worker_init
 from .points import run_point
 from .runner import hashed_sweep, point_args, render_hash, stored_row
 from .store import claim, images_dir as store_images_dir, records_path, release, store_point
@@ -72,6 +73,7 @@ def run_all(sweeps, *, workers: int, keep_records=frozenset(), force=frozenset()
     jobs, seen, waits = [], set(), {}
     refs: dict = {}
     claimed: set[str] = set()
+    timeouts: dict[str, float] = {}  # executor.point_timeout_s of the points whose config sets it
     rendering: set[str] = set()  # render points of this pool (their hashes)
     retimes = []
     for config, source, lines in sweeps:
@@ -85,6 +87,8 @@ def run_all(sweeps, *, workers: int, keep_records=frozenset(), force=frozenset()
             if not claim(h):  # another run is computing it; the sweep waits for its row
                 continue
             claimed.add(h)
+            if config.executor.point_timeout_s is not None:
+                timeouts[h] = config.executor.point_timeout_s
             if config.point.kind == "retime":
                 retimes.append((h, cfg))
                 continue
@@ -113,7 +117,8 @@ def run_all(sweeps, *, workers: int, keep_records=frozenset(), force=frozenset()
             leads.add(rh)
             jobs.append(("point", h, point_args(h, cfg, None, 1), estimate_cost(cfg), rh))
     total = len(jobs) + len(refs) + sum(len(v) for v in waits.values())
-    run = PoolRun(refs, jobs, waits, claimed, workers, progress, total, label=pool_label([c for c, _, _ in sweeps]))
+    run = PoolRun(refs, jobs, waits, claimed, workers, progress, total, label=pool_label([c for c, _, _ in sweeps]),
+                  timeouts=timeouts)
     if background:
         run.start()
     else:
@@ -126,8 +131,10 @@ class PoolRun:
     for the rows through the store's point locks), ``loop()`` in the caller. ``computed``: points
     stored; ``complete``: every job ran (after a broken pool the sweeps compute what is left)."""
 
-    def __init__(self, refs, jobs, waits, claimed, workers, progress, total, label: str = "report"):
+    def __init__(self, refs, jobs, waits, claimed, workers, progress, total, label: str = "report",
+                 timeouts: dict | None = None):
         self.waits, self.claimed, self.workers = waits, claimed, max(1, workers)
+        self.timeouts = timeouts or {}
         self.hashes = frozenset(claimed)  # the points this pool computes (the sweeps wait for their rows)
         self.computed, self.complete, self.total = 0, True, total
         self._order = itertools.count()
@@ -158,6 +165,8 @@ class PoolRun:
         while self._ready and len(self._running) < self.workers and not self._stop:
             job = heapq.heappop(self._ready)[3]
             fn = reference_job if job[0] == "reference" else run_point
+            if job[0] == "point" and job[1] in self.timeouts:
+                fn = functools.partial(timed_point, self.timeouts[job[1]])
             self._running[self._pool.submit(fn, *job[2])] = job
 
     def start(self):

@@ -16,7 +16,13 @@ moves it, experiments/paths.py):
   ``rast5d run`` (host and pid inside). Another run sharing the store waits for that point instead of
   computing it again; a lock whose process is gone (same host) or older than
   ``RAST5D_LOCK_TIMEOUT`` seconds (default one day) is taken over. Every file is written to a
-  temporary name unique to its process and renamed into place, so a reader never sees half a file.
+  temporary name unique to its host and process and renamed into place, so a reader never sees half
+  a file. A point file is put in place only if no other run stored that point first (a hard link,
+  which fails on an existing name): a point computed twice (a file system without working locks,
+  ``rast5d run --no-lock``) keeps the first row stored, and both runs serve that one.
+- A write that fails (a full disk, a read-only store) raises StoreError: the run stops, the temporary
+  file is removed, and every point stored before stays readable. docs/store.md states what the store
+  promises under each fault.
 - ``results/<name>.parquet``: the sweep's table (one row per point of the current sweep, failed
   points included with ``status = "error"`` and their message), written when the sweep ends or is
   interrupted; ``experiments.load(name)`` reads it.
@@ -35,6 +41,7 @@ counter and derived figure of ``Result.flat_stats``, ``time.wall_s``, ``engine.v
 """
 from __future__ import annotations
 
+import errno
 import math
 import os
 import subprocess
@@ -54,7 +61,63 @@ def results_dir() -> Path:
 
 
 class StoreWarning(UserWarning):
-    """A stored file could not be used (truncated, corrupted, unreadable) and is recomputed."""
+    """A stored file could not be used (truncated, corrupted, unreadable) and is recomputed; or the
+    store's file system cannot lock points (check_locks)."""
+
+
+class RunStopped(RuntimeError):
+    """A sweep stopped on a fault of the machinery it runs on (the result store's disk, the Dask
+    cluster), not of its input: the points finished before are stored, a rerun computes the rest."""
+
+
+class StoreError(RunStopped):
+    """The result store cannot be written (a full disk or quota, a read-only file system, no
+    permission): the run stops; nothing half-written is left where a read would find it."""
+
+
+# Why a write failed, by errno, and what the user does about it.
+_WRITE_FAULTS = {
+    errno.ENOSPC: ("the disk is full", "free some space"),
+    errno.EDQUOT: ("the disk quota is exceeded", "free some space or raise the quota"),
+    errno.EROFS: ("the file system is read-only", "make the store writable or give another --results DIR"),
+    errno.EACCES: ("permission denied", "make the store writable or give another --results DIR"),
+    errno.EPERM: ("operation not permitted", "make the store writable or give another --results DIR"),
+    errno.EIO: ("an input/output error of the disk", "check the disk"),
+    errno.EFBIG: ("the file is larger than this process may write (ulimit -f)", "raise the limit"),
+}
+
+
+def _errno_of(e: BaseException) -> int | None:
+    """The errno of an OSError, also when a library (pyarrow) gives it only in the message."""
+    if getattr(e, "errno", None):
+        return e.errno
+    import re
+
+    m = re.search(r"\[errno (\d+)\]", str(e), flags=re.I)
+    return int(m.group(1)) if m else None
+
+
+# A write error that is the disk's, wherever it happens (a point's image, records, row): not the point's.
+DISK_FAULTS = {errno.ENOSPC, errno.EDQUOT, errno.EROFS}
+
+
+def disk_fault(e: BaseException) -> StoreError | None:
+    """The StoreError of ``e`` if it is a fault of the disk (full, over quota, read-only), else None."""
+    if isinstance(e, StoreError):
+        return e
+    if isinstance(e, OSError) and _errno_of(e) in DISK_FAULTS:
+        return store_error(Path(e.filename) if getattr(e, "filename", None) else results_dir(), e)
+    return None
+
+
+def store_error(path: Path, e: BaseException) -> StoreError:
+    """The StoreError of a failed write of ``path``, saying why (by errno) and what to do."""
+    code = _errno_of(e)
+    why, todo = _WRITE_FAULTS.get(code, (f"{type(e).__name__}: {e}", "fix the store"))
+    detail = f" ({os.strerror(code)})" if code in _WRITE_FAULTS else ""
+    return StoreError(f"result store: cannot write {path}: {why}{detail}. The run stops here; every point "
+                      f"finished before is stored and readable, and no partial file is left. {todo[0].upper()}"
+                      f"{todo[1:]} and rerun: only the missing points are computed.")
 
 
 # Folders of the installed package whose files do not enter a result row (the report pages only read
@@ -133,14 +196,59 @@ def to_frame(rows: list[dict]):
     return df
 
 
-def atomic_write(path: Path, write, suffix: str = "") -> None:
-    """``write(tmp)`` to a temporary file beside ``path`` (named ``<name>.tmp<pid><suffix>``, so no
-    store glob matches it; ``suffix`` for writers that append their own), then rename it over
-    ``path``: a reader (another worker, a later run) never sees half a file."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f"{path.name}.tmp{os.getpid()}{suffix}")
-    write(tmp)
-    os.replace(tmp, path)
+# Errors of os.link on a file system without hard links (some FUSE and SMB mounts): the point is then
+# put in place by a rename after a check that no other run stored it (a narrow race, see store_point).
+_NO_LINKS = {errno.EPERM, errno.ENOTSUP, errno.EOPNOTSUPP, errno.ENOSYS, errno.EMLINK, errno.EXDEV}
+
+
+def temporary_name(path: Path, suffix: str = "") -> Path:
+    """A temporary name beside ``path``, unique to this host, process and call
+    (``<name>.tmp-<host>-<pid>-<random><suffix>``): no store glob matches it, and two machines sharing
+    the store never write the same temporary file."""
+    import secrets
+    import socket
+
+    return path.with_name(f"{path.name}.tmp-{socket.gethostname()}-{os.getpid()}-{secrets.token_hex(4)}{suffix}")
+
+
+def atomic_write(path: Path, write, suffix: str = "", keep=None) -> bool:
+    """``write(tmp)`` to a temporary file beside ``path`` (temporary_name; ``suffix`` for writers that
+    append their own), then put it in place: a reader (another worker, a later run) never sees half a
+    file. Without ``keep`` it is renamed over ``path``. With ``keep`` (a function of the path) it is
+    linked to ``path`` only if no file is there; if one is and ``keep(path)`` is true, that file stays
+    and this write is dropped. Returns whether this write was put in place. A failing write (a full
+    disk, a read-only store) removes the temporary file and raises StoreError."""
+    tmp = temporary_name(path, suffix)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        write(tmp)
+        if keep is None:
+            os.replace(tmp, path)
+            return True
+        try:
+            os.link(tmp, path)
+            installed = True
+        except FileExistsError:
+            installed = False
+        except OSError as e:
+            if e.errno not in _NO_LINKS:
+                raise
+            installed = None  # no hard links here: check, then rename
+        if installed is None:
+            installed = not (path.exists() and keep(path))
+            if installed:
+                os.replace(tmp, path)
+        elif not installed and not keep(path):
+            os.replace(tmp, path)
+            installed = True
+        return installed
+    except OSError as e:
+        raise store_error(path, e) from e
+    finally:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
 
 
 def write_parquet(df, path: Path):
@@ -199,9 +307,10 @@ def np_scalar_types() -> tuple:
     return (np.bool_, np.integer, np.floating)
 
 
-def write_point_file(df, path: Path) -> None:
+def write_point_file(df, path: Path, keep=None) -> bool:
     """One point's row (a one-row DataFrame, or the row's dict) with its checksum (Parquet metadata)
-    and Parquet page checksums, atomically."""
+    and Parquet page checksums, atomically. ``keep``: as for atomic_write (a file already there that
+    ``keep`` accepts stays). Returns whether this row was put in place."""
     import pyarrow as pa
     import pyarrow.parquet as pq
 
@@ -211,8 +320,10 @@ def write_point_file(df, path: Path) -> None:
     meta = dict(table.schema.metadata or {})
     meta[_CHECKSUM_KEY] = _table_digest(table).encode()
     table = table.replace_schema_metadata(meta)
-    atomic_write(path, lambda tmp: pq.write_table(table, tmp, write_page_checksum=True))
-    _remember(path, _table_row(table, [col.to_pylist() for col in table.columns]))
+    installed = atomic_write(path, lambda tmp: pq.write_table(table, tmp, write_page_checksum=True), keep=keep)
+    if installed:
+        _remember(path, _table_row(table, [col.to_pylist() for col in table.columns]))
+    return installed
 
 
 # The rows this process wrote or read, by point file and the file's identity (mtime, size, inode and
@@ -270,12 +381,30 @@ def pa_numeric(t) -> bool:
     return pa.types.is_integer(t) or pa.types.is_floating(t) or pa.types.is_boolean(t)
 
 
-def store_point(row: dict):
+def store_point(row: dict, replace: bool = False, replace_failed: bool = False) -> dict:
     """Store a finished point (failed ones too, with their error and traceback), unless the row is
-    marked transient (a lost Dask worker: nothing about the point itself)."""
+    marked transient (a lost Dask worker: nothing about the point itself); returns the row the store
+    holds for the point. If another run stored the point first (it computed it too: a store without
+    working locks, ``--no-lock``), its row is kept and returned, so every run serves the same row;
+    unless that row cannot be served (damaged, an input changed since), or it failed and this one did
+    not or ``replace_failed`` (``--retry-failed``), or ``replace`` (``--force``). Raises StoreError if
+    the store cannot be written."""
     if row.pop("_transient", False):
-        return
-    write_point_file(row, point_path(row["config_hash"]))
+        return row
+    h = row["config_hash"]
+    kept: list = []
+
+    def keep(path: Path) -> bool:
+        if replace:
+            return False
+        stored = cached_row(h)
+        if stored is None or (stored.get("status") != "ok" and (row.get("status") == "ok" or replace_failed)):
+            return False
+        kept.append(stored)
+        return True
+
+    write_point_file(row, point_path(h), keep=keep)
+    return kept[0] if kept else row
 
 
 def cached_row(h: str, retry_failed: bool = False) -> dict | None:
@@ -359,13 +488,71 @@ def lock_is_stale(path: Path) -> bool:
     return not _alive(host, pid) or time.time() - t > timeout
 
 
-def claim(h: str) -> bool:
-    """Take the lock of point ``h`` for this process; False if another live process holds it."""
+# errnos of an exclusive create on a file system that cannot do it (not a full or read-only one)
+_NO_EXCL = {errno.ENOTSUP, errno.EOPNOTSUPP, errno.ENOSYS, errno.EINVAL, errno.ENOLCK}
+_LOCKS_CHECKED: dict[str, bool] = {}
+
+
+def check_locks(directory: Path | None = None) -> bool:
+    """Whether point locks work in the store ``directory`` (default: results_dir()): an exclusive create
+    (O_EXCL) of a probe file succeeds once and fails the second time. Checked once per directory and
+    process; if it does not, a StoreWarning says what that means and the run computes without locks."""
+    import secrets
+    import socket
+
+    d = (Path(directory) if directory is not None else results_dir()) / "points"
+    if str(d) in _LOCKS_CHECKED:
+        return _LOCKS_CHECKED[str(d)]
+    probe = d / f".lockprobe-{socket.gethostname()}-{os.getpid()}-{secrets.token_hex(4)}"
+    why = None
+    try:
+        d.mkdir(parents=True, exist_ok=True)
+        os.close(os.open(probe, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644))
+        try:
+            os.close(os.open(probe, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644))
+            why = "a second exclusive create (O_EXCL) of one file succeeded"
+        except FileExistsError:
+            pass
+    except OSError as e:
+        if e.errno not in _NO_EXCL:
+            raise store_error(probe, e) from e
+        why = f"an exclusive create (O_EXCL) fails: {e.strerror or e}"
+    finally:
+        try:
+            os.unlink(probe)
+        except OSError:
+            pass
+    _LOCKS_CHECKED[str(d)] = why is None
+    if why is not None:
+        _warn_no_locks(d, why)
+    return why is None
+
+
+def _warn_no_locks(d: Path, why: str) -> None:
+    import warnings
+
+    _LOCKS_CHECKED[str(d)] = False
+    warnings.warn(f"result store {d.parent}: point locks do not work on this file system ({why}). This run "
+                  "computes its points without locks: a run sharing this store may compute the same point "
+                  "again (the first row stored is kept and both runs serve it, so rows stay identical; no "
+                  "reader sees a torn file). To compute each point once, run one sweep at a time on this store, "
+                  "or give each concurrent sweep its own --results DIR.", StoreWarning, stacklevel=3)
+
+
+def claim(h: str, locks: bool = True) -> bool:
+    """Take the lock of point ``h`` for this process; False if another live process holds it.
+    ``locks=False`` (``rast5d run --no-lock``, or a store whose file system cannot lock: check_locks)
+    takes and honours no lock: always True. Raises StoreError if the store cannot be written."""
     import socket
     import time
 
+    if not locks or not _LOCKS_CHECKED.get(str(results_dir() / "points"), True):
+        return True
     path = lock_path(h)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise store_error(path.parent, e) from e
     for _ in range(2):
         try:
             fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
@@ -379,14 +566,27 @@ def claim(h: str) -> bool:
                     pass
                 continue
             return False
-        with os.fdopen(fd, "w") as f:
-            f.write(f"{socket.gethostname()} {os.getpid()} {time.time()}")
+        except OSError as e:
+            if e.errno in _NO_EXCL:  # the file system cannot lock: warn and go on without
+                _warn_no_locks(path.parent, f"an exclusive create (O_EXCL) fails: {e.strerror or e}")
+                return True
+            raise store_error(path, e) from e
+        try:
+            with os.fdopen(fd, "w") as f:
+                f.write(f"{socket.gethostname()} {os.getpid()} {time.time()}")
+        except OSError as e:
+            try:
+                path.unlink()
+            except OSError:
+                pass
+            raise store_error(path, e) from e
         return True
     return False
 
 
 def release(h: str) -> None:
-    """Drop this process's lock of point ``h`` (if it holds it)."""
+    """Drop this process's lock of point ``h`` (if it holds it). A lock that cannot be removed (a store
+    turned read-only) is left: its process is gone once the run ends, so the next run takes it over."""
     import socket
 
     path = lock_path(h)
@@ -394,7 +594,7 @@ def release(h: str) -> None:
     if owner is not None and owner[:2] == (socket.gethostname(), os.getpid()):
         try:
             path.unlink()
-        except FileNotFoundError:
+        except OSError:
             pass
 
 

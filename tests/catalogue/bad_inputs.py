@@ -911,6 +911,49 @@ def cli_set_malformed(d):
     _config(d, BASE, overrides=["camera.coc_px"])
 
 
+@case("command line", "a Dask scheduler address where nothing answers (--scheduler tcp://127.0.0.1:1, "
+      "executor.connect_timeout_s: 2)", "ClusterError",
+      r"executor: the Dask scheduler at tcp://127\.0\.0\.1:1 did not answer within 2 s .*is it running, and is the "
+      r"address right\? \(--scheduler ADDRESS or executor\.address; executor\.connect_timeout_s",
+      "the address, the wait, and the options that set them (within the wait: no hang)")
+def cli_scheduler_silent(d):
+    from experiments.run.executors import connect
+
+    connect("tcp://127.0.0.1:1", 2)
+
+
+@case("command line", "a result store on a file system whose exclusive file creation (the point locks) fails "
+      "(a warning, shown here raised; the run goes on without locks)", "StoreWarning",
+      r"result store .*: point locks do not work on this file system \(an exclusive create \(O_EXCL\) fails.*"
+      r"may compute the same point again \(the first row stored is kept",
+      "the store, what failed, and what it means for runs sharing the store")
+def cli_store_without_locks(d):
+    import errno
+    import os
+    import warnings
+
+    from experiments.run import store
+
+    class NoExclusiveCreate:  # the os module as the store sees it, on such a file system
+        def open(self, path, flags, *args):
+            if flags & os.O_EXCL:
+                raise OSError(errno.ENOTSUP, os.strerror(errno.ENOTSUP), str(path))
+            return os.open(path, flags, *args)
+
+        def __getattr__(self, name):
+            return getattr(os, name)
+
+    real = store.os
+    store.os = NoExclusiveCreate()
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", store.StoreWarning)
+            store.check_locks(d)
+    finally:
+        store.os = real
+        store._LOCKS_CHECKED.pop(str(d / "points"), None)
+
+
 # ---- scene files -------------------------------------------------------------------------------------
 
 def _scene(d: Path, text: str, name: str = "s.yaml"):
@@ -1031,11 +1074,13 @@ def expected_types(c: Case) -> tuple[type, ...]:
     from experiments.config import ConfigError as XConfigError
 
     from experiments.paths import OutputDirError
+    from experiments.run.executors import ClusterError
+    from experiments.run.store import StoreWarning
 
     names = {"SceneInputError": (sim.SceneInputError,), "ConfigError": (sim.ConfigError, XConfigError),
              "SceneError": (models.SceneError,), "ValueError": (ValueError,), "TypeError": (TypeError,),
              "KeywordError": (sim.errors.KeywordError,), "MemoryLimitError": (sim.MemoryLimitError,),
-             "OutputDirError": (OutputDirError,)}
+             "OutputDirError": (OutputDirError,), "ClusterError": (ClusterError,), "StoreWarning": (StoreWarning,)}
     return names[_type_name(c.error)]
 
 
@@ -1063,6 +1108,8 @@ def page() -> str:
         "`PlotError`, and `OutputDirError` (a results or pages directory that cannot be written); and",
         "`SceneError` (scene files and `models.Scene`: `models.SceneError` is this class) with",
         "`SceneInputError` (scene arrays). The bindings (`sim._core`) raise `ValueError` or `TypeError`.",
+        "A run stopped by a fault of what it runs on, not of its input, raises `RunStopped` (`ClusterError`:",
+        "a Dask scheduler silent or lost; `StoreError`: a full or read-only store; docs/store.md).",
         "The exception column gives each case's own type.",
         "",
         f"{len(CASES)} cases: " + ", ".join(f"{k} {v}" for k, v in counts.items()) + ".",
