@@ -63,7 +63,7 @@ test-all: install
 # Build a wheel with each of INSTALL_PYTHONS, install it into a fresh venv with the pinned
 # dependencies (constraints.txt) and run tests/install_smoke.py there, outside the checkout: what a new
 # user runs in an empty directory (the whole quickstart report with the last Python, its quick variant
-# with the others).
+# with the others; with the last Python also the notebooks `rast5d init` copies, run by nbclient).
 test-install:
 	@set -e; for v in $(INSTALL_PYTHONS); do \
 	  py=$$(ls -d $$(pyenv root 2>/dev/null)/versions/$$v.*/bin/python3 2>/dev/null | sort -V | tail -1); \
@@ -77,6 +77,7 @@ test-install:
 	  $$py -m venv $$dir/env; \
 	  $$dir/env/bin/python -m pip install --quiet -c $(CONSTRAINTS) $$dir/dist/rast5d-*.whl; \
 	  quick=$$( [ "$$v" = "$(lastword $(INSTALL_PYTHONS))" ] || echo --quick ); \
+	  [ -n "$$quick" ] || $$dir/env/bin/python -m pip install --quiet -c $(CONSTRAINTS) nbclient nbformat ipykernel; \
 	  (cd $$dir && env/bin/python $(CURDIR)/tests/install_smoke.py $$quick); \
 	  echo "test-install: Python $$v passed in $$(( $$(date +%s) - start )) s"; \
 	done

@@ -305,9 +305,10 @@ STARTER = "starter.yaml"  # the shipped starter config, copied by `rast5d init` 
 
 
 def init_dir(target: str | Path, force: bool = False) -> list[Path]:
-    """`rast5d init DIR`: copy the shipped configs (configs/, with the paper configs and the scene files)
-    and a starter sweep (my_sweep.yaml) into DIR, for a user to edit; a non-empty DIR is refused unless
-    ``force`` (then the copied files overwrite theirs, nothing else is touched)."""
+    """`rast5d init DIR`: copy the shipped configs (configs/, with the paper configs and the scene files),
+    a starter sweep (my_sweep.yaml) and the example notebooks (notebooks/) into DIR, for a user to edit;
+    a non-empty DIR is refused unless ``force`` (then the copied files overwrite theirs, nothing else is
+    touched)."""
     import shutil
 
     from .config import ConfigError
@@ -328,6 +329,11 @@ def init_dir(target: str | Path, force: bool = False) -> list[Path]:
         dst.parent.mkdir(parents=True, exist_ok=True)
         shutil.copyfile(f, dst)
         written.append(dst)
+    for f in sorted((Path(__file__).resolve().parent / "examples").glob("*.ipynb")):
+        dst = target / "notebooks" / f.name
+        dst.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(f, dst)
+        written.append(dst)
     return written
 
 
@@ -335,9 +341,13 @@ def cmd_init(args) -> int:
     from .paths import display
 
     written = init_dir(args.dir, force=args.force)
-    n_paper = sum(1 for f in written if "paper" in f.parts)
-    print(f"wrote {display(Path(args.dir))}/: my_sweep.yaml (a starter sweep to edit) and configs/ "
-          f"({len(written) - 1} configs, {n_paper} of them the paper's report configs)")
+    rel = [f.relative_to(Path(args.dir).resolve()) for f in written]
+    configs = [f for f in rel if f.parts[0] == "configs"]
+    n_paper = sum(1 for f in configs if f.parts[1] == "paper")
+    notebooks = [f.name for f in written if f.suffix == ".ipynb"]
+    print(f"wrote {display(Path(args.dir))}/: my_sweep.yaml (a starter sweep to edit), configs/ "
+          f"({len(configs)} configs, {n_paper} of them the paper's report configs) and notebooks/ "
+          f"({', '.join(notebooks)}: run them with Jupyter)")
     print(f"next: cd {args.dir} && rast5d run my_sweep.yaml   (results in ./results; pages of "
           "`rast5d report` in ./reports)")
     return 0
@@ -422,7 +432,8 @@ def main(argv: list[str] | None = None) -> int:
     _results_option(p)
     p.set_defaults(func=cmd_report)
 
-    p = sub.add_parser("init", help="copy the shipped configs (paper, scenes) and a starter sweep into DIR to edit")
+    p = sub.add_parser("init", help="copy the shipped configs (paper, scenes), a starter sweep and the example "
+                                    "notebooks into DIR to edit")
     p.add_argument("dir", metavar="DIR")
     p.add_argument("--force", action="store_true", help="copy into a non-empty DIR (overwriting the copied files)")
     p.set_defaults(func=cmd_init)

@@ -84,3 +84,35 @@ def test_run_validates_every_point_before_the_first_render(tmp_path, sweep, mess
     assert message in err and "Traceback" not in err, err
     assert f"{cfg}:" in err or "sweep point" in err  # names the file or the point
     assert not list((tmp_path / "res").glob("**/*.parquet"))  # nothing rendered
+
+
+def test_init_copies_the_configs_the_starter_and_the_notebooks(tmp_path, capsys):
+    """`rast5d init DIR`: the shipped configs (each file byte for byte), the starter sweep as my_sweep.yaml
+    (a valid config) and the example notebooks; a non-empty DIR is refused unless --force, which copies
+    over the shipped files and leaves the user's own."""
+    from pathlib import Path
+
+    from experiments.cli import main
+    from experiments.config import load_config
+
+    repo = Path(__file__).resolve().parents[1]
+    study = tmp_path / "study"
+    assert main(["init", str(study)]) == 0
+    shipped = sorted(p.relative_to(repo / "configs") for p in (repo / "configs").rglob("*.yaml"))
+    copied = sorted(p.relative_to(study / "configs") for p in (study / "configs").rglob("*.yaml"))
+    assert copied == [p for p in shipped if p.as_posix() != "starter.yaml"] and len(copied) > 40
+    assert all((study / "configs" / p).read_bytes() == (repo / "configs" / p).read_bytes() for p in copied)
+    assert (study / "my_sweep.yaml").read_bytes() == (repo / "configs" / "starter.yaml").read_bytes()
+    assert load_config(study / "my_sweep.yaml", []).name == "my_sweep"
+    notebooks = sorted(p.name for p in (study / "notebooks").glob("*.ipynb"))
+    assert notebooks == sorted(p.name for p in (repo / "experiments" / "examples").glob("*.ipynb")) != []
+    out = capsys.readouterr().out
+    assert f"configs/ ({len(copied)} configs" in out and "notebooks/" in out
+
+    (study / "my_sweep.yaml").write_text("# edited\n")
+    (study / "mine.yaml").write_text("# the user's own\n")
+    assert main(["init", str(study)]) == 2
+    assert "not empty" in capsys.readouterr().err and (study / "my_sweep.yaml").read_text() == "# edited\n"
+    assert main(["init", str(study), "--force"]) == 0
+    assert (study / "my_sweep.yaml").read_bytes() == (repo / "configs" / "starter.yaml").read_bytes()
+    assert (study / "mine.yaml").read_text() == "# the user's own\n"

@@ -195,7 +195,8 @@ def test_dask_local_cluster_gives_the_same_rows_as_the_local_pool(tmp_path, stor
     distributed = pytest.importorskip("distributed")
     c = xc.load_config(write(tmp_path, "d.yaml", SWEEP))
     local = runner.run_sweep(c, workers=2, progress=False, force=True)
-    with distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1, dashboard_address=None) as cl:
+    # the dashboard on any free port: another cluster on this machine may hold the default 8787
+    with distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1, dashboard_address=":0") as cl:
         remote = runner.run_sweep(c, scheduler=cl.scheduler_address, progress=False, force=True)
         # The same through the config's executor section.
         via_config = xc.load_config(tmp_path / "d.yaml", ["executor.kind=dask", f"executor.address={cl.scheduler_address}"])

@@ -145,7 +145,24 @@ def _check_point(check, config: RenderConfig, where: str, lines: dict | None = N
     try:
         check(config)
     except ValueError as e:  # ConfigError, sim.ConfigError, models.SceneError and the sample tables' errors
-        raise ConfigError(f"{_place(str(e), lines, where)}: {e}") from None
+        place = _place(str(e), lines, where)
+        raise ConfigError(f"{place}: {e}{_set_by_flags(str(e), lines, place)}") from None
+
+
+_SECTION_KEY = re.compile(r"\b((?:scene|camera|samples|pipeline|hardware|point)\.[A-Za-z_][\w.]*[A-Za-z0-9_])")
+
+
+def _set_by_flags(message: str, lines: dict | None, place: str) -> str:
+    """' (samples.kind set by --set samples.kind=lines)' for the other keys a combination error names
+    that a --set flag set: the error is placed at one key, the flag that chose its partner is named too."""
+    if not lines:
+        return ""
+    named = []
+    for key in dict.fromkeys(_SECTION_KEY.findall(message)):
+        flag = str(lines.get(tuple(key.split(".")), ""))
+        if flag.startswith("--set") and flag not in place:
+            named.append(f"{key} set by {flag}")
+    return f" ({'; '.join(named)})" if named else ""
 
 
 RESULT_EXCLUDE = {"name", "description", "extends", "sweep", "outputs", "executor", "point"}

@@ -146,6 +146,7 @@ def main(argv=None) -> int:
         lines.append(f"| {case} | **verdict** | PCS by depth only: {depth_only} | PCS by time and depth: {verdict} |")
         print(f"{case}: potentially colliding (time+depth) = {verdict}; (depth only) = {depth_only}")
     (out / "README.md").write_text("\n".join(lines) + "\n")
+    print(f"wrote {out / 'README.md'} and {2 * len(res)} images")
     return 0
 
 

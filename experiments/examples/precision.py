@@ -584,7 +584,7 @@ def study():
         t0 = time.process_time()
         data[str(V)] = dict(rows_2d=rows_2d(V, screen_triangles(V)), rows_nd=rows_nd(V),
                             cpu_s=time.process_time() - t0)
-        ROWS.parent.mkdir(exist_ok=True)
+        ROWS.parent.mkdir(parents=True, exist_ok=True)
         ROWS.write_text(json.dumps(data))
     for key, rows in (("rows_box", rows_box), ("rows_5d", rows_5d), ("rows_4d", rows_4d)):
         for V in VIEWPORTS:  # row kinds missing from a cached study are computed and added
@@ -1079,12 +1079,21 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--print", action="store_true", help="print instead of writing reports/paper/precision.md")
     args = ap.parse_args(argv)
+    try:
+        import tests.reference  # noqa: F401  (the float64 ray caster and the hard cases)
+    except ImportError:
+        print("error: the precision study compares against the float64 ray caster and the hard cases of a "
+              "source checkout (tests/reference/), which an installed package does not ship; run it from a "
+              "checkout: python -m experiments.examples.precision", file=sys.stderr)
+        return 2
     md = markdown(study())
     if args.print:
         print(md)
     else:
-        (reports_dir() / "paper" / "precision.md").write_text(md)
-        print("wrote reports/paper/precision.md")
+        out = reports_dir() / "paper" / "precision.md"
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(md)
+        print(f"wrote {out}")
     return 0
 
 

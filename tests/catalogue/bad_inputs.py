@@ -728,6 +728,13 @@ def yaml_set_out_of_range(d):
     _config(d, BASE, overrides=["samples.spp=0"])
 
 
+@case("YAML config", "a --set that makes the sweep's algorithms clash with the sample table (--set samples.kind=lines)",
+      "ConfigError", r"c\.yaml:4 .*: pipeline\.algorithm: .*needs algorithm 'lines', got 'tile'.*"
+      r"\(samples\.kind set by --set samples\.kind=lines\)", "the sweep line, the clash and the flag that set the partner")
+def yaml_set_combination(d):
+    _config(d, BASE + "sweep:\n  pipeline.algorithm: [tile, interval]\n", overrides=["samples.kind=lines"])
+
+
 @case("YAML config", "an unknown key (camera.heigth)", "ConfigError", r"c\.yaml:4: unknown key 'camera\.heigth'",
       "the file, the line and the key")
 def yaml_unknown_key(d):
