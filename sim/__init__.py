@@ -1,6 +1,6 @@
 """rast5d engine: a functional, operation-counting 5D stochastic rasterizer (C++ via pybind11).
 
-Public contract (ARCHITECTURE.md §Public contract)::
+Public contract (docs/architecture.md)::
 
     camera = sim.Camera.for_scene(scene, width=256, height=256, coc_px=10)  # the scene's camera hint
     table  = sim.SampleTable.stratified(spp=16, seed=1)
@@ -9,14 +9,15 @@ Public contract (ARCHITECTURE.md §Public contract)::
 """
 from . import _core
 
-from .errors import ConfigError, EmptyFrameWarning, Error, MemoryLimitError, SceneError, SceneInputError
+from .errors import (ConfigError, EmptyFrameWarning, Error, MemoryLimitError, SceneError, SceneInputError,
+                     UnreadParameterWarning)
 from .hardware import HardwareConfig, TextureCacheConfig, UnitConfig
 from .errors import suggest_keywords as _suggest_keywords
 
 for _cls in (HardwareConfig, TextureCacheConfig, UnitConfig):  # unknown keywords: KeywordError, did you mean
     _suggest_keywords(_cls)
-from .pipeline import (PipelineConfig, algorithm_docs, algorithm_names, interleaved_algorithms, shading_modes,
-                       texture_filters, texture_layouts)
+from .pipeline import (AlgorithmInfo, PipelineConfig, algorithm_docs, algorithm_info, algorithm_names,
+                       interleaved_algorithms, shading_modes, texture_filters, texture_layouts)
 from .pipeline import line_algorithms
 from .png import linear_to_srgb8, write_png
 
@@ -29,6 +30,7 @@ from . import energy, pixel_stats, timing
 from . import uses
 
 __all__ = [
+    "AlgorithmInfo",
     "Camera",
     "ConservativeResult",
     "OcclusionResult",
@@ -46,7 +48,9 @@ __all__ = [
     "SceneInputError",
     "TextureCacheConfig",
     "UnitConfig",
+    "UnreadParameterWarning",
     "algorithm_docs",
+    "algorithm_info",
     "algorithm_names",
     "counter_docs",
     "interleaved_algorithms",

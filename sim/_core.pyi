@@ -147,6 +147,9 @@ def lens_grid_buckets(
 
 def counter_docs() -> dict[str, tuple[str, str]]: ...
 def algorithms() -> list[tuple[str, str, bool]]: ...
+def algorithm_facts() -> dict[str, dict[str, object]]:
+    """{name: {description, samples ('points' | 'lines'), tables ('points' | 'interleaved' | 'lines'),
+    depth_cull, pipeline ('sample' | 'gpu')}}: the traversal registry's facts about every algorithm."""
 
 # ---- timing.cpp: the timing model (docs/timing.md) ----
 def timing_record_dtype() -> np.dtype:

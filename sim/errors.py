@@ -48,6 +48,13 @@ class EmptyFrameWarning(UserWarning):
     screen, degenerate, back-facing), usually a camera inside or facing away from the scene."""
 
 
+class UnreadParameterWarning(UserWarning):
+    """A parameter was set that the render does not read (``pipeline.hiz.enabled`` under an algorithm
+    without a depth-cull stage, ``pipeline.lines`` under a point-sample algorithm, ...): it has no
+    effect. The message names the parameter, its value and why; sweeps hash such a point as if the
+    parameter were left at its default (sim.pipeline.unread_parameters)."""
+
+
 class FewStrataWarning(UserWarning):
     """A sampled render (PipelineConfig.sample_fraction < 1) drew its bins from so few strata that
     its 95% intervals can cover far below 95%; the message says what to raise."""

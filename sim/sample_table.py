@@ -41,6 +41,8 @@ LENS_GRID_SIZES = (1, 2, 4, 8, 16)
 _GENERATORS: dict[str, tuple[Callable[..., "_Draw"], dict[str, object]]] = {}
 # generators fit to render reference images (image-error metrics): no parameter of their own
 _REFERENCE_GENERATORS: list[str] = []
+# generators whose tables have discrete lens coordinates (n_lens > 0): the interleaved algorithms' tables
+_DISCRETE_LENS_GENERATORS: list[str] = []
 _COMMON_DEFAULTS: dict[str, object] = {"seed": 0, "period": 32, "lens": True, "time": True}
 
 
@@ -92,11 +94,15 @@ class SampleTable:
     # ---------------------------------------------------------------- registry
 
     @classmethod
-    def generators(cls, reference: bool = False) -> list[str]:
+    def generators(cls, reference: bool = False, discrete_lens: bool | None = None) -> list[str]:
         """Names accepted by `create` (procedural generators; `from_array` is separate), in
         registration order; ``reference=True``: only those registered as reference generators (the
-        metrics' reference images)."""
-        return list(_REFERENCE_GENERATORS) if reference else list(_GENERATORS)
+        metrics' reference images); ``discrete_lens``: only those whose tables have (True) or lack
+        (False) discrete lens coordinates (what the interleaved algorithms need)."""
+        names = list(_REFERENCE_GENERATORS) if reference else list(_GENERATORS)
+        if discrete_lens is not None:
+            names = [n for n in names if (n in _DISCRETE_LENS_GENERATORS) == discrete_lens]
+        return names
 
     @classmethod
     def kinds(cls) -> list[str]:
@@ -480,15 +486,17 @@ class _Draw:
         self.params = params or {}
 
 
-def _generator(name: str, reference: bool = False, **extra_defaults):
+def _generator(name: str, reference: bool = False, discrete_lens: bool = False, **extra_defaults):
     """Register a generator `impl(spec, rng, **extras) -> _Draw` under `name`, and expose it as
     the classmethod ``SampleTable.<name>(**params)``; ``reference``: it may render the reference
-    images of the image-error metrics."""
+    images of the image-error metrics; ``discrete_lens``: its tables have discrete lens coordinates."""
 
     def register(impl):
         _GENERATORS[name] = (impl, extra_defaults)
         if reference:
             _REFERENCE_GENERATORS.append(name)
+        if discrete_lens:
+            _DISCRETE_LENS_GENERATORS.append(name)
 
         def factory(cls, **params):
             return cls.create(name, **params)
@@ -573,7 +581,7 @@ def _sobol(spec: _Spec, rng: np.random.Generator) -> _Draw:
     return _Draw(unit, params={"scramble": "owen_hash"})
 
 
-@_generator("interleaved", n_lens=256)
+@_generator("interleaved", discrete_lens=True, n_lens=256)
 def _interleaved(spec: _Spec, rng: np.random.Generator, n_lens) -> _Draw:
     """Interleaved sampling with N = n_lens discrete lens positions (any perfect square >= 1),
     jittered on a √N×√N grid of [0, 1)². Blocks of B×B pixels, B the smallest power of two with
@@ -757,7 +765,7 @@ def _u32_to_unit(x: np.ndarray) -> np.ndarray:
 __all__ = ["SampleTable", "LENS_SHAPES", "LENS_GRID_SIZES"]
 
 
-@_generator("accumulation", passes=None)
+@_generator("accumulation", discrete_lens=True, passes=None)
 def _accumulation(spec: _Spec, rng: np.random.Generator, passes) -> _Draw:
     """Accumulation buffering (000_de06ed5e73318ec6.txt §2.2, §8; Haeberli and Akeley 1990): N = spp
     pinhole passes, pass k at lens position k and shutter time k, the SAME for every pixel (no

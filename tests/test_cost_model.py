@@ -42,7 +42,7 @@ def _render(algorithm, cls, model, op_count="documented"):
 
 
 @pytest.mark.parametrize("cls", CLASSES)
-@pytest.mark.parametrize("algorithm", sim.algorithm_names())
+@pytest.mark.parametrize("algorithm", sim.algorithm_names("points"))
 def test_hardware_render_charges_the_hardware_class_cost(algorithm, cls):
     """Per sample test the render charges the hardware kernel's counted cost, in both counting modes;
     the image and every non-operation counter equal the robust model's."""
@@ -102,7 +102,7 @@ def test_oracle_c_sample_follows_the_cost_model():
 
 
 @pytest.mark.parametrize("scene_name", ["static", "crossing", "moving", "near_clipped"])
-@pytest.mark.parametrize("algorithm", sim.algorithm_names())
+@pytest.mark.parametrize("algorithm", sim.algorithm_names("points"))
 def test_hardware_documented_op_counts_equal_exact_counts(algorithm, scene_name):
     """Invariant 4 under the hardware model: documented == counted for whole renders (defocused,
     moving, focus-crossing and near-clipped triangles; two tile-test configurations)."""

@@ -22,7 +22,7 @@ CASES = ref.hard_cases()
 NEAR_COUNTERS = ("setup.near_clipped", "setup.bbox_fallback", "setup.culled_near")
 # (name, needs an interleaved table) for every registered algorithm
 ALGORITHMS = [(name, interleaved) for name, _doc, interleaved in sim._core.algorithms()
-              if name in sim.algorithm_names()]  # point-sample algorithms
+              if name in sim.algorithm_names("points")]  # point-sample algorithms
 
 
 def tables():
@@ -33,7 +33,7 @@ def tables():
 
 
 def test_every_algorithm_is_covered():
-    names = sim.algorithm_names()
+    names = sim.algorithm_names("points")
     assert "bruteforce" in names and {n for n, _ in ALGORITHMS} == set(names)
     assert any(inter for _, inter in ALGORITHMS)
 

@@ -12,7 +12,7 @@ from tests.reference import Tris, make_scene, world_from_pixel
 
 pytestmark = pytest.mark.invariants
 
-ALGORITHMS = sim.algorithm_names()
+ALGORITHMS = sim.algorithm_names("points")
 INTERLEAVED = sorted(name for name, _desc, needs in sim._core.algorithms() if needs)
 SPP = 16
 NOT_COMPARED = {"time.wall_s"}  # measured, not counted

@@ -38,7 +38,7 @@ def reference_hits():
     return rc.hit, ~close.any(axis=(0, 3))
 
 
-@pytest.mark.parametrize("algorithm", sim.algorithm_names())
+@pytest.mark.parametrize("algorithm", sim.algorithm_names("points"))
 def test_maps_sum_to_frame_counters_for_every_thread_count(algorithm):
     scene, cam, table = setup()
     plain = sim.render(scene, cam, table, sim.PipelineConfig(algorithm=algorithm, threads=2), timing=False)

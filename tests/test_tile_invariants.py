@@ -15,7 +15,7 @@ from tests.reference import make_scene
 
 pytestmark = pytest.mark.invariants
 
-ALGORITHMS = sim.algorithm_names()
+ALGORITHMS = sim.algorithm_names("points")
 INTERLEAVED = sorted(name for name, _desc, needs in sim._core.algorithms() if needs)
 ANY_TABLE = [a for a in ALGORITHMS if a not in INTERLEAVED]
 LENSES = ["disk", "square", "hexagon"]

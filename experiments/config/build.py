@@ -1,6 +1,8 @@
 """Construction of the sim objects of one (non-swept) point: scene, camera, sample table, pipeline."""
 from __future__ import annotations
 
+import warnings
+
 import sim
 
 from .schema import ConfigError, RenderConfig, SceneSpec
@@ -97,7 +99,9 @@ def check(config: RenderConfig) -> None:
             _CHECKED_TABLES[key] = _make_table(config.samples.kind, params, config.samples)
         except ValueError as e:  # "spp: expected ..." -> "samples.spp: expected ..."
             raise ConfigError(f"samples.{e}") from None
-    pipeline = sim.PipelineConfig(**config.pipeline.model_dump())
+    with warnings.catch_warnings():  # a parameter the render does not read: sweep.expand_sweep warns once
+        warnings.simplefilter("ignore", sim.UnreadParameterWarning)
+        pipeline = sim.PipelineConfig(**config.pipeline.model_dump())
     try:
         check_combination(pipeline, _CHECKED_TABLES[key], camera.lens)
     except sim.ConfigError as e:  # name the config's keys: pipeline.algorithm, samples.kind
