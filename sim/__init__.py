@@ -26,7 +26,7 @@ from .render import Result, memory_estimate, render, trace_pixel
 from .sample_table import SampleTable
 from .intervals import ConservativeResult, OcclusionResult, conservative_raster, occlusion_query
 from .stats import counter_docs
-from . import energy, pixel_stats, timing
+from . import energy, pixel_stats, references, timing
 from . import uses
 
 __all__ = [

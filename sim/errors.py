@@ -100,7 +100,9 @@ def field_docs(cls) -> dict[str, dict]:
     out = {}
     for f in dataclasses.fields(cls):
         default = f.default if f.default is not dataclasses.MISSING else f.default_factory()
-        entry = {"default": default, "unit": f.metadata.get("unit", ""), "doc": f.metadata["doc"]}
+        from .references import cite
+
+        entry = {"default": default, "unit": f.metadata.get("unit", ""), "doc": cite(f.metadata["doc"])}
         if dataclasses.is_dataclass(default):
             entry["fields"] = field_docs(type(default))
             entry["default"] = dataclasses.asdict(default)

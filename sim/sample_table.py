@@ -1,4 +1,4 @@
-"""The programmable sample table (ARCHITECTURE.md §sample table).
+"""The programmable sample table (docs/architecture.md; docs/conventions.md).
 
 A P×P block of pixels repeats over the screen; pixel (px, py) uses the spp samples of table entry
 [py mod P, px mod P]. Each sample is (x, y, u, v, t): x, y ∈ [0, 1) inside the pixel, (u, v) in the
@@ -17,8 +17,8 @@ spawn_key=(zlib.crc32(name.encode()), period)))``, so a table is a pure function
 always drawn, even when `lens` or `time` is off, so switching a dimension off leaves the others
 unchanged.
 
-Generators are registered by name with `@_generator(name)` (STYLE.md "one implementation,
-registered by name") and appear as classmethods: ``SampleTable.stratified(spp=16, seed=1)`` is
+Generators are registered by name with `@_generator(name)` (one implementation,
+registered by name: docs/architecture.md §Where to add a thing) and appear as classmethods: ``SampleTable.stratified(spp=16, seed=1)`` is
 ``SampleTable.create("stratified", spp=16, seed=1)``. User tables come from
 ``SampleTable.from_array``.
 """
@@ -300,7 +300,7 @@ class SampleTable:
 
     @classmethod
     def lines(cls, n_lines: int = 16, seed: int = 0, period: int = 32, wheel: int = 4) -> "SampleTable":
-        """A line-sample table for ``PipelineConfig(algorithm="lines")`` (004_da3c211285527fac.txt
+        """A line-sample table for ``PipelineConfig(algorithm="lines")`` ([Tzeng 2012]
         §3): per pixel ``n_lines`` lines through the centre of the disk lens, as wagon wheels of
         ``wheel`` lines sharing one screen point. The n_lines angles are stratified over [0, π)
         with a random rotation per pixel (θ_k = π(k + ξ)/n_lines); line k belongs to wheel
@@ -392,7 +392,7 @@ class SampleTable:
         return p
 
     def lens_grid(self, grid: int, lens: str = "disk") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Lens-grid buckets (001_3248aaf17c219d5e.txt §5.1, Fig. 10) from the engine:
+        """Lens-grid buckets ([Akenine-Möller 2012] §5.1, Fig. 10) from the engine:
         (order (P,P,spp), counts (P,P,G*G), offsets (P,P,G*G)), int32; cell = j*G + i."""
         if isinstance(grid, bool) or not isinstance(grid, (int, np.integer)) or int(grid) not in LENS_GRID_SIZES:
             raise ValueError(
@@ -535,7 +535,7 @@ def _stratified(spec: _Spec, rng: np.random.Generator) -> _Draw:
 
 @_generator("stratified_permuted")
 def _stratified_permuted(spec: _Spec, rng: np.random.Generator) -> _Draw:
-    """001_3248aaf17c219d5e.txt §6, Fig. 13: "permuted (x,y) sample positions for each block of
+    """[Akenine-Möller 2012] §6, Fig. 13: "permuted (x,y) sample positions for each block of
     2×2 pixels". (x, y) are jittered strata per pixel (as `stratified`); the lens (a, b) are
     jittered on an mx×my grid with mx·my = 4·spp over each 2×2 block, and t on 4·spp 1D strata
     over the block; both are randomly (and independently) assigned to the block's 4·spp
@@ -587,7 +587,7 @@ def _interleaved(spec: _Spec, rng: np.random.Generator, n_lens) -> _Draw:
     jittered on a √N×√N grid of [0, 1)². Blocks of B×B pixels, B the smallest power of two with
     B²·spp >= N; each block's B²·spp samples take every position floor(B²·spp / N) times plus
     (B²·spp mod N) distinct extra positions chosen at random, in a random order per block, so
-    per block every position occurs equally often whenever N divides B²·spp (001: N = 256,
+    per block every position occurs equally often whenever N divides B²·spp ([Akenine-Möller 2012]: N = 256,
     spp = 64 gives one sample per position per 2×2 block). spp >= N needs N | spp (then each
     pixel holds each position spp/N times). Needs period divisible by B. (x, y) are jittered
     strata per pixel; t is stratified per pixel and permuted."""
@@ -631,7 +631,7 @@ def _interleaved(spec: _Spec, rng: np.random.Generator, n_lens) -> _Draw:
 
 @_generator("multiview", views=2)
 def _multiview(spec: _Spec, rng: np.random.Generator, views) -> _Draw:
-    """Stereo and multi-view rendering (002_95ea0844b256f75b.txt §8, Fig. 16): the lens is split into
+    """Stereo and multi-view rendering ([Nilsson 2012] §8, Fig. 16): the lens is split into
     `views` equal intervals of u, and view k owns samples k*m .. (k+1)*m - 1 of every pixel
     (m = spp / views), stratified as the `stratified` generator within its interval (so u of view k
     lies in [k/V, (k+1)/V) of the unit square). Use a square lens: the views are strips of one
@@ -767,7 +767,7 @@ __all__ = ["SampleTable", "LENS_SHAPES", "LENS_GRID_SIZES"]
 
 @_generator("accumulation", discrete_lens=True, passes=None)
 def _accumulation(spec: _Spec, rng: np.random.Generator, passes) -> _Draw:
-    """Accumulation buffering (000_de06ed5e73318ec6.txt §2.2, §8; Haeberli and Akeley 1990): N = spp
+    """Accumulation buffering ([Toth 2008] §2.2, §8; Haeberli and Akeley 1990): N = spp
     pinhole passes, pass k at lens position k and shutter time k, the SAME for every pixel (no
     per-pixel randomisation, so the passes' ghosts stay visible). The N lens positions are
     jittered strata of a near-square grid of the unit square, the N times jittered strata of

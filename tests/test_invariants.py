@@ -171,7 +171,7 @@ def determinism_inputs():
 
 @pytest.mark.parametrize("algorithm", ALGORITHMS)
 def test_thread_count_does_not_change_anything(algorithm):
-    """threads = 1, 2, 4: identical image bytes and identical counters (ARCHITECTURE.md invariant 5)."""
+    """threads = 1, 2, 4: identical image bytes and identical counters (docs/architecture.md §Invariants)."""
     scene, cam = determinism_inputs()
     runs = {t: render(scene, cam, interleaved_table(), algorithm=algorithm, threads=t, bin_size=16) for t in (1, 2, 4)}
     for t in (2, 4):

@@ -1,4 +1,4 @@
-"""Line samples (004_da3c211285527fac.txt §3-4; algorithm 'lines'): closed-form coverage of a
+"""Line samples ([Tzeng 2012] §3-4; algorithm 'lines'): closed-form coverage of a
 defocused edge, agreement with point sampling (heuristics off, unlimited buffer), the tile-clipped
 path's image, documented == counted operations, and clear errors for wrong combinations."""
 from __future__ import annotations
@@ -206,7 +206,7 @@ def test_yaml_lines_config(tmp_path):
 
 def test_composite_is_timed():
     """The segment buffers' work reaches the timing model: each offered segment and each composite
-    step (004 Fig. 3) is one depth-unit item, the composite as one record per bin after the bin's
+    step ([Tzeng 2012] Fig. 3) is one depth-unit item, the composite as one record per bin after the bin's
     triangles. With a slow depth unit the frame is depth-bound, and removing the end-of-bin
     records (re-timing the rest) lowers the estimated cycles."""
     cam = sim.Camera(width=80, height=72, focus_distance=5.0, coc_px=6.0, fov_y_deg=30.0)
@@ -224,7 +224,7 @@ def test_composite_is_timed():
     assert s["timing.cycles"] - without >= 0.9 * s["lines.composite_steps"] / 0.25
 
 
-# ---- texturing: each segment textured at its midpoint (004 §3.1.2 "Shading") ---------------------------
+# ---- texturing: each segment textured at its midpoint ([Tzeng 2012] §3.1.2 "Shading") ---------------------------
 
 def _textured_square(z=-6.0, texels=4, seed=3):
     """A square (two triangles) parallel to the lens at view depth -z with uv = its own (x, y)
@@ -292,7 +292,7 @@ def test_textured_lines_agree_with_point_sampling():
     1024 stratified textured points (brute force) as closely as untextured lines do (RMSE 0.003).
     With a period of 3 units (7.5 px on the background, blurred by 3.5 px) they do not: a line inside
     one triangle is shaded at its midpoint, the lens centre, so the lines keep texture detail that the
-    blur removes (004 §5's limitation of midpoint shading; docs/shading.md)."""
+    blur removes ([Tzeng 2012] §5's limitation of midpoint shading; docs/shading.md)."""
     cam = sim.Camera(width=W, height=16, focus_distance=5.0, coc_px=6.0, fov_y_deg=30.0)
     base = _layered_scene()
     yy, xx = np.mgrid[0:16, 0:16] / 16.0

@@ -335,7 +335,7 @@ def test_shading_counts_same_on_counting_path():
 
 
 def test_sample_distribution_texture_adds_one_fetch_per_lane():
-    # 000 §5.3: one extra nearest texel per shaded lane, at a 1:1 pixel mapping (coherent: it should
+    # [Toth 2008] §5.3: one extra nearest texel per shaded lane, at a 1:1 pixel mapping (coherent: it should
     # hardly ever miss once its few lines are in).
     scene, cam = _textured_scene()
     table = sim.SampleTable.stratified(spp=8, seed=3)

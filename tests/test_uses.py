@@ -1,4 +1,4 @@
-"""The rasterizer's uses (sim.uses; 002 §4-§7, 003): each checked against a closed form, a
+"""The rasterizer's uses (sim.uses; [Nilsson 2012] §4-§7, [McGuire 2010]): each checked against a closed form, a
 brute-force computation or a statistical test that does not run the code under test."""
 from __future__ import annotations
 
@@ -29,7 +29,7 @@ def _layers_scene(alphas, colors=None, depth0=2.0):
 CAM = dict(width=32, height=32, fov_y_deg=45.0, focus_distance=3.0)
 
 
-# ---- stochastic transparency (003) ---------------------------------------------------------------
+# ---- stochastic transparency ([McGuire 2010]) ---------------------------------------------------------------
 
 def test_transparency_alpha_one_is_opaque_bit_for_bit():
     sc = models.named("transparent_layers", width=32, height=32)
@@ -118,7 +118,7 @@ def test_transparency_bad_alpha_is_a_clear_error():
         uses.stochastic_transparency(sc.with_alpha(None), sim.Camera(**CAM), sim.SampleTable.stratified(spp=1))
 
 
-# ---- the rasterizer as a sampler (002 §5) ----------------------------------------------------------
+# ---- the rasterizer as a sampler ([Nilsson 2012] §5) ----------------------------------------------------------
 
 def test_chi2_sf_matches_scipy():
     from sim.uses.common import chi2_sf
@@ -161,7 +161,7 @@ def test_sampler_voids_get_no_points_and_cells_are_uniform():
         uses.sample_simploids(sc, cam, sim.SampleTable.random(spp=1), domain="cube")
 
 
-# ---- motion-blurred soft shadows (002 §7) ------------------------------------------------------------
+# ---- motion-blurred soft shadows ([Nilsson 2012] §7) ------------------------------------------------------------
 
 def _shadow_run(motion=0.0, **options):
     sc = models.named("shadow_planes", motion=motion, width=48, height=48)
@@ -213,7 +213,7 @@ def test_shadow_penumbra_width_is_similar_triangles_and_banded():
     assert f["shadow.bands"] == 9
 
 
-# ---- caustic volumes as moving triangles (002 §4) ------------------------------------------------------
+# ---- caustic volumes as moving triangles ([Nilsson 2012] §4) ------------------------------------------------------
 
 def test_caustic_time_intervals_match_a_root_finder(rng):
     """Exact per-point time intervals (edge quadratics) against dense sampling of the inside test in t, with
@@ -304,7 +304,7 @@ def test_caustic_twisted_beam_fills_less_than_its_hull_and_parallel_beam_equals_
     assert straight["caustics.fill_moving"] == straight["caustics.fill_prism"] == inside
 
 
-# ---- planar glossy reflections (002 §6) -----------------------------------------------------------------
+# ---- planar glossy reflections ([Nilsson 2012] §6) -----------------------------------------------------------------
 
 def test_glossy_map_with_a_pinhole_lens_is_a_mirror():
     """Roughness -> 0: the map look-up at each floor point equals the colour of the first triangle hit by the
@@ -403,7 +403,7 @@ def test_alpha_masks_same_image_for_every_algorithm_and_thread_count():
 
 
 def test_refraction_camera_sits_on_the_refracted_central_ray():
-    """002 §6: the refraction map's camera is the primary camera moved along the plane normal onto the
+    """[Nilsson 2012] §6: the refraction map's camera is the primary camera moved along the plane normal onto the
     refracted central ray, so the points of that ray under the plane project onto the central ray's surface
     point (closed form: Snell's law at the plane y = 0)."""
     from sim.uses.glossy import reflection_camera

@@ -10,7 +10,7 @@ from .schema import ConfigError, RenderConfig, SceneSpec
 
 class WideLensCamera(sim.Camera):
     """A camera whose lens is ``u_scale`` times wider in u than in v: V views on a camera line, each
-    with a full-size lens, the samples of view k in the k-th u-interval (002 §8, Fig. 16)."""
+    with a full-size lens, the samples of view k in the k-th u-interval ([Nilsson 2012] §8, Fig. 16)."""
 
     def __init__(self, u_scale: float, **kw):
         super().__init__(**kw)

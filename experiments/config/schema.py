@@ -3,7 +3,7 @@ default and description, and the validation of a merged config into a RenderConf
 
 Every parameter is declared once: the `pipeline` section comes from sim.PipelineConfig's field
 declarations, the `hardware` section from sim.HardwareConfig.field_docs(). Unknown keys are errors
-that name the key, the file and the line (STYLE.md §Configuration).
+that name the key, the file and the line (docs/design_notes.md, note 9: each parameter declared once).
 """
 from __future__ import annotations
 
@@ -90,9 +90,9 @@ class SamplesSpec(_Strict):
     time: bool = Field(True, description="Include the time dimension")
     n_lens: Optional[int] = Field(None, description="Interleaved only: number of discrete lens positions (64, 256)")
     views: Optional[int] = Field(None, description=(
-        "Multiview only: number of views splitting the lens in u (002 §8); spp is the total over all views"))
+        "Multiview only: number of views splitting the lens in u ([Nilsson 2012] §8); spp is the total over all views"))
     n_lines: Optional[int] = Field(None, description=(
-        "Lines only (samples.kind lines, algorithm lines): line samples per pixel (004 §3); default 16"))
+        "Lines only (samples.kind lines, algorithm lines): line samples per pixel ([Tzeng 2012] §3); default 16"))
     wheel: Optional[int] = Field(None, description=(
         "Lines only: lines per wagon wheel sharing one screen point; default 4"))
 
@@ -257,7 +257,12 @@ class OutputsSpec(_Strict):
         "Report page name: reports/<folder>/<page>.md (configs may share a page)"))
     folder: str = Field("paper", description="Folder of the page under reports/")
     title: Optional[str] = Field(None, description="Section title on the page")
-    text: Optional[str] = Field(None, description="Markdown above the figures: what, how, departures, caveats")
+    text: Optional[str] = Field(None, description=(
+        "Markdown above the figures: what, how, departures, caveats; every figure in it is a placeholder filled "
+        "from the page's data ({column[key=value]:.2f}, docs/reports.md §Prose)"))
+    summary: Optional[str] = Field(None, description=(
+        "The section's result in a few sentences, a template like text: printed at the top of the section and "
+        "gathered into the README's Results section with a link to the page"))
     derived: dict[str, str] = Field(default_factory=dict, description=(
         "New columns: pandas expressions over result columns (dotted names allowed), e.g. "
         "'shade.quad_requests / raster.samples_hit'"))

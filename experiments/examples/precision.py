@@ -1,4 +1,4 @@
-"""Precision of the tile test, the sample test and the depth (001 §7: "an efficient fixed-point
+"""Precision of the tile test, the sample test and the depth ([Akenine-Möller 2012] §7: "an efficient fixed-point
 implementation"; pipeline.precision, docs/precision.md). With the render's own kernels in fixed point
 (core/fixed.h: vertices and samples snapped to frac_bits; registers of a sign, int_bits integer and 2
 frac_bits fraction bits, exact on the snapped inputs) and in float32:
@@ -861,7 +861,7 @@ def markdown(data):
             "## 4D tile test: fewest bits per viewport",
             "",
             "The render's 4D tile test in the format (`tiletest/precision_4d.h`, `sim._core.precision_probe_4d`): the "
-            "h_i sets (001 Eq. 1-3) and H_j cells (Eq. 4-5) of TILE's static path, on the static defocused "
+            "h_i sets ([Akenine-Möller 2012] Eq. 1-3) and H_j cells (Eq. 4-5) of TILE's static path, on the static defocused "
             "triangles of the hard-case suite at each viewport, blur scaled with the viewport (the suite's CoC of "
             "8 px at 32 px becomes 128 px at 512 and 2048 px at 8192), 48 random 2x2 tiles near each footprint, a "
             "4x4 lens grid; tiles widened as a render widens them. Each form is conservative by construction "
@@ -937,8 +937,8 @@ def markdown(data):
             "",
             "The render's motion tile tests in the format (`tiletest/precision_5d.h`, `sim._core.precision_probe_5d`): "
             "`tile` with `motion_test: intervals`, 4 time sub-intervals, H5 on, a 4x4 lens grid; per sub-interval the "
-            "time interval t̂ (002 §2, intervals/time_interval.h), the 5D lens sets (h_i lines over the six end "
-            "vertices) and the H5 cells (001's H_j lines extended to time). Workload per viewport: every hard case "
+            "time interval t̂ ([Nilsson 2012] §2, intervals/time_interval.h), the 5D lens sets (h_i lines over the six end "
+            "vertices) and the H5 cells ([Akenine-Möller 2012]'s H_j lines extended to time). Workload per viewport: every hard case "
             "moving (its own shutter-close positions, else moved by (0.6, -0.4, 1.5) world units: through the near "
             "plane, behind the camera, gigantic coordinates, huge blur), blurred with the suite's CoC scaled to the "
             "viewport (5D) and in focus (3D), plus 16 motion_field-style random triangles per class (motion up to a "
@@ -1065,7 +1065,7 @@ def markdown(data):
             "## Not measured",
             "",
             "The conservative rasterizer runs the same format forms (tested, not measured here). The "
-            "4D tile test's lens vertices (a, b of 001 Eq. 1), the motion tests' homogeneous end vertices and H5 "
+            "4D tile test's lens vertices (a, b of [Akenine-Möller 2012] Eq. 1), the motion tests' homogeneous end vertices and H5 "
             "quadratics, and the fixed-point sample test's placed vertices come from float64 before rounding into "
             "the format; a datapath computing them in fixed point would add that rounding. H5's orientation, "
             "usability and oracle are float64 set-up decisions. The box-bound rows measure INTERVAL's per-cell "

@@ -104,13 +104,36 @@ def powerlaw_table(spec, d, hues) -> tuple[list[str], list[dict]]:
 # ---- named tables --------------------------------------------------------------------------------
 
 TABLES: dict = {}
+# name -> the result columns (prefixes ending in ".") a named table reads besides the rows' config; a page
+# that places the table must read them (tests/test_prose.py: timing figures need a page that reads timing)
+READS: dict = {}
+# name -> fn(df, config) -> DataFrame: a named table's values, tidy (one row per cell, df.attrs["keys"] the
+# key columns), for the page prose: {NAME.column[key=value]} (experiments/report/prose.py)
+VALUES: dict = {}
 
 
-def named_table(name: str):
-    """Register a page table fn(df, config) -> Markdown lines under ``name`` (for {{table:NAME}}). The escape
-    hatch: prefer `derived:` columns and `table` plots."""
+def named_table(name: str, reads: tuple[str, ...] = ()):
+    """Register a page table fn(df, config) -> Markdown lines under ``name`` (for {{table:NAME}}); ``reads``:
+    the result columns it needs beyond those any render row has (e.g. "timing."). The escape hatch: prefer
+    `derived:` columns and `table` plots."""
     def deco(fn):
         TABLES[name] = fn
+        READS[name] = tuple(reads)
+        return fn
+
+    return deco
+
+
+def named_values(name: str):
+    """Register fn(df, config) -> DataFrame (tidy, ``attrs["keys"]`` its key columns) as the values the
+    prose may quote as {NAME.column[key=value]}; a named table of the same name prints the same values."""
+    def deco(fn):
+        def tidy(df, config):
+            out = fn(df, config)
+            out.attrs["keys"] = list(out.attrs.get("keys", []))
+            return out
+
+        VALUES[name] = tidy
         return fn
 
     return deco
@@ -118,13 +141,37 @@ def named_table(name: str):
 
 SCENE_ORDER = ["bunny", "spot", "modern_hall", "mixed_sizes"]
 
-# 001 Table 2, StoneGiant: culled share and Gops for none / h_i / H_j / both / INTERVAL.
+# [Akenine-Möller 2012] Table 2, StoneGiant: culled share and Gops for none / h_i / H_j / both / INTERVAL.
 PAPER_T2 = {10: (["0%", "30%", "62%", "65%", "27%"], ["23", "19", "10", "10", "17"]),
             50: (["0%", "79%", "72%", "86%", "66%"], ["83", "24", "26", "18", "29"])}
 
 
 def _ok(df):
     return df[df["status"] == "ok"] if "status" in df.columns else df
+
+
+def _fact(algorithm, name: str):
+    """A traversal-registry fact (sim.algorithm_info) of an algorithm name, or None for an unknown one."""
+    import sim
+
+    try:
+        return getattr(sim.algorithm_info(str(algorithm)), name)
+    except sim.ConfigError:
+        return None
+
+
+def _is_lines(algorithm) -> bool:
+    """The algorithm tests line samples (sim.algorithm_info(name).samples)."""
+    return _fact(algorithm, "samples") == "lines"
+
+
+def _is_gpu(algorithm) -> bool:
+    """The algorithm runs the conventional-GPU pipeline (sim.algorithm_info(name).pipeline)."""
+    return _fact(algorithm, "pipeline") == "gpu"
+
+
+def _lines_mask(df) -> np.ndarray:
+    return np.array([_is_lines(a) for a in df["pipeline.algorithm"]], dtype=bool)
 
 
 def _first(df, keys: dict):
@@ -173,7 +220,7 @@ def table2_culling(df, config) -> list[str]:
 def fig15_trends(df, config) -> list[str]:
     """Is tile (2x2, and 1x1) the cheapest of the arbitrary-pattern algorithms at every CoC?"""
     df = _ok(df)
-    lines = ["Trend checks (001 §6.2: OUR is the cheapest at every CoC):", ""]
+    lines = ["Trend checks ([Akenine-Möller 2012] §6.2: OUR is the cheapest at every CoC):", ""]
     models = list(dict.fromkeys(df["pipeline.cost_model"])) if "pipeline.cost_model" in df.columns else [None]
     for s, model in [(s, m) for s in _scenes(df) for m in models]:
         sub = df[df["scene.name"] == s]
@@ -204,7 +251,7 @@ def fig15_trends(df, config) -> list[str]:
     return lines
 
 
-@named_table("pareto_members")
+@named_table("pareto_members", reads=("timing.",))
 def pareto_members(df, config) -> list[str]:
     """Which (sample-table kind, algorithm) pairs make up the RMSE Pareto front against each cost."""
     df = _ok(df)
@@ -228,7 +275,7 @@ def pareto_members(df, config) -> list[str]:
             + md_table(["scene", "cost", "front points", "members"], rows))
 
 
-# 002 §8: shader-invocation increase with a 1024-entry shading cache, against one view.
+# [Nilsson 2012] §8: shader-invocation increase with a 1024-entry shading cache, against one view.
 PAPER_MULTIVIEW = {2: "+10%", 7: "+15%"}
 
 
@@ -253,7 +300,7 @@ def multiview_increase(df, config) -> list[str]:
                      "cache hit rate", "paper"], rows)
 
 
-# 001 Table 3: quad shading requests / supersampled shades for OUR and INTERVAL.
+# [Akenine-Möller 2012] Table 3: quad shading requests / supersampled shades for OUR and INTERVAL.
 PAPER_T3 = {"tile": {0: 1, 10: 2, 20: 4, 30: 6, 50: 9}, "interval": {0: 10, 10: 12, 20: 14, 30: 16, 50: 19}}
 
 
@@ -389,7 +436,7 @@ def _on(df, name) -> np.ndarray:
 def method_label(row) -> str:
     """'stratified 64 / tile', 'lines 16', 'lines 16 clip', with ' +LoD' when level of detail is on."""
     get = row.get if hasattr(row, "get") else (lambda k, d=None: d)
-    if get("pipeline.algorithm") == "lines":
+    if _is_lines(get("pipeline.algorithm")):
         n = get("samples.n_lines")
         s = f"lines {int(n) if n == n and n is not None else '?'}"
         if str(get("pipeline.lines.tile_clip")) == "True":
@@ -432,11 +479,11 @@ def _families(sub):
     for lod in (False, True):
         part = sub[_on(sub, "pipeline.lod.enabled") == lod]
         tag = " +LoD" if lod else ""
-        pts = part[part["pipeline.algorithm"] != "lines"]
+        pts = part[~_lines_mask(part)]
         for (kind, algo), g in pts.groupby(["samples.kind", "pipeline.algorithm"]):
             if g["samples.spp"].nunique() >= 2:
                 out.append((f"points {kind} / {algo}{tag}", g))
-        is_line = (part["pipeline.algorithm"] == "lines").to_numpy()
+        is_line = _lines_mask(part)
         for clip in (False, True):
             ln = part[is_line & (_on(part, "pipeline.lines.tile_clip") == clip)]
             if len(ln) >= 2:
@@ -444,7 +491,7 @@ def _families(sub):
     return out
 
 
-@named_table("methods_table")
+@named_table("methods_table", reads=("timing.",))
 def methods_table(df, config) -> list[str]:
     """Scene x CoC x method: work, estimated cycles, wall time, RMSE and FLIP."""
     df = _ok(df)
@@ -452,7 +499,7 @@ def methods_table(df, config) -> list[str]:
     for s in _scenes(df):
         for coc in sorted(df[df["scene.name"] == s]["camera.coc_px"].unique()):
             sub = df[(df["scene.name"] == s) & (df["camera.coc_px"] == coc)]
-            recs = sorted((r for _, r in sub.iterrows()), key=lambda r: (method_label(r).startswith("lines"), _work(r)))
+            recs = sorted((r for _, r in sub.iterrows()), key=lambda r: (_is_lines(r["pipeline.algorithm"]), _work(r)))
             for r in recs:
                 rows.append([s, f"{coc:g}", method_label(r), f"{_work(r):.3g}", f"{float(r['ops.total']):.3g}",
                              fmt(r.get("timing.cycles", math.nan), "{:.3g}"), f"{float(r['time.wall_s']):.2f}",
@@ -521,9 +568,9 @@ def _cycles(r) -> float:
     return float(r.get("timing.cycles", math.nan))
 
 
-@named_table("methods_claim")
+@named_table("methods_claim", reads=("timing.",))
 def methods_claim(df, config) -> list[str]:
-    """004's claim, 16 lines against 256 points (4-5x faster at better quality), on our scenes: the
+    """[Tzeng 2012]'s claim, 16 lines against 256 points (4-5x faster at better quality), on our scenes: the
     ratios at 256 points, and at equal RMSE (the work, cycles and wall time the point family needs to
     reach the 16 lines' RMSE, interpolated along its spp sweep) against `tile` and `bruteforce`."""
     df = _ok(df)
@@ -532,7 +579,7 @@ def methods_claim(df, config) -> list[str]:
         for coc in sorted(df[df["scene.name"] == s]["camera.coc_px"].unique()):
             sub = df[(df["scene.name"] == s) & (df["camera.coc_px"] == coc)
                      & ~_on(df, "pipeline.lod.enabled")]
-            is16 = (sub["pipeline.algorithm"] == "lines").to_numpy() & (np.asarray(_col(sub, "samples.n_lines"), float) == 16)
+            is16 = _lines_mask(sub) & (np.asarray(_col(sub, "samples.n_lines"), float) == 16)
             ln = sub[is16 & ~_on(sub, "pipeline.lines.tile_clip")]
             lc = sub[is16 & _on(sub, "pipeline.lines.tile_clip")]
             tile = sub[(sub["pipeline.algorithm"] == "tile") & (sub["samples.kind"] == "stratified")]
@@ -555,7 +602,7 @@ def methods_claim(df, config) -> list[str]:
                          ratio(tile, _cycles), ratio(tile, _wall),
                          ratio(bf, _work), ratio(bf, _wall),
                          fmt(l.get("metric.flip", math.nan), "{:.4f}"), fmt(p.get("metric.flip", math.nan), "{:.4f}")])
-    rows.append(["**004 (GTX 580, 6 scenes)**", "", "lower noise", "", "", "4-5 (fps, naive point sampler)", "",
+    rows.append(["**[Tzeng 2012] (GTX 580, 6 scenes)**", "", "lower noise", "", "", "4-5 (fps, naive point sampler)", "",
                  "", "", "4.2-4.8 (fps)", "", "", "", ""])
     return md_table(["scene", "CoC", "RMSE 16 lines", "RMSE 256 pts", "ops 256 pts (tile) / 16 lines",
                      "ops 256 pts (bruteforce) / 16 lines", "equal RMSE: ops tile / lines",
@@ -574,7 +621,7 @@ def _pareto(points):
     return front
 
 
-@named_table("methods_pareto")
+@named_table("methods_pareto", reads=("timing.",))
 def methods_pareto(df, config) -> list[str]:
     """The Pareto fronts (RMSE against all counted operations and against wall time) per scene and
     CoC: the methods on the front, cheapest first, with their RMSE."""
@@ -586,7 +633,8 @@ def methods_pareto(df, config) -> list[str]:
             for axis, cost in (("ops (all)", _work), ("wall", _wall)):
                 pts = [(cost(r), float(r["metric.rmse"]), method_label(r)) for _, r in sub.iterrows()]
                 front = _pareto(pts)
-                n_lines = sum(lab.startswith("lines") for _c, _e, lab in front)
+                line_labels = {method_label(r) for _, r in sub.iterrows() if _is_lines(r["pipeline.algorithm"])}
+                n_lines = sum(lab in line_labels for _c, _e, lab in front)
                 rows.append([s, f"{coc:g}", axis, f"{n_lines} / {len(front)}",
                              "; ".join(f"{lab} ({e:.4f})" for _c, e, lab in front)])
     return md_table(["scene", "CoC", "cost", "lines on the front", "front, cheapest first (RMSE)"], rows)
@@ -605,7 +653,7 @@ def methods_lod(df, config) -> list[str]:
         base = df[~_on(df, "pipeline.lod.enabled")]
         for k, v in keys.items():
             base = base[base[k] == v]
-        if r["pipeline.algorithm"] == "lines":
+        if _is_lines(r["pipeline.algorithm"]):
             base = base[np.asarray(base["samples.n_lines"], float) == float(r["samples.n_lines"])]
         if "pipeline.lines.tile_clip" in df.columns:
             base = base[_on(base, "pipeline.lines.tile_clip") == (str(r["pipeline.lines.tile_clip"]) == "True")]
@@ -626,7 +674,7 @@ def methods_lod(df, config) -> list[str]:
 def methods_segments(df, config) -> list[str]:
     """Segment-buffer statistics by CoC, and what the tile clip saved."""
     df = _ok(df)
-    ln = df[(df["pipeline.algorithm"] == "lines").to_numpy() & ~_on(df, "pipeline.lod.enabled")]
+    ln = df[_lines_mask(df) & ~_on(df, "pipeline.lod.enabled")]
     rows = []
     for s in _scenes(ln):
         for coc in sorted(ln[ln["scene.name"] == s]["camera.coc_px"].unique()):
@@ -655,23 +703,23 @@ def methods_segments(df, config) -> list[str]:
 
 GPU_METHODS = ["gpu_hexagon3d", "gpu_wedge", "gpu_reduced_wedge", "gpu_hexagon2d", "gpu_pe_triangle",
                "gpu_vr_triangle", "gpu_convex_hull", "gpu_adaptive"]
-# 000 Table 1: vertices, triangles, computation, usability (003's hull and 000 §4.7 are not in it).
+# [Toth 2008] Table 1: vertices, triangles, computation, usability ([McGuire 2010]'s hull and [Toth 2008] §4.7 are not in it).
 PAPER_GPU_T1 = {"gpu_hexagon3d": ("12", "20/16", "heavy", "excellent"), "gpu_wedge": ("6", "8", "medium", "good"),
                 "gpu_reduced_wedge": ("5", "4", "intense", "excellent"),
                 "gpu_hexagon2d": ("6", "4", "medium", "mediocre"), "gpu_pe_triangle": ("3", "1", "light", "poor"),
                 "gpu_vr_triangle": ("3", "1", "medium", "very poor")}
-# 000 Table 2: total output floats (none / triangle / strip constants), bump-mapped textured surface.
+# [Toth 2008] Table 2: total output floats (none / triangle / strip constants), bump-mapped textured surface.
 PAPER_GPU_T2 = {"gpu_hexagon3d": (858, 788, 123), "gpu_hexagon2d": (234, 164, 59)}
 
 
 def _gpu_rows(df):
     df = _ok(df)
-    return df[df["pipeline.algorithm"].astype(str).str.startswith("gpu_")]
+    return df[[_is_gpu(a) for a in df["pipeline.algorithm"]]]
 
 
 @named_table("gpu_table1")
 def gpu_table1(df, config) -> list[str]:
-    """000 Table 1 measured at CoC 8 px: per input triangle (mean over the scenes) output vertices, strip
+    """[Toth 2008] Table 1 measured at CoC 8 px: per input triangle (mean over the scenes) output vertices, strip
     triangles, geometry-shader ops, output floats; bound area and fragments against hit fragments."""
     df = _gpu_rows(df)
     coc = 8 if (df["camera.coc_px"] == 8).any() else sorted(df["camera.coc_px"].unique())[0]
@@ -698,7 +746,7 @@ def gpu_table1(df, config) -> list[str]:
 
 @named_table("gpu_fallbacks")
 def gpu_fallbacks(df, config) -> list[str]:
-    """Fallbacks by cause (000 §4.8) summed over the sweep, per method."""
+    """Fallbacks by cause ([Toth 2008] §4.8) summed over the sweep, per method."""
     df = _gpu_rows(df)
     cols = ["gpu.fallback_near", "gpu.fallback_motion", "gpu.fallback_degenerate", "gpu.fallback_vr",
             "gpu.fallback_reduced", "gpu.volume_clipped", "gpu.adaptive_pe", "gpu.adaptive_hexagon"]
@@ -710,7 +758,7 @@ def gpu_fallbacks(df, config) -> list[str]:
     return md_table(["method", "triangles"] + [c.split(".", 1)[1] for c in cols], rows)
 
 
-@named_table("gpu_vs_tile")
+@named_table("gpu_vs_tile", reads=("timing.",))
 def gpu_vs_tile(df, config) -> list[str]:
     """Per scene and CoC: the GPU method with the fewest ops and the one with the fewest estimated
     cycles, and their ratios to tile."""
@@ -720,7 +768,7 @@ def gpu_vs_tile(df, config) -> list[str]:
         for coc in sorted(df["camera.coc_px"].unique()):
             sub = df[(df["scene.name"] == s) & (df["camera.coc_px"] == coc)]
             tile = sub[sub["pipeline.algorithm"] == "tile"]
-            gpu = sub[sub["pipeline.algorithm"].astype(str).str.startswith("gpu_")]
+            gpu = sub[[_is_gpu(a) for a in sub["pipeline.algorithm"]]]
             if not len(tile) or not len(gpu):
                 continue
             t_ops, t_cyc = float(tile["ops.total"].iloc[0]), float(tile["timing.cycles"].iloc[0])
@@ -733,9 +781,9 @@ def gpu_vs_tile(df, config) -> list[str]:
                      "best GPU (cycles)", "cycles GPU / tile", "GPU bottleneck"], rows)
 
 
-@named_table("gpu_table2")
+@named_table("gpu_table2", reads=("timing.",))
 def gpu_table2(df, config) -> list[str]:
-    """000 Table 2 in kind: per input triangle output floats, per fragment interpolated floats and
+    """[Toth 2008] Table 2 in kind: per input triangle output floats, per fragment interpolated floats and
     re-derived setup ops, per constant type; the paper's output floats beside."""
     df = _gpu_rows(df)
     rows = []
@@ -791,12 +839,12 @@ def accumulation_k(df, config) -> list[str]:
                              f"{k:.2f}" if k == k else "", f"{float(r['metric.ghosting']):.2f}", f"{g_st:.2f}", "~4"])
     return md_table(["scene", "CoC [px]", "N passes", "RMSE accumulation", "RMSE stratified (N spp)",
                      "stratified spp of equal RMSE", "k", "ghosting accumulation", "ghosting stratified",
-                     "paper k (000 §9.1, perceived)"], rows)
+                     "paper k ([Toth 2008] §9.1, perceived)"], rows)
 
 
-@named_table("gpu_early_depth")
+@named_table("gpu_early_depth", reads=("timing.",))
 def gpu_early_depth(df, config) -> list[str]:
-    """Per scene, CoC and algorithm: HiZ off against on (000 §9.7's depth interval for the gpu_*
+    """Per scene, CoC and algorithm: HiZ off against on ([Toth 2008] §9.7's depth interval for the gpu_*
     pipeline, ẑ against HiZ for tile): fragments rejected before the pixel shader, pixel-shader sample
     tests saved, ops and cycles with HiZ over without, and the GPU/tile cycle ratio with HiZ in both."""
     df = _ok(df)
@@ -810,7 +858,7 @@ def gpu_early_depth(df, config) -> list[str]:
                 off, on = _first(sub, {"pipeline.algorithm": alg, on_col: False}), _first(sub, {"pipeline.algorithm": alg, on_col: True})
                 if off is None or on is None:
                     continue
-                gpu = alg.startswith("gpu_")
+                gpu = _is_gpu(alg)
                 culled = float(on["gpu.fragments_depth_culled"]) if gpu else math.nan
                 frags = float(off["gpu.fragments"]) if gpu else math.nan
                 saved = (float(off["gpu.ps_samples_tested"]) - float(on["gpu.ps_samples_tested"])) if gpu else \

@@ -11,7 +11,7 @@ from ..errors import ConfigError
 
 # Every figure a use adds to its flat_stats, declared once: name -> (unit, description).
 FIGURES: dict[str, tuple[str, str]] = {
-    # stochastic transparency (003)
+    # stochastic transparency ([McGuire 2010])
     "transparency.rmse": ("linear RGB", "RMS error of the stochastic-transparency image against sorted alpha blending "
                                         "at the same sample positions"),
     "transparency.max_layers": ("layers", "Most layers any sample position sees: the passes depth peeling needs"),
@@ -20,7 +20,7 @@ FIGURES: dict[str, tuple[str, str]] = {
     "transparency.peel_ops": ("ops", "Depth peeling's operations: max_layers x (ops.total + ops.interp) of the opaque "
                                      "render at the same spp"),
     "transparency.ops": ("ops", "Stochastic transparency's operations: ops.total + ops.interp of its one pass"),
-    # the rasterizer as a sampler (002 §5)
+    # the rasterizer as a sampler ([Nilsson 2012] §5)
     "sampler.points": ("samples", "Sample points the rasterizer placed inside the simploids (sample tests that hit)"),
     "sampler.expected_points": ("samples", "E[N] = density x volume of the simploids (closed form)"),
     "sampler.chi2_p": ("probability", "p-value of the chi-square test of uniformity of the points inside the "
@@ -28,7 +28,7 @@ FIGURES: dict[str, tuple[str, str]] = {
     "sampler.chi2_dof": ("cells", "Degrees of freedom of that chi-square test"),
     "sampler.void_points": ("samples", "Points inside the voids (must be 0)"),
     "sampler.candidates_per_test": ("ratio", "sampler.points / raster.samples_tested: candidates per sample test"),
-    # motion-blurred soft shadows (002 §7)
+    # motion-blurred soft shadows ([Nilsson 2012] §7)
     "shadow.light_samples": ("samples", "Fixed (u, v, t) samples of the 5D shadow map (2D shadow maps in the array)"),
     "shadow.map_texels": ("texels", "Shadow-map texels over all light samples (map pixels x light samples)"),
     "shadow.onepass_ops": ("ops", "ops.total + ops.interp of the one-pass 5D shadow map"),
@@ -43,7 +43,7 @@ FIGURES: dict[str, tuple[str, str]] = {
                                                "(receiver - occluder) / occluder distance"),
     "shadow.rmse": ("linear RGB", "RMS error of the soft-shadow image against a many-light-sample reference"),
     "shadow.bands": ("levels", "Distinct visibility levels in the penumbra (banding: at most light_samples + 1)"),
-    # caustic volumes (002 §4)
+    # caustic volumes ([Nilsson 2012] §4)
     "caustics.volumes": ("volumes", "Caustic volumes (generator triangles)"),
     "caustics.fill_tiles": ("pairs", "(volume, pixel) pairs the conservative 1 x 1 tile test passes with a non-empty "
                                      "t̂ (the rasterizer's candidates)"),
@@ -61,7 +61,7 @@ FIGURES: dict[str, tuple[str, str]] = {
     "caustics.folded": ("volumes", "Volumes whose end triangle is flipped against the generator (fold over)"),
     "caustics.zhat_over_path": ("ratio", "Mean over covered pixel centres of the ẑ width over the ray-marched path "
                                          "length inside the beam (>= 1: ẑ is conservative)"),
-    # planar glossy reflections (002 §6)
+    # planar glossy reflections ([Nilsson 2012] §6)
     "glossy.texels": ("texels", "Texels of the reflection map"),
     "glossy.samples_per_texel": ("samples", "Samples per reflection-map texel (the lens samples of the glossy lobe)"),
     "glossy.ops_per_texel": ("ops/texel", "(ops.total + ops.interp) of the reflection-map pass per texel"),

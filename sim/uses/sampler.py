@@ -1,4 +1,4 @@
-"""The rasterizer as a sampler (002_95ea0844b256f75b.txt §5): a moving triangle carves a
+"""The rasterizer as a sampler ([Nilsson 2012] §5): a moving triangle carves a
 (2,1)-simploid out of xyt space (with a lens, a (2,1,1,1)-simploid of xyuvt); the sample table fills
 that space with uniform samples and the sample tests pick those inside, so the hits are uniform
 samples of the simploid with E[N] = density x volume. A domain tessellated into non-overlapping
