@@ -3,11 +3,13 @@ are declared here once, with unit and description, and evaluated at export, neve
 from __future__ import annotations
 
 from . import _core
-from .derived import Derived, evaluate, ratio
+from .derived import Derived, evaluate, nest, ratio  # noqa: F401 - nest: sim.stats.nest
 from .derived import docs as derived_docs
 from .timing import docs as timing_docs
 from .sampling import docs as sampling_docs
 from .energy import docs as energy_docs
+from .figures import figure_docs as use_figure_docs
+from .references import cite
 
 # By pipeline stage; a formula may use the figures declared before it (sim.derived.evaluate).
 DERIVED: tuple[Derived, ...] = (
@@ -83,10 +85,7 @@ def counter_docs() -> dict[str, tuple[str, str]]:
     docs.update(timing_docs())  # the timing model's figures (docs/timing.md)
     docs.update(sampling_docs())  # sampled simulation (sim/sampling.py)
     docs.update(energy_docs())  # the energy estimate (sim.energy, docs/energy.md)
-    from .uses.common import figure_docs
-    from .references import cite
-
-    docs.update(figure_docs())  # the figures of the rasterizer's uses (sim/uses/)
+    docs.update(use_figure_docs())  # the figures of the rasterizer's uses (sim/figures.py)
     return {name: (unit, cite(doc)) for name, (unit, doc) in docs.items()}
 
 
@@ -96,15 +95,3 @@ def flat_stats(raw: dict, measured: dict | None = None) -> dict:
     if measured:
         flat.update(measured)
     return dict(sorted(flat.items()))
-
-
-def nest(flat: dict) -> dict:
-    """{"a.b": v} -> {"a": {"b": v}} (names have the form stage.thing)."""
-    out: dict = {}
-    for key, value in flat.items():
-        node = out
-        parts = key.split(".")
-        for p in parts[:-1]:
-            node = node.setdefault(p, {})
-        node[parts[-1]] = value
-    return out

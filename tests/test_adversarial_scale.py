@@ -24,7 +24,7 @@ import numpy as np
 import pytest
 
 import sim
-from tests.reference.raycaster import screen_to_world
+from experiments.reference.raycaster import screen_to_world
 
 pytestmark = pytest.mark.slow
 

@@ -1,6 +1,6 @@
 """Hard cases (behind the camera, focus crossing, degenerate, edge-on, huge and tiny blur, near plane, gigantic coordinates) rendered with every algorithm: no crash, a valid image, per-sample results identical to bruteforce, bruteforce equal to the ray caster away from edges, and the setup counters that should fire do.
 
-The cases and their expected counters live in tests/reference/hardcases.py (hard_cases). Tolerances are those
+The cases and their expected counters live in experiments/reference/hardcases.py (hard_cases). Tolerances are those
 of test_raycaster.py: coverage may differ from the ray caster only within 1e-3 px of an edge seen
 from the sample's lens point or 1e-4 (relative) of the near plane; a different winning triangle is
 also accepted where the two triangles' reference depths are within the float32 depth tolerance

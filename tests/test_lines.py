@@ -240,13 +240,13 @@ def _textured_square(z=-6.0, texels=4, seed=3):
 
 def test_textured_segments_match_a_numpy_reference():
     """Heuristics off: each pixel is the mean over its lines of Σ κ(segment) · texture(uv at the
-    segment's midpoint). The reference casts float64 rays (tests/reference/raycaster.py) from the two
+    segment's midpoint). The reference casts float64 rays (experiments/reference/raycaster.py) from the two
     ends of each line through the pixel's screen point: on a plane parallel to the lens the hit point
     is affine in the line parameter p, so each triangle's segment is an intersection of three
     half-lines, its midpoint's uv is affine, and the texture is read by models.textures'
     sample_bilinear (texels larger than pixels: level 0)."""
     from models.textures import sample_bilinear
-    from tests.reference import raycaster as rc
+    from experiments.reference import raycaster as rc
 
     w, h = 24, 16
     cam = sim.Camera(width=w, height=h, focus_distance=5.0, coc_px=20.0, fov_y_deg=30.0)
@@ -372,8 +372,8 @@ _TINY = np.array([
 def _exact_line_length(cam, tri, pts):
     """float64 length of the part of each line inside the triangle (0: none): the edge functions are
     the triple products det(V_j - L, V_k - L, Q - L) of the ray from lens point L through the focus-plane
-    point Q (tests/reference/raycaster.py's camera model), affine in the line parameter p."""
-    from tests.reference import raycaster as rc
+    point Q (experiments/reference/raycaster.py's camera model), affine in the line parameter p."""
+    from experiments.reference import raycaster as rc
 
     V = rc.world_to_view(cam, tri)
     ends = []

@@ -11,7 +11,7 @@ import pytest
 import sim
 from tests.reference import ray_cast
 from tests.reference.compare import table_points
-from tests.reference.raycaster import edge_distance_px, near_rel_distance
+from experiments.reference.raycaster import edge_distance_px, near_rel_distance
 from tests.test_invariants import interleaved_table, synthetic_scene
 
 W, H = 40, 32
