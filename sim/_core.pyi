@@ -40,7 +40,7 @@ class RenderParams:
     precision_sample: str | dict  # Sample test decision: float32 (the default), float64, or fixed point on the vertices placed at the sample's (u, v, t) and projected, snapped with the sample to frac_bits sub-pixel bits; tile tests widen by 2^(1 - frac_bits) px to stay conservative; default 'float32'
     precision_depth: str | dict  # Stored sample depth z in [0, 1]: float32 (the default) or fixed point (z rounded to frac_bits fraction bits, frac_bits <= 24: a unorm depth buffer); float64 is refused (the buffer holds float32); default 'float32'
     hinterleave_tile: int  # HINTERLEAVE tile edge: 4, 8 or 16 [px]; default 8
-    bin_size: int  # Screen bin edge for threading (multiple of 8 and of hinterleave_tile) [px]; default 64
+    bin_size: int  # Screen bin edge for threading and for sampled simulation's strata (multiple of 8 and of hinterleave_tile); auto = 64, or sim.pipeline.SAMPLED_BIN_SIZE in a sampled render (sample_fraction < 1; chosen by the sampling page) [px]; default 64
     lines_buffer_size: int  # Segment-buffer capacity per line sample; 0 = unlimited ([Tzeng 2012] does not state its size; 8 overflows by 27% on modern_hall at CoC 40 and darkens it, 32 does not) [segments]; default 32
     lines_min_weight: float  # Drop segments that merged nowhere and whose κ weight (share of the line) is below this; 0 = off; default 0.0001
     lines_occlusion: bool  # Drop segments covered by a buffered segment entirely in front (and remove those an incoming segment hides); default True

@@ -1,5 +1,6 @@
-"""The figures of the rasterizer's uses (sim/uses/), declared once: name -> (unit, description). A leaf
-module, so sim.stats merges them into sim.counter_docs() without importing the uses."""
+"""The figures of the rasterizer's uses (sim/uses/) and of the numerical-precision study
+(experiments/run/precision.py), declared once: name -> (unit, description). A leaf module, so sim.stats
+merges them into sim.counter_docs() without importing the uses."""
 from __future__ import annotations
 
 # Every figure a use adds to its flat_stats, declared once: name -> (unit, description).
@@ -65,5 +66,65 @@ FIGURES: dict[str, tuple[str, str]] = {
 }
 
 
+
+# The numerical-precision study (experiments/run/precision.py, point kind `precision`; docs/precision.md):
+# the engine's kernels in an arithmetic against float64 and the ray caster, per viewport.
+NUMERICS: dict[str, tuple[str, str]] = {
+    "numerics.int_bits_tile": ("bits", "Fewest integer bits of the 2D tile test's registers (set-up included) on the "
+                                       "suite: every magnitude below 2^int_bits"),
+    "numerics.int_bits_sample": ("bits", "Fewest integer bits of the 2D sample test's registers on the suite"),
+    "numerics.int_bits_bound": ("bits", "Closed-form integer bits of the 2D tests for any triangle clipped to the guard "
+                                        "band: 5 + 2 ceil(log2 V)"),
+    "numerics.bound_total_bits": ("bits", "Total bits of the closed-form format: 1 + int_bits_bound + 2 frac_bits"),
+    "numerics.bound_safe": ("bool", "The closed-form format overflows nowhere and misses nothing on the suite"),
+    "numerics.total_bits": ("bits", "Register width: 1 + fewest int_bits (in band) + 2 frac_bits (float32: 32)"),
+    "numerics.safe": ("bool", "At the fewest int_bits: no overflow, no tile culled that holds a point of the triangle "
+                              "beyond DELTA from its edges, no sample decision different beyond DELTA"),
+    "numerics.triangles": ("triangles", "Triangles of the study's workload at this viewport"),
+    "numerics.samples": ("samples", "Sample decisions checked"),
+    "numerics.tiles": ("tiles", "Tiles checked"),
+    "numerics.boxes": ("boxes", "Lens-cell bounds checked (triangles x lens cells)"),
+    "numerics.dmax": ("px", "Largest distance from an edge of a sample whose decision differs from float64"),
+    "numerics.differ": ("ratio", "Share of the checked samples whose decision differs from the reference beyond "
+                                 "10^-3 px of an edge"),
+    "numerics.sample_bad": ("samples", "Sample decisions differing from the reference beyond the stated distance (DELTA "
+                                       "= 2^(1 - frac_bits) px in fixed point, 10^-3 px in floats): must be 0"),
+    "numerics.tile_violations": ("tiles", "Tiles culled that hold a point of the triangle beyond DELTA from its edges"),
+    "numerics.cull_lost": ("ratio", "Share of float64's culls (tiles, lens cells or samples) that the format does not "
+                                    "make"),
+    "numerics.below_overflows": ("tests", "Overflowing register values with one integer bit fewer than the fewest"),
+    "numerics.in_band": ("ratio", "Share of the samples whose placed triangle lies in front of the near plane and in a "
+                                  "guard band of one viewport (what a clipping datapath sees)"),
+    "numerics.int_bits_all": ("bits", "Fewest integer bits over every case (t̂ and the lens sets for the motion tests)"),
+    "numerics.int_bits_band": ("bits", "Fewest integer bits over the cases in the guard band (t̂ and the lens sets for "
+                                       "the motion tests)"),
+    "numerics.int_bits_all_h5": ("bits", "Motion tests: fewest integer bits of H5 over every case"),
+    "numerics.int_bits_band_h5": ("bits", "Motion tests: fewest integer bits of H5 over the cases in the guard band"),
+    "numerics.culled64": ("pairs", "(tile, lens cell) pairs (4D test) or samples (motion tests) that float64 culls"),
+    "numerics.checked": ("samples", "Samples of culled (tile, lens cell) pairs checked with the float64 ray caster"),
+    "numerics.hits": ("samples", "Checked samples the float64 ray caster hits (4D: inside culled pairs, must be 0)"),
+    "numerics.outside": ("samples", "Ray-cast hits outside the format's bounds or region (must be 0)"),
+    "numerics.outside64": ("samples", "Ray-cast hits outside float64's own bounds or region (must be 0)"),
+    "numerics.grow_mean": ("px", "Mean outward move of a lens cell's screen bound by the format against float64"),
+    "numerics.grow_max": ("px", "Largest outward move of a lens cell's screen bound against float64"),
+    "numerics.rmse": ("linear RGB", "RMS difference of the render's image and the default precision's"),
+    "numerics.samples_differ": ("samples", "Samples whose visible triangle differs from the default precision's render"),
+    "numerics.tested_base": ("samples", "raster.samples_tested of the default precision's render"),
+    "numerics.culled_2d_base": ("tiles", "tile.culled_2d of the default precision's render"),
+    "numerics.culled_H5_base": ("cells", "tile.H5_cells_culled of the default precision's render"),
+}
+
+
+def numerics(**values) -> dict:
+    """{numerics.name: value} with each name checked against NUMERICS."""
+    out = {}
+    for k, v in values.items():
+        name = f"numerics.{k}"
+        if name not in NUMERICS:
+            raise KeyError(f"undeclared numerics figure {name!r}")
+        out[name] = v.item() if hasattr(v, "item") else v
+    return out
+
+
 def figure_docs() -> dict[str, tuple[str, str]]:
-    return dict(FIGURES)
+    return {**FIGURES, **NUMERICS}

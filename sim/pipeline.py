@@ -15,6 +15,20 @@ from .errors import ConfigError, UnreadParameterWarning, field_docs
 _OWNER = "PipelineConfig"
 
 
+# Screen bins of a whole-frame render (the threads' work units; the timing model's bin order) and of a
+# sampled render (pipeline.sample_fraction < 1), whose strata the bins make: the largest bin size whose 95%
+# intervals hold on the default scene at a quarter of its bins (reports/paper/sampling.md,
+# configs/paper/sampling.yaml). pipeline.bin_size 'auto' (the default) picks one of them.
+WHOLE_FRAME_BIN_SIZE = 64
+SAMPLED_BIN_SIZE = 8
+
+
+def resolved_bin_size(sample_fraction: float, hinterleave_tile: int = 8) -> int:
+    """The bin size 'auto' stands for: WHOLE_FRAME_BIN_SIZE, or SAMPLED_BIN_SIZE when sample_fraction < 1 (at
+    least HINTERLEAVE's tile, of which a bin is a multiple)."""
+    return WHOLE_FRAME_BIN_SIZE if sample_fraction >= 1 else max(SAMPLED_BIN_SIZE, hinterleave_tile)
+
+
 @dataclasses.dataclass(frozen=True)
 class AlgorithmInfo:
     """What the traversal registry declares about an algorithm (sim/engine/traversal/traversal.h,
@@ -184,6 +198,9 @@ class PipelineConfig:
 
     def __post_init__(self):
         params.check_declared(self, _OWNER)
+        if self.bin_size == "auto":  # resolved here, so every reader sees the bin size the render uses
+            object.__setattr__(self, "bin_size", resolved_bin_size(self.sample_fraction, self.hinterleave_tile))
+            object.__setattr__(self, "_auto_bin_size", True)
         self._check_across_fields()
         for field, why in unread_parameters(self).items():
             warnings.warn(f"{_OWNER}.{field} = {_get(self, field)!r} is not read: {why}; it has no effect",
@@ -211,6 +228,10 @@ class PipelineConfig:
         return int(self.lens_grid)
 
     def replace(self, **changes) -> "PipelineConfig":
+        """A copy with ``changes``; a bin size left at 'auto' is resolved again (a sampled copy of a whole-frame
+        config gets the sampled bin size)."""
+        if getattr(self, "_auto_bin_size", False) and "bin_size" not in changes:
+            changes["bin_size"] = "auto"
         return dataclasses.replace(self, **changes)
 
     def describe(self) -> dict:

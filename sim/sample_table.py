@@ -34,6 +34,9 @@ import numpy as np
 from .lens import LENS_SHAPES, check_shape, inside_lens, map_to_lens
 
 MAX_SPP = 4096
+# Lines per wagon wheel of SampleTable.lines: chosen by the wheel sweep of the methods page (the lowest mean
+# RMSE excess at equal operations over its scenes; reports/paper/methods.md).
+LINE_WHEEL = 2
 MAX_PERIOD = 256
 LENS_GRID_SIZES = (1, 2, 4, 8, 16)
 
@@ -299,7 +302,7 @@ class SampleTable:
     # ---------------------------------------------------------------- line samples
 
     @classmethod
-    def lines(cls, n_lines: int = 16, seed: int = 0, period: int = 32, wheel: int = 4) -> "SampleTable":
+    def lines(cls, n_lines: int = 16, seed: int = 0, period: int = 32, wheel: int = LINE_WHEEL) -> "SampleTable":
         """A line-sample table for ``PipelineConfig(algorithm="lines")`` ([Tzeng 2012]
         §3): per pixel ``n_lines`` lines through the centre of the disk lens, as wagon wheels of
         ``wheel`` lines sharing one screen point. The n_lines angles are stratified over [0, π)
@@ -307,7 +310,10 @@ class SampleTable:
         k mod (n_lines / wheel), so every wheel's spokes are spread evenly; the wheels' screen
         points are jittered on a stratified grid of the pixel. Sample s holds (x, y, cos θ, sin θ,
         0): (u, v) is the line's direction, and the line covers the lens points p (u, v), p in
-        [-1, 1]. Static scenes only (no time); the disk lens only."""
+        [-1, 1]. Static scenes only (no time); the disk lens only. The default wheel, LINE_WHEEL lines, is
+        the size with the lowest RMSE at equal operations over the wheel sweep of the methods page
+        (reports/paper/methods.md, configs/paper/methods_wheel.yaml): smaller wheels place more screen
+        points per pixel (sharper in-focus edges), larger ones more lens directions per point."""
         n_lines = _check_int("n_lines", n_lines, 1, MAX_SPP)
         seed = _check_int("seed", seed, 0, 2**63 - 1)
         period = _check_int("period", period, 1, MAX_PERIOD)

@@ -68,6 +68,8 @@ def expand_sweep(config: RenderConfig, source: str = "config", lines: dict | Non
         _warn_unread(unread, 1, source, lines)
         return [({}, config)]
     base = config.model_dump(exclude={"sweep"})
+    if config._auto_bin_size:  # 'auto' depends on the point's sample_fraction: resolved per point
+        base["pipeline"]["bin_size"] = "auto"
     points, bad = [], []
     every = sweep_points(config.sweep)
     for point in every:

@@ -187,3 +187,16 @@ def chi2_uniform(counts: np.ndarray, expected: np.ndarray) -> tuple[float, int]:
     stat = float(np.sum((counts[keep] - expected[keep]) ** 2 / expected[keep]))
     dof = int(keep.sum()) - 1
     return chi2_sf(stat, dof), dof
+
+
+def chi2_stratified(counts: np.ndarray, expected: np.ndarray, variance: np.ndarray) -> tuple[float, int]:
+    """(p-value, degrees of freedom) of sum (count - expected)^2 / variance over the cells with a positive
+    variance: chi-square with one degree per cell when each count is independent with that mean and
+    variance (the counts of pixel-stratified samples, whose total is not fixed)."""
+    counts = np.asarray(counts, np.float64).ravel()
+    expected = np.asarray(expected, np.float64).ravel()
+    variance = np.asarray(variance, np.float64).ravel()
+    keep = variance > 0
+    stat = float(np.sum((counts[keep] - expected[keep]) ** 2 / variance[keep]))
+    dof = int(keep.sum())
+    return chi2_sf(stat, dof), dof
