@@ -102,7 +102,7 @@ REFERENCES: tuple[Reference, ...] = (
 )
 
 BY_NUMBER = {r.number: r for r in REFERENCES if r.number}
-# A paper by its number or its text file's name: 001, 001_3248aaf17c219d5e.txt
+# A paper by its number, or by the name of its text file (the number, an underscore, 16 hex digits, .txt)
 _NUMBERED = re.compile(r"(?<![\w.,\-])(00[0-4])(?:_[0-9a-f]{16}(?:\.txt)?)?(?![\w.]|-\d)")
 
 

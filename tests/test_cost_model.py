@@ -113,5 +113,7 @@ def test_hardware_documented_op_counts_equal_exact_counts(algorithm, scene_name)
 
 
 def test_cost_model_rejects_unknown_names():
-    with pytest.raises(Exception, match="cost_model"):
+    """A clear ConfigError naming the field and the value (not any exception: a TypeError or a crash in the
+    engine would fail here)."""
+    with pytest.raises(sim.ConfigError, match=r"PipelineConfig\.cost_model: expected 'robust' or 'hardware', got 'fixed'"):
         sim.PipelineConfig(cost_model="fixed")

@@ -276,6 +276,46 @@ def test_table2_constants_floats(method, strip_vertices):
     assert tuple(got) == want
 
 
+@pytest.mark.parametrize("constants", ["none", "triangle", "strip"])
+def test_output_floats_follow_table2s_rules_from_the_emitted_geometry(constants):
+    """Independent of the engine's float formula (checked against the paper's two rows above): [Toth 2008]
+    Table 2's rules applied to the geometry each method emits, counted by the engine as strip triangles per
+    input triangle. One strip per bound, so its strip vertices are triangles + 2; every strip vertex carries
+    the 4 position floats; the payload goes on every strip vertex (no constants), once per emitted triangle
+    (triangle constants) or once per strip (strip constants). Fails on any method whose floats do not follow
+    the rules (a payload counted per vertex under triangle constants would be off by (V - T) x P per strip)."""
+    payload = 35
+    scene, cam = scene_and_camera()
+    table = sim.SampleTable.stratified(spp=4, seed=2)
+    for alg in GPU_ALGORITHMS:
+        s = sim.render(scene, cam, table, sim.PipelineConfig(algorithm=alg, gpu_constants=constants,
+                                                             gpu_payload_floats=payload, threads=1),
+                       timing=False).flat_stats
+        strips = s["gpu.gs_triangles_in"] - s["gpu.culled_bound"] if "gpu.culled_bound" in s else s["gpu.gs_triangles_in"]
+        triangles = s["gpu.gs_triangles"]
+        strip_vertices = triangles + 2 * strips
+        per = {"none": strip_vertices * (4 + payload), "triangle": strip_vertices * 4 + triangles * payload,
+               "strip": strip_vertices * 4 + strips * payload}[constants]
+        assert s["gpu.gs_floats"] == per, (alg, constants, s["gpu.gs_floats"], per)
+
+
+def test_accumulation_resolves_as_the_ray_caster(request):
+    """Independent of INTERLEAVE (the comparison above is engine against engine): every sample of an
+    accumulation render, each pass a pinhole render at its lens position and time, resolves to the triangle
+    and depth the float64 ray caster finds at that sample, static and moving, away from edges and the near
+    plane (tests/reference/compare.py)."""
+    from tests import reference as ref
+
+    scene, cam = scene_and_camera()
+    table = sim.SampleTable.accumulation(passes=16, seed=5)
+    moving = make_scene(scene.positions, scene.positions + np.array([0.3, -0.2, 0.0]))
+    for label, moved in (("static", scene), ("moving", moving)):
+        res = sim.render(moved, cam, table, sim.PipelineConfig(algorithm="accumulation", threads=1),
+                         export_samples=True, timing=False)
+        r = ref.check_resolved(request, f"accumulation {label}", cam, moved.positions, moved.positions_t1, table, res)
+        assert r["covered"] > 0
+
+
 def scene_and_camera():
     rng = np.random.default_rng(7)
     tris = []

@@ -80,20 +80,59 @@ def _layered_scene():
     )
 
 
-@pytest.mark.parametrize("n_lines", [64])
-def test_lines_agree_with_point_sampling(n_lines):
-    """Heuristics off and an unlimited buffer: an unbiased estimate. The image agrees with 1024
-    stratified points (brute force) within Monte Carlo error."""
+def _wheel_angles_squeezed(table, share: float):
+    """The table with every line's angle θ in [0, π) moved to share x θ: the wagon wheels then miss the last
+    (1 - share) of the lens directions, a biased line sampler (the κ weights are unbiased only over uniform
+    angles: test_kappa_weights_are_unbiased_for_the_disk)."""
+    arr = np.array(table.samples("disk"))
+    theta = np.arctan2(arr[..., 3], arr[..., 2]) % np.pi * share
+    arr[..., 2], arr[..., 3] = np.cos(theta), np.sin(theta)
+    table._final = arr.astype(np.float32)
+    table._samples_cache.clear()
+    return table
+
+
+def _line_and_point_means(share: float = 1.0, seeds: int = 6):
+    """(difference of the per-pixel means, combined standard error of that difference) of `seeds` renders
+    with 64 lines (heuristics off, unlimited buffer: an unbiased estimator) and of two brute-force renders
+    with 1024 stratified points."""
     cam = sim.Camera(width=W, height=16, focus_distance=5.0, coc_px=6.0, fov_y_deg=30.0)
     scene = _layered_scene()
-    lines = sim.render(scene, cam, sim.SampleTable.lines(n_lines=n_lines, seed=1), _lines_config(), timing=False)
-    points = sim.render(scene, cam, sim.SampleTable.stratified(spp=1024, seed=5, time=False),
-                        sim.PipelineConfig(algorithm="bruteforce", threads=1), timing=False)
-    diff = lines.image - points.image
-    assert np.abs(diff.mean()) < 2e-3
-    assert np.sqrt((diff ** 2).mean()) < 0.02
-    assert np.abs(diff).max() < 0.1
-    assert lines.flat_stats["lines.tests"] > 0 and lines.flat_stats["lines.segments"] > 0
+    lines = np.array([sim.render(scene, cam, _wheel_angles_squeezed(sim.SampleTable.lines(n_lines=64, seed=s), share)
+                                 if share != 1.0 else sim.SampleTable.lines(n_lines=64, seed=s),
+                                 _lines_config(), timing=False).image for s in range(seeds)])
+    points = np.array([sim.render(scene, cam, sim.SampleTable.stratified(spp=1024, seed=s, time=False),
+                                  sim.PipelineConfig(algorithm="bruteforce", threads=1), timing=False).image
+                       for s in (5, 6)])
+    se = np.sqrt(lines.var(0, ddof=1) / len(lines) + points.var(0, ddof=1) / len(points))
+    return lines.mean(0) - points.mean(0), se
+
+
+def test_lines_agree_with_point_sampling():
+    """Heuristics off and an unlimited buffer: an unbiased estimate. The mean of six 64-line renders and the
+    mean of two 1024-point renders (brute force) agree to within twice their combined standard error, RMS over
+    the image (measured: 1.3 times). Power: a line sampler whose wheels miss a tenth of the lens directions
+    (test_a_biased_line_sampler_is_caught) differs by about 4 times the standard error (RMS 0.008 against
+    0.002 here) and fails; the former tolerance, RMSE < 0.02 on one render, let a sampler missing a fifth of
+    the directions (RMS 0.015) pass."""
+    diff, se = _line_and_point_means()
+    noise = np.sqrt(np.mean(se ** 2))
+    rms = np.sqrt(np.mean(diff ** 2))
+    assert rms < 2 * noise, (rms, noise)
+    assert abs(diff.mean()) < 4 * noise / np.sqrt(diff.size) + 1e-4, (diff.mean(), noise)
+
+
+def test_a_biased_line_sampler_is_caught():
+    """The agreement test above fails on a biased line sampler: wagon-wheel angles over 0.9 of [0, π)."""
+    diff, se = _line_and_point_means(share=0.9)
+    assert np.sqrt(np.mean(diff ** 2)) > 2 * np.sqrt(np.mean(se ** 2))
+
+
+def test_lines_counters_are_nonzero():
+    cam = sim.Camera(width=W, height=16, focus_distance=5.0, coc_px=6.0, fov_y_deg=30.0)
+    s = sim.render(_layered_scene(), cam, sim.SampleTable.lines(n_lines=16, seed=1), _lines_config(),
+                   timing=False).flat_stats
+    assert s["lines.tests"] > 0 and s["lines.segments"] > 0
 
 
 def test_occlusion_heuristic_keeps_the_image():

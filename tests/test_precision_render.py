@@ -62,7 +62,9 @@ def test_yaml_precision_is_checked_at_load():
 
     ok = validate({"scene": {"name": "spot"}, "pipeline": {"precision": {"sample": FIX4}}}, "t.yaml")
     assert ok.pipeline.precision["sample"] == FIX4
-    with pytest.raises(Exception, match="precision"):
+    from experiments.config import ConfigError
+
+    with pytest.raises(ConfigError, match=r"t\.yaml: pipeline\.precision.*smaple"):
         validate({"scene": {"name": "spot"}, "pipeline": {"precision": {"smaple": "float32"}}}, "t.yaml")
 
 

@@ -119,7 +119,7 @@ def test_no_report_config_types_a_figure(path, request):
     _, data, config = next(x for x in CONFIGS if x[0] == path)
     if config.name in PENDING:
         request.applymarker(pytest.mark.xfail(strict=True, reason=PENDING[config.name]))
-    allowed = config_numbers(data, config.model_dump(exclude={"outputs"}))
+    allowed = config_numbers(data, config.model_dump(exclude={"outputs"}), config.hardware_config().describe())
     for part in ("text", "summary"):
         text = getattr(config.outputs, part) or ""
         assert not typed_figures(text, allowed), (

@@ -18,7 +18,8 @@ text as text; `a|b` for either), COLUMN's values in sweep order. KEY and COLUMN 
 config's rows, or the config or named value table named before the first dot. Arithmetic between two
 references pairs their rows by the config columns that vary and that neither reference fixes.
 
-Functions: range, min, max, mean, sum, count, list (values joined by " / "), order(x, KEY) (the KEY
+Functions: range, min, max, mean, sum, count, list (values joined by " / "), distinct (the distinct
+values, joined the same way), order(x, KEY) (the KEY
 values by falling x, "a > b > c"), argmax(x, KEY), argmin(x, KEY), all, any, abs. The format after the
 last colon applies to every number (a range's ends, a list's items); a bool prints yes/no.
 """
@@ -182,6 +183,7 @@ FUNCTIONS = {
     "sum": lambda x, what: float(np.sum(_numbers(x, what))),
     "count": lambda x, what: len(x.values) if isinstance(x, Cells) else 1,
     "list": lambda x, what: Joined(x.values if isinstance(x, Cells) else [x], "list"),
+    "distinct": lambda x, what: Joined(list(dict.fromkeys(x.values if isinstance(x, Cells) else [x])), "list"),
     "all": lambda x, what: bool(all(bool(v) for v in (x.values if isinstance(x, Cells) else [x]))),
     "any": lambda x, what: bool(any(bool(v) for v in (x.values if isinstance(x, Cells) else [x]))),
     "abs": lambda x, what: _pair(x, 0, lambda a, _b: abs(a), what),
@@ -432,7 +434,8 @@ _LOCATOR = re.compile(r"(?:§|\bTables?|\bFigs?\.|\bFigures?|\bEqs?\.|\bAppendix
                       r"[A-Z]?\d+(?:\.\d+)*[a-z]?(?:\s*(?:[–-]|,|and)\s*[A-Z]?\d+(?:\.\d+)*[a-z]?)*")
 _CITATION = re.compile(r"\[[A-Z][^\]\[]*?\d{4}[a-z]?\]")
 _LINK_TARGET = re.compile(r"\]\([^)]*\)|https?://\S+")
-_NAMES = re.compile(r"\(\d\+\d\)D|\b\d+D\b|\b[A-Za-z_]+\d+\w*|\b\d+(?:st|nd|rd|th)\b")
+_NAMES = re.compile(r"\(\d\+\d\)D|\b\d+D\b|\b[A-Za-z_]+\d+\w*|\b\d+(?:st|nd|rd|th)\b"
+                    r"|\b\d+ ?% (?=(?:t |confidence )?(?:intervals?|level|confidence))")  # a statistical level
 _NUMBER = re.compile(r"(?<![\w.])[-+−]?(?:\d{1,3}(?:,\d{3})+|\d+)(?:\.\d+)?(?:\s*(?:%|×|x(?![a-z\d])|k\b|M\b|G\b))?")
 _SHAPE = re.compile(r"(?<![\w.])(\d+)\s*[x×]\s*(\d+)(?![\w.])")
 
