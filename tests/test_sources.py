@@ -17,7 +17,7 @@ OUTSIDE = re.compile(r"STYLE\.md|ARCHITECTURE\.md|\b00[0-4]_[0-9a-f]{16}")
 BY_NUMBER = re.compile(r"(?<![\w.,\-/])00[0-4](?![\w.]|-\d)")
 # Files another change rewrites (the engine and its bindings, the timing and energy models); each must come
 # to pass, then leave this list (strict: a listed file that passes fails the test).
-PENDING = ("sim/engine/", "sim/bindings/", "sim/energy.py")
+PENDING = ("sim/engine/", "sim/bindings/", "sim/energy.py", "reports/paper/cycles.md")
 
 
 def _files():

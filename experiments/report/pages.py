@@ -188,6 +188,15 @@ def _ok(df):
     return df[df["status"] == "ok"] if "status" in df.columns else df
 
 
+def _with_keys(df, config):
+    """df with attrs["keys"]: its columns that a sweep key of config sets (what tells its rows apart), by
+    which the prose pairs the rows of two references."""
+    swept = [k for k in config.sweep if k != "zip"]
+    df = df.copy()
+    df.attrs["keys"] = [str(c) for c in df.columns if any(str(c) == k or str(c).startswith(k + ".") for k in swept)]
+    return df
+
+
 def fill_prose(lines: list[str], names: list[str]) -> tuple[list[str], int]:
     """The page's lines with each section's summary and text filled from the page's data: a section's own
     rows (derived columns included), the other sections of the page by config name, the section's named
@@ -195,7 +204,7 @@ def fill_prose(lines: list[str], names: list[str]) -> tuple[list[str], int]:
     (lines, number of prose errors); an error is printed on the page in place of the paragraph."""
     from .prose import ProseError, Sources, fill
 
-    frames = {n: _ok(PROSE_DATA[n][2]) for n in names if n in PROSE_DATA}
+    frames = {n: _with_keys(_ok(PROSE_DATA[n][2]), PROSE_DATA[n][0]) for n in names if n in PROSE_DATA}
     out, errors = [], 0
     for line in lines:
         if not line.startswith("\x00prose:"):
@@ -205,9 +214,12 @@ def fill_prose(lines: list[str], names: list[str]) -> tuple[list[str], int]:
         config, df, dfd = PROSE_DATA[name]
         template = (config.outputs.summary if part == "summary" else config.outputs.text or "").strip()
         values = {k: (lambda fn=fn: fn(_ok(dfd), config)) for k, fn in VALUES.items()}
-        sources = Sources(frames.get(name, _ok(dfd)), {n: f for n, f in frames.items() if n != name}, values)
+        sources = Sources(frames.get(name, _with_keys(_ok(dfd), config)), {n: f for n, f in frames.items() if n != name},
+                          values)
         try:
             text = fill(template, sources)
+            if part == "summary":  # one paragraph, as the README quotes it
+                text = " ".join(text.split())
         except ProseError as e:
             errors += 1
             print(f"{name}: prose error: {e}", file=sys.stderr)

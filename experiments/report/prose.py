@@ -109,7 +109,10 @@ def _pair(a, b, op, what: str):
         return b.like([op(a.values[0], v) for v in b.values])
     if len(b) == 1:
         return a.like([op(v, b.values[0]) for v in a.values])
-    shared = [c for c in a.ident if c in b.ident]
+    # pair on the swept columns that vary within either side (one held constant on each side, such as the
+    # algorithm a derived selector picks, says nothing about which rows go together)
+    shared = [c for c in a.ident if c in b.ident and (a.rows[c].nunique(dropna=False) > 1
+                                                      or b.rows[c].nunique(dropna=False) > 1)]
     ka, kb = _keys(a.rows, shared), _keys(b.rows, shared)
     if len(set(ka)) != len(ka) or len(set(kb)) != len(kb) or set(ka) != set(kb):
         raise ProseError(f"{what}: cannot pair the rows of {a.source} ({len(a)}) and {b.source} ({len(b)}) by "
@@ -127,8 +130,13 @@ class Joined:
     def format(self, spec: str | None) -> str:
         parts = [_format_one(v, spec) for v in self.values]
         if self.kind == "range":
-            return parts[0] if parts[0] == parts[-1] else f"{parts[0]}{DASH}{parts[-1]}"
-        return " / ".join(parts)
+            if parts[0] == parts[-1]:
+                return parts[0]
+            lo, hi = parts[0], parts[-1]
+            if lo.endswith(" %") and hi.endswith(" %"):  # 5–20 %, not 5 %–20 %
+                lo = lo[:-2]
+            return f"{lo}{DASH}{hi}"
+        return ("; " if any("/" in x for x in parts) else " / ").join(parts)
 
 
 def _format_one(v, spec: str | None) -> str:
@@ -294,7 +302,7 @@ def _value(text: str):
     low = text.lower()
     if low in ("true", "false"):
         return low == "true"
-    if low in ("null", "none"):
+    if low == "null":
         return None
     try:
         return float(text)

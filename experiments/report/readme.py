@@ -23,6 +23,7 @@ def summaries(page: Path, root: Path) -> list[tuple[str, str, str]]:
     for m in _SUMMARY.finditer(text):
         titles = re.findall(r"^## (.+)$", text[:m.start()], flags=re.M)
         body = _LINK.sub(lambda k: "](" + _rebase(k.group(1), page.parent, root) + ")", m.group(2).strip())
+        body = " ".join(body.split())  # one line per paragraph
         out.append((titles[-1] if titles else page.stem, body, m.group(1)))
     return out
 

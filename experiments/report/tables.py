@@ -707,10 +707,12 @@ def methods_pareto_values(df, config):
             for axis, cost in (("ops (all)", _work), ("wall", _wall)):
                 front = _pareto([(cost(r), float(r["metric.rmse"]), method_label(r)) for _, r in sub.iterrows()])
                 line_labels = {method_label(r) for _, r in sub.iterrows() if _is_lines(r["pipeline.algorithm"])}
-                rows.append({"scene": s, "coc": float(coc), "axis": axis, "front": len(front),
-                             "lines": sum(lab in line_labels for _c, _e, lab in front),
+                n_lines = sum(lab in line_labels for _c, _e, lab in front)
+                rows.append({"scene": s, "coc": float(coc), "axis": axis, "front": len(front), "lines": n_lines,
                              "members": "; ".join(f"{lab} ({e:.4f})" for _c, e, lab in front),
-                             "best_rmse": front[-1][1], "best_method": front[-1][2]})
+                             "best_rmse": front[-1][1], "best_method": front[-1][2],
+                             "lines_on_front": f"{s} CoC {coc:g}: {n_lines} of {len(front)}",
+                             "best_on_front": f"{s} CoC {coc:g}: {front[-1][2]}"})
     out = pd.DataFrame(rows)
     out.attrs["keys"] = ["scene", "coc", "axis"]
     return out
