@@ -560,7 +560,7 @@ def test_every_report_config_is_valid():
     assert paths
     for p in paths:
         c = xc.load_config(p)
-        assert c.outputs.page and c.outputs.plots, f"{p.name}: no report spec"
+        assert c.outputs.page and (c.outputs.plots or "{{table:" in (c.outputs.text or "")), f"{p.name}: no report spec"
         data, _ = xc.load_dict(p, pages.quick_overrides(xc.load_dict(p)[0]))
         xc.expand_sweep(xc.validate(data, str(p)))
 

@@ -113,8 +113,8 @@ def test_lines_agree_with_point_sampling():
     mean of two 1024-point renders (brute force) agree to within twice their combined standard error, RMS over
     the image (measured: 1.3 times). Power: a line sampler whose wheels miss a tenth of the lens directions
     (test_a_biased_line_sampler_is_caught) differs by about 4 times the standard error (RMS 0.008 against
-    0.002 here) and fails; the former tolerance, RMSE < 0.02 on one render, let a sampler missing a fifth of
-    the directions (RMS 0.015) pass."""
+    0.002 here) and fails, as does one missing a fifth (RMS 0.015), which a bound of RMSE < 0.02 on one
+    render would let pass."""
     diff, se = _line_and_point_means()
     noise = np.sqrt(np.mean(se ** 2))
     rms = np.sqrt(np.mean(diff ** 2))

@@ -146,8 +146,8 @@ def test_sampler_simploid_points_are_uniform(coc, depth, spp):
 def test_sampler_chi2_rejects_a_mildly_non_uniform_table(seed):
     """The test can fail, on a small bias: shutter times warped t -> t^1.2 (the time density then runs from
     infinite at t = 0 down to 0.83 at t = 1: about a fifth fewer samples late in the shutter). At 128 px and
-    16 spp (about 4,500 points) it is rejected at p < 1e-3 for 8 of 8 seeds measured (t^1.1: 1 of 8); the
-    former 64 px test (about 1,100 points) rejected t^1.2 for 3 of 8 and passed t^1.1 always."""
+    16 spp (about 4,500 points) it is rejected at p < 1e-3 for 8 of 8 seeds measured (t^1.1: 1 of 8); at
+    64 px (about 1,100 points) t^1.2 is rejected for 3 of 8 and t^1.1 never."""
     sc = models.named("sampler_simploids", width=128, height=128)
     cam = sim.Camera(**sc.camera_hint)
     s = np.array(sim.SampleTable.random(spp=16, seed=seed).samples())
@@ -159,8 +159,8 @@ def test_sampler_chi2_rejects_a_mildly_non_uniform_table(seed):
 def test_sampler_voids_get_no_points_and_cells_are_uniform():
     """Counts per kept cell against the null of pixel-stratified samples (every pixel holds spp samples:
     mean spp x area, variance spp x sum f (1 - f) over the pixels a cell covers a share f of); calibrated
-    for a random table (seeds measured 0.01-0.99), where the multinomial chi-square gave p = 1.0 for
-    every table, random or not, and so tested nothing. Power: test_sampler_voids_reject_a_biased_table."""
+    for a random table (seeds measured 0.01-0.99); a multinomial chi-square gives p = 1 here for every
+    table, random or not, and so tests nothing. Power: test_sampler_voids_reject_a_biased_table."""
     sc = models.named("sampler_voids", width=64, height=64)
     cam = sim.Camera(**sc.camera_hint)
     r = uses.sample_simploids(sc, cam, sim.SampleTable.random(spp=8, seed=2), domain="voids")
