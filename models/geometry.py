@@ -1,7 +1,7 @@
 """Small geometry helpers: 4x4 affine matrices and the pinhole mapping of the engine's default camera.
 
 The default camera sits at the origin looking down -z, +y up, with a vertical field of view fov_y_deg.
-Pixel (X, Y) covers [X, X+1) x [Y, Y+1) and row 0 is the top of the picture (ARCHITECTURE.md).
+Pixel (X, Y) covers [X, X+1) x [Y, Y+1) and row 0 is the top of the picture (docs/conventions.md).
 """
 from __future__ import annotations
 

@@ -1,9 +1,9 @@
-"""Blur-based level of detail (000_de06ed5e73318ec6.txt §7.2; 004_da3c211285527fac.txt §4.2).
+"""Blur-based level of detail ([Toth 2008] §7.2; [Tzeng 2012] §4.2).
 
 Per object, a chain of simplified meshes (level 0 = the original; level k keeps about
 ``reduction**k`` of its triangles), built with fast-simplification (quadric edge collapse, the
 library trimesh uses) and cached on disk by content hash. The level of each object is chosen from
-its blur, as 004 §4.2: s_lod = c_min / d_avg, with c_min the smallest CoC radius [px] over the
+its blur, as [Tzeng 2012] §4.2: s_lod = c_min / d_avg, with c_min the smallest CoC radius [px] over the
 object's bounding box (0 when the box reaches the focus plane) and d_avg the screen length [px]
 of the object's average edge placed at the box centre, parallel to the image plane. Level k's
 average edge is about ``reduction**(-k/2)`` times longer, so the chosen level is the coarsest

@@ -1,5 +1,5 @@
 """Procedural scenes: single triangles, quads, hard cases (focus crossing, behind the camera,
-degenerate) and the mixed-size scene of 001_3248aaf17c219d5e.txt Fig. 17.
+degenerate) and the mixed-size scene of [Akenine-Möller 2012] Fig. 17.
 
 All scenes are in the view space of the engine's default camera (origin, looking down -z, +y up).
 """
@@ -196,7 +196,7 @@ def mixed_sizes(
     fov_y_deg: float = 45.0,
     focus_distance: float | None = None,
 ) -> Scene:
-    """Triangles with log-uniform screen areas (001_3248aaf17c219d5e.txt Fig. 17): random depths, positions, colours."""
+    """Triangles with log-uniform screen areas ([Akenine-Möller 2012] Fig. 17): random depths, positions, colours."""
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
         raise SceneError(f"n: expected a non-negative integer, got {n!r}")
     if not 0 < min_area_px <= max_area_px:

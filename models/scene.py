@@ -383,7 +383,7 @@ class Scene:
 
     def with_alpha(self, alpha: Any) -> "Scene":
         """Same geometry with opacity alpha per triangle ((N,) or one number; None: opaque): a render
-        then keeps each covered sample with probability alpha (stochastic transparency, 003)."""
+        then keeps each covered sample with probability alpha (stochastic transparency, [McGuire 2010])."""
         return self._replace(alpha=None if alpha is None else _alpha(alpha, self.n_triangles))
 
     def with_color(self, color: Any) -> "Scene":

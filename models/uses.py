@@ -1,4 +1,4 @@
-"""Scenes of the rasterizer's other uses (002 §4-§7) and of stochastic transparency (003):
+"""Scenes of the rasterizer's other uses ([Nilsson 2012] §4-§7) and of stochastic transparency ([McGuire 2010]):
 overlapping transparent layers, moving simploids for the sampler, a plane over a plane under an
 area light, a water surface over a pool floor, and a glossy floor under objects. The uses
 themselves are in sim/uses/ (point kinds in experiments/run/uses.py)."""
@@ -89,7 +89,7 @@ def sampler_simploids(
     height: int = 96,
     fov_y_deg: float = 45.0,
 ) -> Scene:
-    """Triangles at one depth whose vertices move independently in their plane: (2,1)-simploids in xyt (002 §5, Fig. 10), disjoint over the shutter."""
+    """Triangles at one depth whose vertices move independently in their plane: (2,1)-simploids in xyt ([Nilsson 2012] §5, Fig. 10), disjoint over the shutter."""
     if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= 64:
         raise SceneError(f"n: expected an integer in 1..64, got {n!r}")
     depth = _positive("depth", depth)
@@ -131,7 +131,7 @@ def sampler_voids(
     height: int = 96,
     fov_y_deg: float = 45.0,
 ) -> Scene:
-    """A square domain tessellated into cells x cells squares (two triangles each) with `voids` cells left out: a sample domain with voids (002 §5)."""
+    """A square domain tessellated into cells x cells squares (two triangles each) with `voids` cells left out: a sample domain with voids ([Nilsson 2012] §5)."""
     if isinstance(cells, bool) or not isinstance(cells, int) or not 1 <= cells <= 64:
         raise SceneError(f"cells: expected an integer in 1..64, got {cells!r}")
     if isinstance(voids, bool) or not isinstance(voids, int) or not 0 <= voids < cells * cells:
@@ -163,7 +163,7 @@ def shadow_planes(
     width: int = 96,
     height: int = 96,
 ) -> Scene:
-    """A floor (y = 0) under a 1 x 1.2 plate at occluder_height whose right edge lies on x = 0, the plate moving by `motion` along +x over the shutter: plane over plane for soft shadows (002 §7)."""
+    """A floor (y = 0) under a 1 x 1.2 plate at occluder_height whose right edge lies on x = 0, the plate moving by `motion` along +x over the shutter: plane over plane for soft shadows ([Nilsson 2012] §7)."""
     h = _positive("occluder_height", occluder_height)
     f = _positive("floor_size", floor_size) / 2
     floor = np.array([[(-f, 0, -f), (-f, 0, f), (f, 0, f)], [(-f, 0, -f), (f, 0, f), (f, 0, -f)]], np.float64)
@@ -210,7 +210,7 @@ def water_caustics(
     width: int = 128,
     height: int = 128,
 ) -> Scene:
-    """Caustic volumes (002 §4): generator triangles of a procedural water surface (t = 0) and their ends on the pool floor y = 0 (t = 1), light straight down, refracted per vertex; grid x grid x 2 volumes."""
+    """Caustic volumes ([Nilsson 2012] §4): generator triangles of a procedural water surface (t = 0) and their ends on the pool floor y = 0 (t = 1), light straight down, refracted per vertex; grid x grid x 2 volumes."""
     if isinstance(grid, bool) or not isinstance(grid, int) or not 1 <= grid <= 512:
         raise SceneError(f"grid: expected an integer in 1..512, got {grid!r}")
     if view not in ("oblique", "top"):
@@ -251,7 +251,7 @@ def glossy_floor(
     width: int = 128,
     height: int = 96,
 ) -> Scene:
-    """A glossy floor (y = 0, x in [-1.5, 1.5], z in [-3, 0]) under standing triangles at several heights and a striped back wall (below: all of it 1.6 under the surface, for refraction): planar glossy reflections and refractions (002 §6)."""
+    """A glossy floor (y = 0, x in [-1.5, 1.5], z in [-3, 0]) under standing triangles at several heights and a striped back wall (below: all of it 1.6 under the surface, for refraction): planar glossy reflections and refractions ([Nilsson 2012] §6)."""
     floor = np.array([[(-1.5, 0, -3.0), (-1.5, 0, 0.0), (1.5, 0, 0.0)],
                       [(-1.5, 0, -3.0), (1.5, 0, 0.0), (1.5, 0, -3.0)]], np.float64)
     tris = [floor]

@@ -1,6 +1,6 @@
 """rast5d engine: a functional, operation-counting 5D stochastic rasterizer (C++ via pybind11).
 
-Public contract (ARCHITECTURE.md §Public contract)::
+Public contract (docs/architecture.md)::
 
     camera = sim.Camera.for_scene(scene, width=256, height=256, coc_px=10)  # the scene's camera hint
     table  = sim.SampleTable.stratified(spp=16, seed=1)
@@ -9,7 +9,8 @@ Public contract (ARCHITECTURE.md §Public contract)::
 """
 from . import _core
 
-from .errors import ConfigError, EmptyFrameWarning, Error, MemoryLimitError, SceneError, SceneInputError
+from .errors import (ConfigError, EmptyFrameWarning, Error, MemoryLimitError, SceneError, SceneInputError,
+                     UnreadParameterWarning)
 from .hardware import (ColorBufferConfig, DepthBufferConfig, DramConfig, HardwareConfig, TextureCacheConfig,
                        UnitConfig)
 from .errors import suggest_keywords as _suggest_keywords
@@ -17,8 +18,8 @@ from .errors import suggest_keywords as _suggest_keywords
 for _cls in (HardwareConfig, TextureCacheConfig, DepthBufferConfig, ColorBufferConfig, DramConfig,
              UnitConfig):  # unknown keywords: KeywordError, did you mean
     _suggest_keywords(_cls)
-from .pipeline import (PipelineConfig, algorithm_docs, algorithm_names, interleaved_algorithms, shading_modes,
-                       texture_filters, texture_layouts)
+from .pipeline import (AlgorithmInfo, PipelineConfig, algorithm_docs, algorithm_info, algorithm_names,
+                       interleaved_algorithms, shading_modes, texture_filters, texture_layouts)
 from .pipeline import line_algorithms
 from .png import linear_to_srgb8, write_png
 
@@ -27,10 +28,11 @@ from .render import Result, memory_estimate, render, trace_pixel
 from .sample_table import SampleTable
 from .intervals import ConservativeResult, OcclusionResult, conservative_raster, occlusion_query
 from .stats import counter_docs
-from . import energy, pixel_stats, timing
+from . import energy, pixel_stats, references, timing
 from . import uses
 
 __all__ = [
+    "AlgorithmInfo",
     "Camera",
     "ConservativeResult",
     "OcclusionResult",
@@ -51,7 +53,9 @@ __all__ = [
     "ColorBufferConfig",
     "DramConfig",
     "UnitConfig",
+    "UnreadParameterWarning",
     "algorithm_docs",
+    "algorithm_info",
     "algorithm_names",
     "counter_docs",
     "interleaved_algorithms",

@@ -27,21 +27,21 @@ class RenderParams:
     halfspace_h: bool  # Use the h_i half-space lines; default True
     halfspace_H: bool  # Use the H_j half-space lines; default True
     halfspace_H5: bool  # tile, moving triangles (motion_test 'intervals'): the H_j lines extended to time, culling lens cells per tile over each t̂_k (docs/tile_tests.md H5); off by default; default False
-    selective_H: bool  # 001 Appendix A oracle: disable H_j lines on edges where they are not expected to pay; default True
-    oracle: str  # Oracle estimate: 'simplified' (001 Eq. 15, the paper's) or 'full' (Eq. 11-12) (oracle_modes: simplified, full); default 'simplified'
+    selective_H: bool  # [Akenine-Möller 2012] Appendix A oracle: disable H_j lines on edges where they are not expected to pay; default True
+    oracle: str  # Oracle estimate: 'simplified' ([Akenine-Möller 2012] Eq. 15, the paper's) or 'full' (Eq. 11-12) (oracle_modes: simplified, full); default 'simplified'
     c_sample: float  # Oracle C_sample; null = the documented 4D sample-test cost of the cost model [ops]; default -1.0
     c_tile: float  # Oracle C_tile (one edge's H_j lines vs one tile); null = documented [ops]; default -1.0
     backface_cull: bool  # Cull back-facing triangles; default False
     op_count: str  # 'documented' (charge each kernel's documented cost) or 'exact' (counting scalar type) (op_counts: documented, exact); default 'documented'
     cost_model: str  # Operation cost model: 'robust' (float32 sample-relative edge functions, no FMA) or 'hardware' (fixed-point affine edge functions with FMA; 2D edges set up per triangle or lens position); the image is the same in both (cost_models: robust, hardware); default 'robust'
-    count_optimal: bool  # Instrument tile.samples_optimal (exact lens region per tile; 001 Table 1); off by default: it costs more than the traversal it describes; default False
+    count_optimal: bool  # Instrument tile.samples_optimal (exact lens region per tile; [Akenine-Möller 2012] Table 1); off by default: it costs more than the traversal it describes; default False
     simd: bool  # Fast path: the 4D/5D sample tests in explicit SIMD (bit-identical results and counts; false = the auto-vectorised kernels, for benchmarks); default True
     precision_tile: str | dict  # Tile tests: the 2D edge test (in-focus triangles of tile and tile_interleaved; hinterleave) and the 4D test (h_i sets, H_j cells, lens-box bounds, ẑ; tiletest/precision_4d.h): float64 (the default), float32 (2D: no extra margin, may lose samples; 4D: error-bounded), or fixed point on vertices and tile corners snapped to frac_bits sub-pixel bits (tiles widened by 2^(1 - frac_bits) px); default 'float64'
     precision_sample: str | dict  # Sample test decision: float32 (the default), float64, or fixed point on the vertices placed at the sample's (u, v, t) and projected, snapped with the sample to frac_bits sub-pixel bits; tile tests widen by 2^(1 - frac_bits) px to stay conservative; default 'float32'
     precision_depth: str | dict  # Stored sample depth z in [0, 1]: float32 (the default) or fixed point (z rounded to frac_bits fraction bits, frac_bits <= 24: a unorm depth buffer); float64 is refused (the buffer holds float32); default 'float32'
     hinterleave_tile: int  # HINTERLEAVE tile edge: 4, 8 or 16 [px]; default 8
-    bin_size: int  # Screen bin edge for threading (multiple of 8 and of hinterleave_tile) [px]; default 64
-    lines_buffer_size: int  # Segment-buffer capacity per line sample; 0 = unlimited (004 does not state its size; 8 overflows by 27% on modern_hall at CoC 40 and darkens it, 32 does not) [segments]; default 32
+    bin_size: int  # Screen bin edge for threading and for sampled simulation's strata (multiple of 8 and of hinterleave_tile); auto = 64, or sim.pipeline.SAMPLED_BIN_SIZE in a sampled render (sample_fraction < 1; chosen by the sampling page) [px]; default 64
+    lines_buffer_size: int  # Segment-buffer capacity per line sample; 0 = unlimited ([Tzeng 2012] does not state its size; 8 overflows by 27% on modern_hall at CoC 40 and darkens it, 32 does not) [segments]; default 32
     lines_min_weight: float  # Drop segments that merged nowhere and whose κ weight (share of the line) is below this; 0 = off; default 0.0001
     lines_occlusion: bool  # Drop segments covered by a buffered segment entirely in front (and remove those an incoming segment hides); default True
     lines_merge: bool  # Merge a segment into a buffered one within the three thresholds; default True
@@ -51,7 +51,7 @@ class RenderParams:
     lines_tile_clip: bool  # Skip line-triangle tests of lines that miss the tile's h_i lens region (the same image, but for float32 slivers of the line test outside the exact coverage on sub-pixel triangles: docs/op_costs.md); default False
     sample_fraction: float  # Sampled simulation: traverse this fraction of the screen bins that hold triangles (2 per stratum of bins with similar brute-force work), scale the counters to the frame and give 95% confidence half-widths (Result.ci95); 1 = the whole frame, exact; default 1.0
     sample_seed: int  # Seed of the sampled bins (sample_fraction < 1); default 0
-    shading: str  # What costs a shader lane: 'per_sample' (supersampling), 'msaa' (one per pixel per visit), 'per_lens_cell' (one per pixel and lens-grid cell per visit), 'cache' (memoising shading cache, 002 §2) or 'none' (not modelled: no shade.*/tex.* counts, fastest); the image is the same in every mode (shading_modes: per_sample, msaa, per_lens_cell, cache, none); default 'none'
+    shading: str  # What costs a shader lane: 'per_sample' (supersampling), 'msaa' (one per pixel per visit), 'per_lens_cell' (one per pixel and lens-grid cell per visit), 'cache' (memoising shading cache, [Nilsson 2012] §2) or 'none' (not modelled: no shade.*/tex.* counts, fastest); the image is the same in every mode (shading_modes: per_sample, msaa, per_lens_cell, cache, none); default 'none'
     shading_cache_entries: int  # Shading cache (shading: cache): LRU entries, key (triangle, shading-grid point) [entries]; default 1024
     shading_grid: int  # Shading cache: shading-grid points per pixel edge (1 = pixel grid, 2 = 2x2 per pixel, ...) [points/px]; default 1
     texture_count: int  # Textures read per shader lane, 0..4 (0: untextured, the vertex colour) [textures]; default 0
@@ -65,14 +65,14 @@ class RenderParams:
     clip_u: list[float]  # Lens u range kept; default [-1.0, 1.0]
     clip_v: list[float]  # Lens v range kept; default [-1.0, 1.0]
     clip_t: list[float]  # Shutter time range kept; default [0.0, 1.0]
-    zhat: str  # Depth interval per (triangle, tile): 'planes' (moving box + moving planes, 002 App. A) or 'vertex' (vertex min/max) (zhat_modes: planes, vertex); default 'planes'
+    zhat: str  # Depth interval per (triangle, tile): 'planes' (moving box + moving planes, [Nilsson 2012] App. A) or 'vertex' (vertex min/max) (zhat_modes: planes, vertex); default 'planes'
     zhat_margin: str  # Widening of ẑ before it is compared with float sample depths (HiZ, occlusion queries): 'derived' (each pair's rounding bound) or 'fixed' (12.5 % of W, for comparison) (zhat_margins: derived, fixed); default 'derived'
     zhat_stats: bool  # tile: compute the depth interval of every accepted pair and count its width (zcull.width_zhat, zcull.width_vertex); default False
     hiz_enabled: bool  # zmax/zmin culling against per-tile HiZ; default False
     hiz_tile_size: int  # HiZ tile edge (>= tile_size) [px]; default 8
-    gpu_constants: str  # gpu_* algorithms: 'none' (data on every bounding vertex, setup re-derived per fragment), 'triangle' or 'strip' constants (000 §9.6) (gpu_constants: none, triangle, strip); default 'none'
-    gpu_payload_floats: int  # gpu_* algorithms: floats of contained-triangle data per bounding vertex besides its 4 position floats; auto = 3 x (position 3, disc of confusion 1, colour 3) = 21, + 9 end positions when moving (000 Table 2's bump-mapped example: 35) [floats]; default -1
-    gpu_adaptive_ratio: float  # gpu_adaptive: parallel-edge triangle when the largest confusion radius <= ratio x sqrt(projected area), else the 2D hexagon (000 §4.7); default 0.5
+    gpu_constants: str  # gpu_* algorithms: 'none' (data on every bounding vertex, setup re-derived per fragment), 'triangle' or 'strip' constants ([Toth 2008] §9.6) (gpu_constants: none, triangle, strip); default 'none'
+    gpu_payload_floats: int  # gpu_* algorithms: floats of contained-triangle data per bounding vertex besides its 4 position floats; auto = 3 x (position 3, disc of confusion 1, colour 3) = 21, + 9 end positions when moving ([Toth 2008] Table 2's bump-mapped example: 35) [floats]; default -1
+    gpu_adaptive_ratio: float  # gpu_adaptive: parallel-edge triangle when the largest confusion radius <= ratio x sqrt(projected area), else the 2D hexagon ([Toth 2008] §4.7); default 0.5
     # hardware: from sim.HardwareConfig
     tex_cache_size_bytes: int  # Capacity of one cache (a whole number of sets of ways x line_bytes) [bytes]; default 16384
     tex_cache_line_bytes: int  # Cache line size (a power of two) [bytes]; default 64
@@ -155,10 +155,13 @@ def render(
 def lens_grid_buckets(
     samples: npt.NDArray[np.float32], grid: int
 ) -> tuple[npt.NDArray[np.int32], npt.NDArray[np.int32], npt.NDArray[np.int32]]:
-    """(order (P,P,spp), counts (P,P,G*G), offsets (P,P,G*G)) of 001 Fig. 10."""
+    """(order (P,P,spp), counts (P,P,G*G), offsets (P,P,G*G)) of [Akenine-Möller 2012] Fig. 10."""
 
 def counter_docs() -> dict[str, tuple[str, str]]: ...
 def algorithms() -> list[tuple[str, str, bool]]: ...
+def algorithm_facts() -> dict[str, dict[str, object]]:
+    """{name: {description, samples ('points' | 'lines'), tables ('points' | 'interleaved' | 'lines'),
+    depth_cull, pipeline ('sample' | 'gpu')}}: the traversal registry's facts about every algorithm."""
 
 # ---- timing.cpp: the timing model (docs/timing.md) ----
 def timing_record_dtype() -> np.dtype:
@@ -188,7 +191,7 @@ def conservative_raster(
     reduce: bool,
     max_records: int,
 ) -> dict[str, Any]:
-    """Conservative rasterization (002 Fig. 2): {'counters', 'records': uint8 bytes of (x, y, triangle,
+    """Conservative rasterization ([Nilsson 2012] Fig. 2): {'counters', 'records': uint8 bytes of (x, y, triangle,
     u_lo, u_hi, v_lo, v_hi, t_lo, t_hi, z_lo, z_hi) records, 'record_bytes'} or, with reduce,
     {'counters', 'tz_box': float32 (H, W, 4), 'count': int32 (H, W)}. ValueError past max_records."""
 

@@ -1,6 +1,6 @@
 """The thin-lens, shuttered camera and the world -> clip -> engine transforms.
 
-Conventions (ARCHITECTURE.md §Geometric conventions; docs/conventions.md):
+Conventions (docs/conventions.md):
 
 * View space is right-handed; by default the camera is at the origin looking down -z with +y up
   (``eye``/``target``/``up`` place it elsewhere). Clip space: ``x_c = s_x x_v``, ``y_c = s_y y_v``,
@@ -15,7 +15,7 @@ Conventions (ARCHITECTURE.md §Geometric conventions; docs/conventions.md):
   (= ``k_y H / 2``): a point at depth ``w`` is blurred over a disc of radius ``K |1 - F / w|`` px.
 * ``shift`` (default (0, 0)) moves the principal point by (shift_x, shift_y) in normalised device
   coordinates: ``x_c = s_x x_v + shift_x w`` (an off-centre viewport, e.g. a reflection map that
-  tightly encloses a glossy surface, 002 §6). The lens shear is unchanged (it is linear in w - F).
+  tightly encloses a glossy surface, [Nilsson 2012] §6). The lens shear is unchanged (it is linear in w - F).
 * Time: vertices move linearly in world space from ``t = 0`` to ``t = 1``. The shutter interval
   ``[open, close]`` is applied by moving the scene's endpoints to ``open`` and ``close`` before
   projection, so the sample table's ``t`` in ``[0, 1)`` spans the open shutter.

@@ -38,3 +38,15 @@ def evaluate(derived: Iterable[Derived], flat: dict) -> dict:
 def docs(derived: Iterable[Derived]) -> dict[str, tuple[str, str]]:
     """{name: (unit, description)} of the derived figures."""
     return {d.name: (d.unit, d.description) for d in derived}
+
+
+def nest(flat: dict) -> dict:
+    """{"a.b": v} -> {"a": {"b": v}} (names have the form stage.thing)."""
+    out: dict = {}
+    for key, value in flat.items():
+        node = out
+        parts = key.split(".")
+        for p in parts[:-1]:
+            node = node.setdefault(p, {})
+        node[parts[-1]] = value
+    return out

@@ -48,6 +48,13 @@ class EmptyFrameWarning(UserWarning):
     screen, degenerate, back-facing), usually a camera inside or facing away from the scene."""
 
 
+class UnreadParameterWarning(UserWarning):
+    """A parameter was set that the render does not read (``pipeline.hiz.enabled`` under an algorithm
+    without a depth-cull stage, ``pipeline.lines`` under a point-sample algorithm, ...): it has no
+    effect. The message names the parameter, its value and why; sweeps hash such a point as if the
+    parameter were left at its default (sim.pipeline.unread_parameters)."""
+
+
 class FewStrataWarning(UserWarning):
     """A sampled render (PipelineConfig.sample_fraction < 1) drew its bins from so few strata that
     its 95% intervals can cover far below 95%; the message says what to raise."""
@@ -93,7 +100,9 @@ def field_docs(cls) -> dict[str, dict]:
     out = {}
     for f in dataclasses.fields(cls):
         default = f.default if f.default is not dataclasses.MISSING else f.default_factory()
-        entry = {"default": default, "unit": f.metadata.get("unit", ""), "doc": f.metadata["doc"]}
+        from .references import cite
+
+        entry = {"default": default, "unit": f.metadata.get("unit", ""), "doc": cite(f.metadata["doc"])}
         if dataclasses.is_dataclass(default):
             entry["fields"] = field_docs(type(default))
             entry["default"] = dataclasses.asdict(default)

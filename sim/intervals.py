@@ -1,9 +1,9 @@
 """Python APIs over the 5D pipeline's intervals (docs/intervals.md):
 
-* ``conservative_raster``: the conservative rasterization mode (002 §2, Fig. 2): 1 x 1 tiles, no
+* ``conservative_raster``: the conservative rasterization mode ([Nilsson 2012] §2, Fig. 2): 1 x 1 tiles, no
   sample test, one fragment record (pixel, triangle, û, v̂, t̂, ẑ) per (triangle, pixel) pair, or a
-  per-pixel tz-box reduction computed in C++ (002 §3) for large scenes.
-* ``occlusion_query``: 5D occlusion queries (002 §3), sample-based or interval-based.
+  per-pixel tz-box reduction computed in C++ ([Nilsson 2012] §3) for large scenes.
+* ``occlusion_query``: 5D occlusion queries ([Nilsson 2012] §3), sample-based or interval-based.
 """
 from __future__ import annotations
 
@@ -100,7 +100,7 @@ class _Concat:
 
 def occlusion_query(occluders, query, camera: Camera, table, pipeline: PipelineConfig | None = None, *,
                     mode: str = "samples") -> OcclusionResult:
-    """5D occlusion query (002 §3): is ``query`` (a scene) hidden behind ``occluders`` for every
+    """5D occlusion query ([Nilsson 2012] §3): is ``query`` (a scene) hidden behind ``occluders`` for every
     sample (lens point and time)?
 
     mode="samples": the query triangles are rasterized with the samples of the 5D rasterizer and

@@ -1,6 +1,6 @@
 """Lens apertures: area-preserving maps from the unit square onto each lens shape, and membership.
 
-Contract: for every shape Ω ⊆ [-1, 1]² (ARCHITECTURE.md §Geometric conventions), `map_to_lens`
+Contract: for every shape Ω ⊆ [-1, 1]² (docs/conventions.md), `map_to_lens`
 sends the uniform distribution on [0, 1)² to the uniform distribution on Ω (the map's Jacobian is
 constant), and every image point satisfies `inside_lens`. Sample tables store canonical (a, b) in
 [0, 1)² and call `map_to_lens` when they are asked for a concrete shape.

@@ -339,7 +339,9 @@ def stub_fields() -> str:
         if s.layer != last:
             lines.append(f"    # {s.layer}: {_LAYER_SETTERS[s.layer]}")
             last = s.layer
-        what = s.doc
+        from .references import cite
+
+        what = cite(s.doc)
         if s.choices is not None and s.registry != "algorithms":  # algorithms: an open registry
             what += f" ({s.registry}: {', '.join(s.choices)})"
         if s.unit:

@@ -15,11 +15,6 @@ def linear_to_srgb8(image: np.ndarray) -> np.ndarray:
     return np.round(s * 255.0).astype(np.uint8)
 
 
-def srgb8_to_linear(image: np.ndarray) -> np.ndarray:
-    s = np.asarray(image, dtype=np.float64) / 255.0
-    return np.where(s <= 0.04045, s / 12.92, np.power((s + 0.055) / 1.055, 2.4))
-
-
 def write_png(path, image: np.ndarray) -> Path:
     """Write a linear (H, W, 3) float image as an 8-bit sRGB PNG (with an sRGB chunk)."""
     img = np.asarray(image)

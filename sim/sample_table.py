@@ -1,4 +1,4 @@
-"""The programmable sample table (ARCHITECTURE.md §sample table).
+"""The programmable sample table (docs/architecture.md; docs/conventions.md).
 
 A P×P block of pixels repeats over the screen; pixel (px, py) uses the spp samples of table entry
 [py mod P, px mod P]. Each sample is (x, y, u, v, t): x, y ∈ [0, 1) inside the pixel, (u, v) in the
@@ -17,8 +17,8 @@ spawn_key=(zlib.crc32(name.encode()), period)))``, so a table is a pure function
 always drawn, even when `lens` or `time` is off, so switching a dimension off leaves the others
 unchanged.
 
-Generators are registered by name with `@_generator(name)` (STYLE.md "one implementation,
-registered by name") and appear as classmethods: ``SampleTable.stratified(spp=16, seed=1)`` is
+Generators are registered by name with `@_generator(name)` (one implementation,
+registered by name: docs/architecture.md §Where to add a thing) and appear as classmethods: ``SampleTable.stratified(spp=16, seed=1)`` is
 ``SampleTable.create("stratified", spp=16, seed=1)``. User tables come from
 ``SampleTable.from_array``.
 """
@@ -34,6 +34,9 @@ import numpy as np
 from .lens import LENS_SHAPES, check_shape, inside_lens, map_to_lens
 
 MAX_SPP = 4096
+# Lines per wagon wheel of SampleTable.lines: chosen by the wheel sweep of the methods page (the lowest mean
+# RMSE excess at equal operations over its scenes; reports/paper/methods.md).
+LINE_WHEEL = 2
 MAX_PERIOD = 256
 LENS_GRID_SIZES = (1, 2, 4, 8, 16)
 
@@ -41,6 +44,8 @@ LENS_GRID_SIZES = (1, 2, 4, 8, 16)
 _GENERATORS: dict[str, tuple[Callable[..., "_Draw"], dict[str, object]]] = {}
 # generators fit to render reference images (image-error metrics): no parameter of their own
 _REFERENCE_GENERATORS: list[str] = []
+# generators whose tables have discrete lens coordinates (n_lens > 0): the interleaved algorithms' tables
+_DISCRETE_LENS_GENERATORS: list[str] = []
 _COMMON_DEFAULTS: dict[str, object] = {"seed": 0, "period": 32, "lens": True, "time": True}
 
 
@@ -92,11 +97,15 @@ class SampleTable:
     # ---------------------------------------------------------------- registry
 
     @classmethod
-    def generators(cls, reference: bool = False) -> list[str]:
+    def generators(cls, reference: bool = False, discrete_lens: bool | None = None) -> list[str]:
         """Names accepted by `create` (procedural generators; `from_array` is separate), in
         registration order; ``reference=True``: only those registered as reference generators (the
-        metrics' reference images)."""
-        return list(_REFERENCE_GENERATORS) if reference else list(_GENERATORS)
+        metrics' reference images); ``discrete_lens``: only those whose tables have (True) or lack
+        (False) discrete lens coordinates (what the interleaved algorithms need)."""
+        names = list(_REFERENCE_GENERATORS) if reference else list(_GENERATORS)
+        if discrete_lens is not None:
+            names = [n for n in names if (n in _DISCRETE_LENS_GENERATORS) == discrete_lens]
+        return names
 
     @classmethod
     def kinds(cls) -> list[str]:
@@ -293,15 +302,18 @@ class SampleTable:
     # ---------------------------------------------------------------- line samples
 
     @classmethod
-    def lines(cls, n_lines: int = 16, seed: int = 0, period: int = 32, wheel: int = 4) -> "SampleTable":
-        """A line-sample table for ``PipelineConfig(algorithm="lines")`` (004_da3c211285527fac.txt
+    def lines(cls, n_lines: int = 16, seed: int = 0, period: int = 32, wheel: int = LINE_WHEEL) -> "SampleTable":
+        """A line-sample table for ``PipelineConfig(algorithm="lines")`` ([Tzeng 2012]
         §3): per pixel ``n_lines`` lines through the centre of the disk lens, as wagon wheels of
         ``wheel`` lines sharing one screen point. The n_lines angles are stratified over [0, π)
         with a random rotation per pixel (θ_k = π(k + ξ)/n_lines); line k belongs to wheel
         k mod (n_lines / wheel), so every wheel's spokes are spread evenly; the wheels' screen
         points are jittered on a stratified grid of the pixel. Sample s holds (x, y, cos θ, sin θ,
         0): (u, v) is the line's direction, and the line covers the lens points p (u, v), p in
-        [-1, 1]. Static scenes only (no time); the disk lens only."""
+        [-1, 1]. Static scenes only (no time); the disk lens only. The default wheel, LINE_WHEEL lines, is
+        the size with the lowest RMSE at equal operations over the wheel sweep of the methods page
+        (reports/paper/methods.md, configs/paper/methods_wheel.yaml): smaller wheels place more screen
+        points per pixel (sharper in-focus edges), larger ones more lens directions per point."""
         n_lines = _check_int("n_lines", n_lines, 1, MAX_SPP)
         seed = _check_int("seed", seed, 0, 2**63 - 1)
         period = _check_int("period", period, 1, MAX_PERIOD)
@@ -386,7 +398,7 @@ class SampleTable:
         return p
 
     def lens_grid(self, grid: int, lens: str = "disk") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Lens-grid buckets (001_3248aaf17c219d5e.txt §5.1, Fig. 10) from the engine:
+        """Lens-grid buckets ([Akenine-Möller 2012] §5.1, Fig. 10) from the engine:
         (order (P,P,spp), counts (P,P,G*G), offsets (P,P,G*G)), int32; cell = j*G + i."""
         if isinstance(grid, bool) or not isinstance(grid, (int, np.integer)) or int(grid) not in LENS_GRID_SIZES:
             raise ValueError(
@@ -480,15 +492,17 @@ class _Draw:
         self.params = params or {}
 
 
-def _generator(name: str, reference: bool = False, **extra_defaults):
+def _generator(name: str, reference: bool = False, discrete_lens: bool = False, **extra_defaults):
     """Register a generator `impl(spec, rng, **extras) -> _Draw` under `name`, and expose it as
     the classmethod ``SampleTable.<name>(**params)``; ``reference``: it may render the reference
-    images of the image-error metrics."""
+    images of the image-error metrics; ``discrete_lens``: its tables have discrete lens coordinates."""
 
     def register(impl):
         _GENERATORS[name] = (impl, extra_defaults)
         if reference:
             _REFERENCE_GENERATORS.append(name)
+        if discrete_lens:
+            _DISCRETE_LENS_GENERATORS.append(name)
 
         def factory(cls, **params):
             return cls.create(name, **params)
@@ -527,7 +541,7 @@ def _stratified(spec: _Spec, rng: np.random.Generator) -> _Draw:
 
 @_generator("stratified_permuted")
 def _stratified_permuted(spec: _Spec, rng: np.random.Generator) -> _Draw:
-    """001_3248aaf17c219d5e.txt §6, Fig. 13: "permuted (x,y) sample positions for each block of
+    """[Akenine-Möller 2012] §6, Fig. 13: "permuted (x,y) sample positions for each block of
     2×2 pixels". (x, y) are jittered strata per pixel (as `stratified`); the lens (a, b) are
     jittered on an mx×my grid with mx·my = 4·spp over each 2×2 block, and t on 4·spp 1D strata
     over the block; both are randomly (and independently) assigned to the block's 4·spp
@@ -573,13 +587,13 @@ def _sobol(spec: _Spec, rng: np.random.Generator) -> _Draw:
     return _Draw(unit, params={"scramble": "owen_hash"})
 
 
-@_generator("interleaved", n_lens=256)
+@_generator("interleaved", discrete_lens=True, n_lens=256)
 def _interleaved(spec: _Spec, rng: np.random.Generator, n_lens) -> _Draw:
     """Interleaved sampling with N = n_lens discrete lens positions (any perfect square >= 1),
     jittered on a √N×√N grid of [0, 1)². Blocks of B×B pixels, B the smallest power of two with
     B²·spp >= N; each block's B²·spp samples take every position floor(B²·spp / N) times plus
     (B²·spp mod N) distinct extra positions chosen at random, in a random order per block, so
-    per block every position occurs equally often whenever N divides B²·spp (001: N = 256,
+    per block every position occurs equally often whenever N divides B²·spp ([Akenine-Möller 2012]: N = 256,
     spp = 64 gives one sample per position per 2×2 block). spp >= N needs N | spp (then each
     pixel holds each position spp/N times). Needs period divisible by B. (x, y) are jittered
     strata per pixel; t is stratified per pixel and permuted."""
@@ -623,7 +637,7 @@ def _interleaved(spec: _Spec, rng: np.random.Generator, n_lens) -> _Draw:
 
 @_generator("multiview", views=2)
 def _multiview(spec: _Spec, rng: np.random.Generator, views) -> _Draw:
-    """Stereo and multi-view rendering (002_95ea0844b256f75b.txt §8, Fig. 16): the lens is split into
+    """Stereo and multi-view rendering ([Nilsson 2012] §8, Fig. 16): the lens is split into
     `views` equal intervals of u, and view k owns samples k*m .. (k+1)*m - 1 of every pixel
     (m = spp / views), stratified as the `stratified` generator within its interval (so u of view k
     lies in [k/V, (k+1)/V) of the unit square). Use a square lens: the views are strips of one
@@ -757,9 +771,9 @@ def _u32_to_unit(x: np.ndarray) -> np.ndarray:
 __all__ = ["SampleTable", "LENS_SHAPES", "LENS_GRID_SIZES"]
 
 
-@_generator("accumulation", passes=None)
+@_generator("accumulation", discrete_lens=True, passes=None)
 def _accumulation(spec: _Spec, rng: np.random.Generator, passes) -> _Draw:
-    """Accumulation buffering (000_de06ed5e73318ec6.txt §2.2, §8; Haeberli and Akeley 1990): N = spp
+    """Accumulation buffering ([Toth 2008] §2.2, §8; Haeberli and Akeley 1990): N = spp
     pinhole passes, pass k at lens position k and shutter time k, the SAME for every pixel (no
     per-pixel randomisation, so the passes' ghosts stay visible). The N lens positions are
     jittered strata of a near-square grid of the unit square, the N times jittered strata of

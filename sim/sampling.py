@@ -251,16 +251,6 @@ class Estimator:
         return ty + (self._X - self._tx) @ b, var * self._scale
 
 
-def ratio_total(sample: BinSample, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(estimated totals, variances) by the combined ratio estimator on brute-force work (Estimator)."""
-    return Estimator(BinSample(sample.bins, sample.stratum, sample.sizes, sample.candidates, sample.work)).total(y)
-
-
-def regression_total(sample: BinSample, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(estimated totals, variances) by the sample's Estimator (GREG with the auxiliaries)."""
-    return Estimator(sample).total(y)
-
-
 def sampled_strata(sample: BinSample) -> int:
     """Strata whose bins were drawn (not the take-all stratum): the degrees of freedom."""
     nh = np.bincount(sample.stratum, minlength=len(sample.sizes))

@@ -3,18 +3,20 @@ are declared here once, with unit and description, and evaluated at export, neve
 from __future__ import annotations
 
 from . import _core
-from .derived import Derived, evaluate, ratio
+from .derived import Derived, evaluate, nest, ratio  # noqa: F401 - nest: sim.stats.nest
 from .derived import docs as derived_docs
 from .timing import docs as timing_docs
 from .sampling import docs as sampling_docs
 from .energy import docs as energy_docs
+from .figures import figure_docs as use_figure_docs
+from .references import cite
 
 # By pipeline stage; a formula may use the figures declared before it (sim.derived.evaluate).
 DERIVED: tuple[Derived, ...] = (
-    # operations (001 §6.2), summed over setup, tile and sample stages
+    # operations ([Akenine-Möller 2012] §6.2), summed over setup, tile and sample stages
     Derived("ops.sample", "ops", "Sample-stage operations: ops.sample_region + ops.sample_inside",
             lambda s: s["ops.sample_region"] + s["ops.sample_inside"]),
-    Derived("ops.total", "ops", "Rasterization operations as in 001 §6.2: ops.setup + ops.tile + ops.sample "
+    Derived("ops.total", "ops", "Rasterization operations as in [Akenine-Möller 2012] §6.2: ops.setup + ops.tile + ops.sample "
             "(+ ops.ps_setup: a conventional GPU's pixel shader re-deriving setup per fragment)",
             lambda s: s["ops.setup"] + s["ops.tile"] + s["ops.sample"] + s["ops.ps_setup"]),
     Derived("ops.per_pixel", "ops/pixel", "ops.total / frame.pixels",
@@ -23,7 +25,7 @@ DERIVED: tuple[Derived, ...] = (
             lambda s: ratio(s["ops.sample_inside"], s["raster.samples_tested"])),
     # tile tests
     Derived("tile.tested_over_optimal", "ratio",
-            "raster.samples_tested / tile.samples_optimal (001 Table 1; tile algorithms only)",
+            "raster.samples_tested / tile.samples_optimal ([Akenine-Möller 2012] Table 1; tile algorithms only)",
             lambda s: ratio(s["raster.samples_tested"], s["tile.samples_optimal"])),
     Derived("tile.culled", "tiles", "Tiles culled by any tile test",
             lambda s: s["tile.culled_2d"] + s["tile.culled_h"] + s["tile.culled_lens"] + s["tile.culled_H"]
@@ -48,9 +50,9 @@ DERIVED: tuple[Derived, ...] = (
             lambda s: ratio(s["zcull.width_zhat"], s["zcull.width_vertex"])),
     # shading and texturing (docs/shading.md)
     Derived("shade.quads_per_sample", "quads/sample",
-            "shade.quad_requests / depth.passes: quad shading requests relative to supersampling (001 Table 3)",
+            "shade.quad_requests / depth.passes: quad shading requests relative to supersampling ([Akenine-Möller 2012] Table 3)",
             lambda s: ratio(s["shade.quad_requests"], s["depth.passes"])),
-    Derived("shade.helper_share", "ratio", "shade.lanes_helper / shade.invocations (000 §9.5 quad waste)",
+    Derived("shade.helper_share", "ratio", "shade.lanes_helper / shade.invocations ([Toth 2008] §9.5 quad waste)",
             lambda s: ratio(s["shade.lanes_helper"], s["shade.invocations"])),
     Derived("shade.cache_hit_rate", "ratio", "shade.cache_hits / (shade.cache_hits + shade.cache_misses)",
             lambda s: ratio(s["shade.cache_hits"], s["shade.cache_hits"] + s["shade.cache_misses"])),
@@ -83,10 +85,8 @@ def counter_docs() -> dict[str, tuple[str, str]]:
     docs.update(timing_docs())  # the timing model's figures (docs/timing.md)
     docs.update(sampling_docs())  # sampled simulation (sim/sampling.py)
     docs.update(energy_docs())  # the energy estimate (sim.energy, docs/energy.md)
-    from .uses.common import figure_docs
-
-    docs.update(figure_docs())  # the figures of the rasterizer's uses (sim/uses/)
-    return docs
+    docs.update(use_figure_docs())  # the figures of the rasterizer's uses (sim/figures.py)
+    return {name: (unit, cite(doc)) for name, (unit, doc) in docs.items()}
 
 
 def flat_stats(raw: dict, measured: dict | None = None) -> dict:
@@ -95,15 +95,3 @@ def flat_stats(raw: dict, measured: dict | None = None) -> dict:
     if measured:
         flat.update(measured)
     return dict(sorted(flat.items()))
-
-
-def nest(flat: dict) -> dict:
-    """{"a.b": v} -> {"a": {"b": v}} (names have the form stage.thing)."""
-    out: dict = {}
-    for key, value in flat.items():
-        node = out
-        parts = key.split(".")
-        for p in parts[:-1]:
-            node = node.setdefault(p, {})
-        node[parts[-1]] = value
-    return out

@@ -1,6 +1,6 @@
 """Texture inputs of the engine's texture unit (docs/shading.md): which textures each triangle's
 shader reads, their uvs, procedural textures for scenes without any, and the sample-distribution
-texture of 000_de06ed5e73318ec6.txt §5.3. numpy only (the engine never imports models)."""
+texture of [Toth 2008] §5.3. numpy only (the engine never imports models)."""
 from __future__ import annotations
 
 import numpy as np
@@ -33,7 +33,7 @@ def planar_uvs(positions: np.ndarray, uv_per_unit: float) -> np.ndarray:
 
 
 def sample_distribution_texture(samples: np.ndarray) -> np.ndarray:
-    """000 §5.3: the sample table's per-pixel random numbers as a texture, one texel per pixel of
+    """[Toth 2008] §5.3: the sample table's per-pixel random numbers as a texture, one texel per pixel of
     the table's P x P period (the lens position of sample 0, mapped to [0, 1])."""
     uv = samples[:, :, 0, 2:4]
     tex = np.zeros(uv.shape[:2] + (3,), np.float32)

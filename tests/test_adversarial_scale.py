@@ -24,7 +24,7 @@ import numpy as np
 import pytest
 
 import sim
-from tests.reference.raycaster import screen_to_world
+from experiments.reference.raycaster import screen_to_world
 
 pytestmark = pytest.mark.slow
 
@@ -178,7 +178,7 @@ def test_no_algorithm_misses_a_sample_brute_force_hits():
         report.append(f"{kind}: bruteforce {time.perf_counter() - t0:.1f} s, "
                       f"{int(np.isfinite(ref.sample_depth).sum()):,} samples hit, "
                       f"setup: {({k: v for k, v in ref.flat_stats.items() if k.startswith('setup.') and v})}")
-        for algorithm in _chosen("RAST5D_ADVERSARIAL_ALGORITHMS", sim.algorithm_names()):
+        for algorithm in _chosen("RAST5D_ADVERSARIAL_ALGORITHMS", sim.algorithm_names("points")):
             if algorithm == "bruteforce" or (algorithm in interleaved and not has_lens_index):
                 continue
             t0 = time.perf_counter()

@@ -1,4 +1,4 @@
-"""Continuous collision detection example (experiments/examples/ccd.py, 002 §3): tests that know the answer."""
+"""Continuous collision detection example (experiments/examples/ccd.py, [Nilsson 2012] §3): tests that know the answer."""
 from __future__ import annotations
 
 import numpy as np

@@ -1,7 +1,7 @@
-"""The conventional-GPU pipeline (000 §3-5, §9.6; 003) and accumulation buffering (000 §2.2, §8):
+"""The conventional-GPU pipeline ([Toth 2008] §3-5, §9.6; [McGuire 2010]) and accumulation buffering ([Toth 2008] §2.2, §8):
 bounds conservative against an independent numpy model of the sheared, moving triangle (random and
 hypothesis-drawn triangles, adversarial classes), closed-form bound areas for a disc-of-confusion
-triangle, the paper's orderings, every fallback counted, 000 Table 2's float counts, the pixel
+triangle, the paper's orderings, every fallback counted, [Toth 2008] Table 2's float counts, the pixel
 shader's work, and accumulation against INTERLEAVE counter for counter.
 
 The same image as bruteforce for every gpu_* algorithm (and accumulation) on the hard cases and the
@@ -150,8 +150,8 @@ def test_bounds_conservative_adversarial(method, case, rng):
 
 
 def test_behind_camera_and_moving_fallbacks(rng):
-    """000 §4.8: 2D methods fall back to clip-and-box across the near plane, 3D methods clip their
-    volume; 000's methods give moving triangles 003's hull; all counted and conservative."""
+    """[Toth 2008] §4.8: 2D methods fall back to clip-and-box across the near plane, 3D methods clip their
+    volume; [Toth 2008]'s methods give moving triangles [McGuire 2010]'s hull; all counted and conservative."""
     v0 = homog([(10, 10, 3.0), (50, 14, 5.0), (30, 50, 8.0)])
     v0[0] = [0.4, -0.3, -1.0]  # behind the camera
     for method in ("pe_triangle", "vr_triangle", "hexagon2d", "convex_hull"):
@@ -172,7 +172,7 @@ def test_behind_camera_and_moving_fallbacks(rng):
 
 
 def test_variable_radius_fallback_when_a_circle_encloses_another():
-    """000 §4.6: no outer tangent when one confusion circle contains the other: the parallel-edge
+    """[Toth 2008] §4.6: no outer tangent when one confusion circle contains the other: the parallel-edge
     triangle, counted."""
     v0 = homog([(30, 30, 0.5), (31, 30, 4.0), (30, 31, 4.0)])  # one very blurry vertex next to two sharp
     b = _core.gpu_bound("vr_triangle", params(kx=10.0), v0, v0, True)
@@ -218,11 +218,11 @@ def test_closed_form_bound_area_disc_of_confusion_triangle():
 
 
 def test_paper_orderings(rng):
-    """000's orderings: the hexagon is the tightest of its class (§4.4: inside the parallel-edge
+    """[Toth 2008]'s orderings: the hexagon is the tightest of its class (§4.4: inside the parallel-edge
     triangle in 2D, inside the wedge in 3D); the reduced wedge covers the wedge's screen area with
     fewer triangles (§4.5); the variable-radius triangle is not always tighter than the parallel-edge
     one (§4.6: both orders occur); with zero blur every bound fits the triangle exactly (§4.4, §4.5).
-    Focus-crossing triangles around the focus plane (000 Fig. 6's narrow waist)."""
+    Focus-crossing triangles around the focus plane ([Toth 2008] Fig. 6's narrow waist)."""
     vr_smaller = vr_larger = 0
     n = 0
     for _ in range(80):
@@ -251,7 +251,7 @@ def test_paper_orderings(rng):
 
 @pytest.mark.parametrize("method,strip_vertices", [("hexagon2d", 6), ("hexagon3d", 22)])
 def test_table2_constants_floats(method, strip_vertices):
-    """000 Table 2 exactly: bump-mapped textured surface (35 constant floats per vertex): 2D hexagon
+    """[Toth 2008] Table 2 exactly: bump-mapped textured surface (35 constant floats per vertex): 2D hexagon
     234 / 164 / 59 output floats, 3D hexagon 858 / 788 / 123; interpolated floats per fragment 39
     without constants, 4 with."""
     want = {"hexagon2d": (234, 164, 59), "hexagon3d": (858, 788, 123)}[method]
@@ -274,6 +274,46 @@ def test_table2_constants_floats(method, strip_vertices):
         # the perturbation-texture coordinate (2) and, without constants, the 4D shear constants (6)
         assert s["ops.ps_setup"] == (8 if constants == "none" else 2) * s["gpu.fragments"]
     assert tuple(got) == want
+
+
+@pytest.mark.parametrize("constants", ["none", "triangle", "strip"])
+def test_output_floats_follow_table2s_rules_from_the_emitted_geometry(constants):
+    """Independent of the engine's float formula (checked against the paper's two rows above): [Toth 2008]
+    Table 2's rules applied to the geometry each method emits, counted by the engine as strip triangles per
+    input triangle. One strip per bound, so its strip vertices are triangles + 2; every strip vertex carries
+    the 4 position floats; the payload goes on every strip vertex (no constants), once per emitted triangle
+    (triangle constants) or once per strip (strip constants). Fails on any method whose floats do not follow
+    the rules (a payload counted per vertex under triangle constants would be off by (V - T) x P per strip)."""
+    payload = 35
+    scene, cam = scene_and_camera()
+    table = sim.SampleTable.stratified(spp=4, seed=2)
+    for alg in GPU_ALGORITHMS:
+        s = sim.render(scene, cam, table, sim.PipelineConfig(algorithm=alg, gpu_constants=constants,
+                                                             gpu_payload_floats=payload, threads=1),
+                       timing=False).flat_stats
+        strips = s["gpu.gs_triangles_in"] - s["gpu.culled_bound"] if "gpu.culled_bound" in s else s["gpu.gs_triangles_in"]
+        triangles = s["gpu.gs_triangles"]
+        strip_vertices = triangles + 2 * strips
+        per = {"none": strip_vertices * (4 + payload), "triangle": strip_vertices * 4 + triangles * payload,
+               "strip": strip_vertices * 4 + strips * payload}[constants]
+        assert s["gpu.gs_floats"] == per, (alg, constants, s["gpu.gs_floats"], per)
+
+
+def test_accumulation_resolves_as_the_ray_caster(request):
+    """Independent of INTERLEAVE (the comparison above is engine against engine): every sample of an
+    accumulation render, each pass a pinhole render at its lens position and time, resolves to the triangle
+    and depth the float64 ray caster finds at that sample, static and moving, away from edges and the near
+    plane (tests/reference/compare.py)."""
+    from tests import reference as ref
+
+    scene, cam = scene_and_camera()
+    table = sim.SampleTable.accumulation(passes=16, seed=5)
+    moving = make_scene(scene.positions, scene.positions + np.array([0.3, -0.2, 0.0]))
+    for label, moved in (("static", scene), ("moving", moving)):
+        res = sim.render(moved, cam, table, sim.PipelineConfig(algorithm="accumulation", threads=1),
+                         export_samples=True, timing=False)
+        r = ref.check_resolved(request, f"accumulation {label}", cam, moved.positions, moved.positions_t1, table, res)
+        assert r["covered"] > 0
 
 
 def scene_and_camera():
@@ -390,7 +430,7 @@ def test_hexagon3d_of_a_triangle_in_the_focus_plane_is_conservative():
     assert np.array_equal(out["bruteforce"], out["gpu_hexagon3d"])
 
 
-# ---- early depth (000 §9.7), the perturbation texture (000 §5.3), overdraw on screen ----
+# ---- early depth ([Toth 2008] §9.7), the perturbation texture ([Toth 2008] §5.3), overdraw on screen ----
 
 def occluded_scene(n=32):
     """A wall at depth 3 in front of defocused triangles at depth 6-9: most of their fragments lie
@@ -407,7 +447,7 @@ def occluded_scene(n=32):
 
 @pytest.mark.parametrize("alg", GPU_ALGORITHMS)
 def test_early_depth_rejects_hidden_fragments_before_the_pixel_shader(alg):
-    """With HiZ (000 §9.7's depth interval) hidden fragments never reach the pixel shader: the image
+    """With HiZ ([Toth 2008] §9.7's depth interval) hidden fragments never reach the pixel shader: the image
     stays bruteforce's, the rasterized fragments are the same (shaded + depth-culled), each culled
     fragment saves spp pixel-shader sample tests, and the counting path agrees with the documented
     costs."""
@@ -440,7 +480,7 @@ def test_early_depth_rejects_hidden_fragments_before_the_pixel_shader(alg):
 
 
 def test_perturbation_texture_fetches_and_coordinates():
-    """000 §5.3: every fragment computes its perturbation-texture coordinate (2 ops) and fetches one
+    """[Toth 2008] §5.3: every fragment computes its perturbation-texture coordinate (2 ops) and fetches one
     texel per sample; the texture unit of the timing model receives the fetches."""
     scene, cam = scene_and_camera()
     table = sim.SampleTable.stratified(spp=8, seed=2)

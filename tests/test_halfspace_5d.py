@@ -1,4 +1,4 @@
-"""The H5 test (pipeline.halfspace.H5, intervals/halfspace_5d.h): 001's H_j lines extended to time for moving triangles. Conservative against brute force (adversarial moving classes and hypothesis), never removes a sample of the exact 5D region (tile.samples_optimal is unchanged, and equals laine5d's), documented op costs equal the counting scalar's under both cost models, and it culls where it should."""
+"""The H5 test (pipeline.halfspace.H5, intervals/halfspace_5d.h): [Akenine-Möller 2012]'s H_j lines extended to time for moving triangles. Conservative against brute force (adversarial moving classes and hypothesis), never removes a sample of the exact 5D region (tile.samples_optimal is unchanged, and equals laine5d's), documented op costs equal the counting scalar's under both cost models, and it culls where it should."""
 from __future__ import annotations
 
 import numpy as np

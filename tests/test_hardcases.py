@@ -1,6 +1,6 @@
 """Hard cases (behind the camera, focus crossing, degenerate, edge-on, huge and tiny blur, near plane, gigantic coordinates) rendered with every algorithm: no crash, a valid image, per-sample results identical to bruteforce, bruteforce equal to the ray caster away from edges, and the setup counters that should fire do.
 
-The cases and their expected counters live in tests/reference/hardcases.py (hard_cases). Tolerances are those
+The cases and their expected counters live in experiments/reference/hardcases.py (hard_cases). Tolerances are those
 of test_raycaster.py: coverage may differ from the ray caster only within 1e-3 px of an edge seen
 from the sample's lens point or 1e-4 (relative) of the near plane; a different winning triangle is
 also accepted where the two triangles' reference depths are within the float32 depth tolerance
@@ -22,7 +22,7 @@ CASES = ref.hard_cases()
 NEAR_COUNTERS = ("setup.near_clipped", "setup.bbox_fallback", "setup.culled_near")
 # (name, needs an interleaved table) for every registered algorithm
 ALGORITHMS = [(name, interleaved) for name, _doc, interleaved in sim._core.algorithms()
-              if name in sim.algorithm_names()]  # point-sample algorithms
+              if name in sim.algorithm_names("points")]  # point-sample algorithms
 
 
 def tables():
@@ -33,7 +33,7 @@ def tables():
 
 
 def test_every_algorithm_is_covered():
-    names = sim.algorithm_names()
+    names = sim.algorithm_names("points")
     assert "bruteforce" in names and {n for n, _ in ALGORITHMS} == set(names)
     assert any(inter for _, inter in ALGORITHMS)
 

@@ -15,7 +15,7 @@ from tests.reference import Tris
 
 pytestmark = pytest.mark.invariants
 
-ALGORITHMS = sim.algorithm_names()
+ALGORITHMS = sim.algorithm_names("points")
 INTERLEAVED = sorted(name for name, _desc, needs in sim._core.algorithms() if needs)
 ARBITRARY = [a for a in ALGORITHMS if a not in INTERLEAVED]
 WIDTH, HEIGHT, FOCUS, NEAR = 32, 24, 4.0, 0.05

@@ -1,4 +1,4 @@
-"""Blur-based level of detail (models/lod.py; 000 §7.2, 004 §4.2): object split, level choice from
+"""Blur-based level of detail (models/lod.py; [Toth 2008] §7.2, [Tzeng 2012] §4.2): object split, level choice from
 s_lod = c_min / d_avg, simplification with its disk cache, and the render path."""
 from __future__ import annotations
 

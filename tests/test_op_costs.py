@@ -118,7 +118,7 @@ INTERLEAVED = {name for name, _desc, needs in sim._core.algorithms() if needs}
 
 @pytest.mark.parametrize("op_count", ["documented", "exact"])
 @pytest.mark.parametrize("cls", CLASSES)
-@pytest.mark.parametrize("algorithm", sim.algorithm_names())
+@pytest.mark.parametrize("algorithm", sim.algorithm_names("points"))
 def test_render_charges_the_documented_class_cost(algorithm, cls, op_count):
     """A single-class scene: every sample test uses that class's kernel (interleaved algorithms: the 2D
     kernel on pre-sheared static triangles), and ops.sample_inside / tests == its documented cost."""

@@ -34,7 +34,7 @@ def test_pipeline_config_is_the_pipeline_layer():
     assert list(fields) == [s.name for s in params.layer("pipeline")]
     docs = sim.PipelineConfig.field_docs()
     for s in params.layer("pipeline"):
-        assert docs[s.name]["doc"] == s.doc and docs[s.name]["unit"] == s.unit
+        assert docs[s.name]["doc"] == sim.references.cite(s.doc) and docs[s.name]["unit"] == s.unit
         assert docs[s.name]["default"] == s.user_default
 
 

@@ -11,7 +11,7 @@ import pytest
 import sim
 from tests.reference import ray_cast
 from tests.reference.compare import table_points
-from tests.reference.raycaster import edge_distance_px, near_rel_distance
+from experiments.reference.raycaster import edge_distance_px, near_rel_distance
 from tests.test_invariants import interleaved_table, synthetic_scene
 
 W, H = 40, 32
@@ -38,7 +38,7 @@ def reference_hits():
     return rc.hit, ~close.any(axis=(0, 3))
 
 
-@pytest.mark.parametrize("algorithm", sim.algorithm_names())
+@pytest.mark.parametrize("algorithm", sim.algorithm_names("points"))
 def test_maps_sum_to_frame_counters_for_every_thread_count(algorithm):
     scene, cam, table = setup()
     plain = sim.render(scene, cam, table, sim.PipelineConfig(algorithm=algorithm, threads=2), timing=False)

@@ -11,13 +11,13 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import sim
-from experiments.examples import precision as P
+from experiments.run import precision as P
 
 HYPO = dict(deadline=None, derandomize=True, database=None,
             suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 
 # (viewport, frac_bits) the test runs; int_bits: the closed-form format reports/paper/precision.md calls safe
-# for triangles clipped to the guard band (python -m experiments.examples.precision)
+# for triangles clipped to the guard band (the precision page: configs/paper/precision_2d.yaml)
 SAFE = {(512, 4), (2048, 8), (8192, 4)}
 
 

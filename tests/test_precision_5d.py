@@ -243,9 +243,8 @@ def test_every_algorithm_renders_brute_force_image_on_moving_scenes(precision):
     hint = {k: v for k, v in dict(mf.camera_hint or {}).items() if k != "aperture_radius"}
     scenes.append(("motion_field", mf, sim.Camera(**{**hint, "width": 128, "height": 128, "coc_px": 10.0}),
                    sim.SampleTable.stratified(spp=16, seed=2)))
-    algos = [a for a in sim.algorithm_names() if not a.startswith("gpu_") and a not in ("lines", "interleave",
-                                                                                          "hinterleave", "accumulation",
-                                                                                          "tile_interleaved")]
+    algos = [a for a, info in sim.algorithm_info().items()  # the arbitrary-table sample-pipeline algorithms
+             if info.samples == "points" and info.pipeline == "sample" and not info.discrete_lens]
     for name, scene, cam, tab in scenes:
         base = sim.render(scene, cam, tab, sim.PipelineConfig(algorithm="bruteforce"), timing=False)
         for algo in algos:

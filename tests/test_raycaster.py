@@ -1,4 +1,4 @@
-"""Per-sample coverage and depth of the engine (sim._core.probe and sim.render) against the independent float64 thin-lens ray caster of tests/reference/raycaster.py (ARCHITECTURE.md invariant 3).
+"""Per-sample coverage and depth of the engine (sim._core.probe and sim.render) against the independent float64 thin-lens ray caster of experiments/reference/raycaster.py (docs/architecture.md §Invariants).
 
 Tolerances, and why (the engine is float32, the reference float64):
 * Coverage may differ only for samples within EDGE_TOL_PX = 1e-3 px of an edge line of the triangle

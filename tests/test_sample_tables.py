@@ -501,7 +501,7 @@ def test_stratum_values_stay_in_their_stratum_after_float32_rounding():
 
 @pytest.mark.parametrize("views, spp", [(2, 16), (7, 56), (4, 4)])
 def test_multiview_splits_the_lens_into_views(views, spp):
-    """002 §8 Fig. 16: view k owns samples k*m..(k+1)*m-1 and the k-th u-interval; within it the
+    """[Nilsson 2012] §8 Fig. 16: view k owns samples k*m..(k+1)*m-1 and the k-th u-interval; within it the
     lens positions are uniform (chi-square on the rescaled u) and v and t stratified per view."""
     table = make("multiview", spp=spp, views=views, period=8, seed=5)
     m = spp // views

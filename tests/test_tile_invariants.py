@@ -15,7 +15,7 @@ from tests.reference import make_scene
 
 pytestmark = pytest.mark.invariants
 
-ALGORITHMS = sim.algorithm_names()
+ALGORITHMS = sim.algorithm_names("points")
 INTERLEAVED = sorted(name for name, _desc, needs in sim._core.algorithms() if needs)
 ANY_TABLE = [a for a in ALGORITHMS if a not in INTERLEAVED]
 LENSES = ["disk", "square", "hexagon"]
@@ -133,7 +133,7 @@ def assert_same_samples(ref, res, case: Case, tbl, algorithm: str):
 
 
 def assert_tile_bounds(res, case: Case, algorithm: str):
-    """001 Table 1: tested >= optimal (exact active lens region) >= hit, per tile algorithm."""
+    """[Akenine-Möller 2012] Table 1: tested >= optimal (exact active lens region) >= hit, per tile algorithm."""
     st_ = res.flat_stats
     tested, optimal, hit = st_["raster.samples_tested"], st_["tile.samples_optimal"], st_["raster.samples_hit"]
     assert tested >= optimal >= hit, (
@@ -239,7 +239,7 @@ def random_triangles(draw):
 
 @st.composite
 def focus_crossing(draw):
-    """Vertices on both sides of the focus plane (001 Fig. 6-7: two or three uv-boxes)."""
+    """Vertices on both sides of the focus plane ([Akenine-Möller 2012] Fig. 6-7: two or three uv-boxes)."""
     F = draw(focus_st)
     ratios = [draw(finite(min_value=0.15, max_value=0.97)), draw(finite(min_value=1.03, max_value=6.0)),
               draw(finite(min_value=0.15, max_value=6.0))]
@@ -250,7 +250,7 @@ def focus_crossing(draw):
 @st.composite
 def vertex_on_focus(draw):
     """One or two vertices exactly at view depth F (world z = -F): b = 0, no h_i line; with two,
-    an edge lies in the focus plane (ignored by 001 §4.3); also one vertex at float32(F)."""
+    an edge lies in the focus plane (ignored by [Akenine-Möller 2012] §4.3); also one vertex at float32(F)."""
     F = draw(focus_st)
     k = draw(st.integers(1, 3))
     depths = [F] * k + [F * draw(finite(min_value=0.2, max_value=5.0)) for _ in range(3 - k)]
@@ -349,7 +349,7 @@ def axis_aligned(draw):
 @st.composite
 def region_boundary(draw):
     """An edge whose focus-plane intersection v lies on a tile line x = i*T and/or y = j*T (or a
-    tile-test margin away): the boundaries of 001 §4.3's nine regions."""
+    tile-test margin away): the boundaries of [Akenine-Möller 2012] §4.3's nine regions."""
     T = draw(st.sampled_from(TILE_SIZES))
     F = draw(focus_st)
     offsets = st.sampled_from([0.0, 0.0, 1e-6, -1e-6, 2.0**-10, -(2.0**-10), 2.0**-10 + 1e-9])
@@ -449,7 +449,7 @@ def test_conservative_long(name):
 # Fixed adversarial triangles (world space) for the full product of tile-test switches.
 F_SWEEP = 4.0
 SWEEP_TRIANGLES = {
-    # one vertex in front of the focus plane, two far behind (001 Fig. 7: uv-boxes A and B); its
+    # one vertex in front of the focus plane, two far behind ([Akenine-Möller 2012] Fig. 7: uv-boxes A and B); its
     # plane cuts the lens, so the orientation changes sign and H_j is skipped (conservatively)
     "crossing": [world_from_pixel(5.3, 4.1, 2.1), world_from_pixel(27.2, 9.6, 9.0), world_from_pixel(12.5, 21.7, 6.5)],
     # crossing the focus plane at a shallow angle: two uv-boxes and H_j lines
@@ -511,7 +511,7 @@ def test_sweep_triangles_exercise_the_tile_tests():
 @pytest.mark.parametrize("third", ["front", "behind", "at_focus"])
 def test_conservative_exact_region_boundaries(T, where, third):
     """Edge qr meets the focus plane *exactly* (dyadic arithmetic) on a tile corner, a tile line, or
-    the boundary of the margin-expanded tile: 001 §4.3's nine-region table at its seams."""
+    the boundary of the margin-expanded tile: [Akenine-Möller 2012] §4.3's nine-region table at its seams."""
     F = 4.0  # q at W = 3.5, r at W = 4.5: the edge's focus point is their exact midpoint
     lo = lambda x: x - (2.0**-10 + 2.0**-18 * abs(x))  # tiletest::expand_lo / expand_hi
     hi = lambda x: x + (2.0**-10 + 2.0**-18 * abs(x))

@@ -83,7 +83,7 @@ def test_rast5d_list(what, capsys, monkeypatch):
     monkeypatch.chdir(REPO)
     assert main(["list", what]) == 0
     names = [line.split()[0] for line in capsys.readouterr().out.splitlines()]
-    expected = {"algorithms": sim.algorithm_names() + sim.line_algorithms(), "scenes": models.scene_names(),
+    expected = {"algorithms": sim.algorithm_names(), "scenes": models.scene_names(),
                 "counters": list(sim.counter_docs()),
                 "configs": [str(p.relative_to(REPO)) for p in (REPO / "configs").rglob("*.yaml")
                             if "scenes" not in p.parts]}[what]

@@ -126,7 +126,7 @@ def run(hall_scale: float = 0.5, threads=(1, 2), repeats: int = 3, spp: int = 64
              f"{os.cpu_count()} hardware threads, load average {load:.1f} at the start. Wall times are minima over "
              f"{repeats} interleaved repeats; compare the ratios (measured in one run), not the seconds.", "",
              f"## Wall time against operations ({spp} spp; one thread and two)", "",
-             "`tile+optimal` is `tile` with `count_optimal: true` (the exact-region instrumentation of 001 "
+             "`tile+optimal` is `tile` with `count_optimal: true` (the exact-region instrumentation of [Akenine-Möller 2012] "
              "Table 1, off by default). Ratios are to brute force in the same cell.", "",
              "CPU: process CPU time of the render (all threads; minimum over the repeats), which other processes' "
              "load disturbs less than wall time. Work-proportional simulation means CPU / bruteforce <= 1 wherever "

@@ -1,6 +1,8 @@
 """Construction of the sim objects of one (non-swept) point: scene, camera, sample table, pipeline."""
 from __future__ import annotations
 
+import warnings
+
 import sim
 
 from .schema import ConfigError, RenderConfig, SceneSpec
@@ -8,7 +10,7 @@ from .schema import ConfigError, RenderConfig, SceneSpec
 
 class WideLensCamera(sim.Camera):
     """A camera whose lens is ``u_scale`` times wider in u than in v: V views on a camera line, each
-    with a full-size lens, the samples of view k in the k-th u-interval (002 §8, Fig. 16)."""
+    with a full-size lens, the samples of view k in the k-th u-interval ([Nilsson 2012] §8, Fig. 16)."""
 
     def __init__(self, u_scale: float, **kw):
         super().__init__(**kw)
@@ -97,7 +99,9 @@ def check(config: RenderConfig) -> None:
             _CHECKED_TABLES[key] = _make_table(config.samples.kind, params, config.samples)
         except ValueError as e:  # "spp: expected ..." -> "samples.spp: expected ..."
             raise ConfigError(f"samples.{e}") from None
-    pipeline = sim.PipelineConfig(**config.pipeline.model_dump())
+    with warnings.catch_warnings():  # a parameter the render does not read: sweep.expand_sweep warns once
+        warnings.simplefilter("ignore", sim.UnreadParameterWarning)
+        pipeline = sim.PipelineConfig(**config.pipeline.model_dump())
     try:
         check_combination(pipeline, _CHECKED_TABLES[key], camera.lens)
     except sim.ConfigError as e:  # name the config's keys: pipeline.algorithm, samples.kind

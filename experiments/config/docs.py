@@ -1,6 +1,6 @@
 """Generate the reference docs that are derived from declarations: docs/config.md (the YAML schema),
-docs/counters.md (the counter registry and derived figures) and docs/scenes.md (scene files and the
-named scenes). `python -m experiments.config.docs`;
+docs/counters.md (the counter registry and derived figures), docs/scenes.md (scene files and the
+named scenes) and docs/references.md (the bibliography, sim/references.py). `python -m experiments.config.docs`;
 tests/test_docs.py fails when they are stale."""
 from __future__ import annotations
 
@@ -184,9 +184,13 @@ def scenes_markdown() -> str:
 
 
 def targets() -> dict[Path, str]:
-    return {REPO / "docs" / "config.md": markdown_reference() + "\n",
-            REPO / "docs" / "counters.md": counters_markdown(),
-            REPO / "docs" / "scenes.md": scenes_markdown()}
+    """The generated docs; a paper is cited by its key everywhere (sim.references.cite)."""
+    from sim import references
+
+    return {REPO / "docs" / "config.md": references.cite(markdown_reference() + "\n"),
+            REPO / "docs" / "counters.md": references.cite(counters_markdown()),
+            REPO / "docs" / "scenes.md": references.cite(scenes_markdown()),
+            REPO / "docs" / "references.md": references.markdown() + "\n"}
 
 
 def main() -> int:

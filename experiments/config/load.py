@@ -69,6 +69,8 @@ def _load_with_extends(path: Path, chain: tuple[Path, ...] = ()) -> tuple[dict, 
                               f"(looked for {base_path})")
         bdata, blines = _load_with_extends(base_path, chain + (path,))
         bdata.pop("name", None)  # the name identifies a file's result table: never inherited
+        if isinstance(bdata.get("outputs"), dict):  # a section's summary speaks of its own rows only
+            bdata["outputs"].pop("summary", None)
         merged = deep_merge(merged, bdata)
         merged_lines.update(blines)
     merged = deep_merge(merged, data)

@@ -3,7 +3,7 @@ default and description, and the validation of a merged config into a RenderConf
 
 Every parameter is declared once: the `pipeline` section comes from sim.PipelineConfig's field
 declarations, the `hardware` section from sim.HardwareConfig.field_docs(). Unknown keys are errors
-that name the key, the file and the line (STYLE.md §Configuration).
+that name the key, the file and the line (docs/design_notes.md, note 9: each parameter declared once).
 """
 from __future__ import annotations
 
@@ -14,7 +14,8 @@ import typing
 from pathlib import Path
 from typing import Any, Literal, Optional, Union
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, create_model, field_validator, model_validator
+from pydantic import (BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, create_model, field_validator,
+                      model_validator)
 
 import sim
 
@@ -90,11 +91,12 @@ class SamplesSpec(_Strict):
     time: bool = Field(True, description="Include the time dimension")
     n_lens: Optional[int] = Field(None, description="Interleaved only: number of discrete lens positions (64, 256)")
     views: Optional[int] = Field(None, description=(
-        "Multiview only: number of views splitting the lens in u (002 §8); spp is the total over all views"))
+        "Multiview only: number of views splitting the lens in u ([Nilsson 2012] §8); spp is the total over all views"))
     n_lines: Optional[int] = Field(None, description=(
-        "Lines only (samples.kind lines, algorithm lines): line samples per pixel (004 §3); default 16"))
+        "Lines only (samples.kind lines, algorithm lines): line samples per pixel ([Tzeng 2012] §3); default 16"))
     wheel: Optional[int] = Field(None, description=(
-        "Lines only: lines per wagon wheel sharing one screen point; default 4"))
+        "Lines only: lines per wagon wheel sharing one screen point; default sim.sample_table.LINE_WHEEL (2, "
+        "chosen by the wheel sweep of the methods page)"))
 
 
 def _spec_type(spec):
@@ -257,7 +259,12 @@ class OutputsSpec(_Strict):
         "Report page name: reports/<folder>/<page>.md (configs may share a page)"))
     folder: str = Field("paper", description="Folder of the page under reports/")
     title: Optional[str] = Field(None, description="Section title on the page")
-    text: Optional[str] = Field(None, description="Markdown above the figures: what, how, departures, caveats")
+    text: Optional[str] = Field(None, description=(
+        "Markdown above the figures: what, how, departures, caveats; every figure in it is a placeholder filled "
+        "from the page's data ({column[key=value]:.2f}, docs/reports.md §Prose)"))
+    summary: Optional[str] = Field(None, description=(
+        "The section's result in a few sentences, a template like text: printed at the top of the section and "
+        "gathered into the README's Results section with a link to the page"))
     derived: dict[str, str] = Field(default_factory=dict, description=(
         "New columns: pandas expressions over result columns (dotted names allowed), e.g. "
         "'shade.quad_requests / raster.samples_hit'"))
@@ -296,6 +303,11 @@ class ExecutorSpec(_Strict):
         return self
 
 
+# point.options of kind 'precision' (experiments/run/precision.py): the study and its row.
+PRECISION_OPTIONS = {"study": ("2d", "nd", "4d", "box", "5d", "render"), "viewport": None, "arithmetic": None,
+                     "frac_bits": None, "cls": None}
+
+
 class PointSpec(_Strict):
     """What one point of the sweep computes (docs/reports.md §Point kinds). `render` renders the scene;
     `occlusion_query` asks whether `query` is hidden behind the scene (sim.occlusion_query) and records
@@ -304,9 +316,11 @@ class PointSpec(_Strict):
     hardware `hardware` (sim.timing.estimate, no re-render when the records are in the result store)."""
 
     kind: Literal["render", "occlusion_query", "conservative", "retime", "transparency", "sampler", "soft_shadows",
-                  "caustics", "glossy"] = Field(
+                  "caustics", "glossy", "precision"] = Field(
         "render", description=("render | occlusion_query | conservative | retime | a use of the rasterizer "
-                               "(sim.uses.USES): transparency | sampler | soft_shadows | caustics | glossy"))
+                               "(sim.uses.USES): transparency | sampler | soft_shadows | caustics | glossy | precision "
+                               "(a row of the numerical-precision study, point.options: study, viewport, arithmetic, "
+                               "frac_bits, cls)"))
     query: Optional[SceneSpec] = Field(None, description="occlusion_query: the query scene (the config's scene "
                                                          "is the occluders)")
     mode: QueryModeName = Field("samples", description=(
@@ -326,8 +340,17 @@ class PointSpec(_Strict):
             raise ValueError("point.hardware: only for kind 'retime'")
         from sim import uses
 
-        if self.options and self.kind not in uses.USES:
-            raise ValueError(f"point.options: only for the use kinds ({', '.join(uses.USES)})")
+        if self.kind == "precision":
+            unknown = sorted(set(self.options) - set(PRECISION_OPTIONS))
+            if unknown:
+                raise ValueError(f"point.options: unknown {unknown} for kind 'precision' (known: "
+                                 f"{', '.join(PRECISION_OPTIONS)})")
+            study = self.options.get("study")
+            if study not in PRECISION_OPTIONS["study"]:
+                raise ValueError(f"point.options.study: expected one of {', '.join(PRECISION_OPTIONS['study'])}, "
+                                 f"got {study!r}")
+        elif self.options and self.kind not in uses.USES:
+            raise ValueError(f"point.options: only for the use kinds ({', '.join(uses.USES)}) and 'precision'")
         if self.kind in uses.USES:
             known = uses.use_options(self.kind)
             unknown = sorted(set(self.options) - set(known))
@@ -358,6 +381,18 @@ class RenderConfig(_Strict):
     point: PointSpec = Field(default_factory=PointSpec, description="What each point computes (default: a render)")
     outputs: OutputsSpec = Field(default_factory=OutputsSpec, description="Files, metrics and the report spec")
     executor: ExecutorSpec = Field(default_factory=ExecutorSpec, description="Where the points run")
+    _auto_bin_size: bool = PrivateAttr(False)
+
+    @model_validator(mode="after")
+    def _resolve_bin_size(self):
+        """pipeline.bin_size 'auto' as the render resolves it (sim.pipeline.resolved_bin_size), so a point's hash
+        and row hold the bin size it is rendered with."""
+        if self.pipeline.bin_size == "auto":
+            from sim.pipeline import resolved_bin_size
+
+            self.pipeline.bin_size = resolved_bin_size(self.pipeline.sample_fraction, self.pipeline.hinterleave_tile)
+            self._auto_bin_size = True  # a sweep resolves it again per point (sweep.expand_sweep)
+        return self
 
     @field_validator("sweep")
     @classmethod

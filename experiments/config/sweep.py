@@ -61,10 +61,15 @@ def expand_sweep(config: RenderConfig, source: str = "config", lines: dict | Non
     algorithm-table combination), all before any render: one ConfigError lists every bad point."""
     from .build import check
 
+    unread: dict = {}
     if not config.sweep:
         _check_point(check, config, source, lines)
+        config = _as_read(config, {}, unread)
+        _warn_unread(unread, 1, source, lines)
         return [({}, config)]
     base = config.model_dump(exclude={"sweep"})
+    if config._auto_bin_size:  # 'auto' depends on the point's sample_fraction: resolved per point
+        base["pipeline"]["bin_size"] = "auto"
     points, bad = [], []
     every = sweep_points(config.sweep)
     for point in every:
@@ -79,11 +84,55 @@ def expand_sweep(config: RenderConfig, source: str = "config", lines: dict | Non
         except ConfigError as e:
             bad.append((point, str(e)))
             continue
-        points.append((point, point_config))
+        points.append((point, _as_read(point_config, point, unread)))
     if bad:
         raise ConfigError(f"{source}: {len(bad)} of {len(every)} sweep points are invalid (nothing was "
                           f"rendered):\n{_grouped(bad)}")
+    _warn_unread(unread, len(every), source, lines)
     return points
+
+
+def _as_read(config: RenderConfig, point: dict, unread: dict) -> RenderConfig:
+    """The point with every pipeline parameter that its render does not read back at its default
+    (sim.pipeline.unread_parameters: `hiz` under an algorithm without a depth-cull stage, `lines` under a
+    point-sample algorithm, ...), so it hashes, renders and is stored as what the render sees; each such
+    parameter is noted in ``unread`` {(field, why): [points]} for one warning per field."""
+    import warnings
+
+    import sim
+    from sim.pipeline import unread_parameters, without_unread
+
+    if config.point.kind != "render" and config.point.kind != "retime":
+        return config
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sim.UnreadParameterWarning)
+        pipeline = sim.PipelineConfig(**config.pipeline.model_dump())
+        fields = unread_parameters(pipeline)
+        if not fields:
+            return config
+        read = without_unread(pipeline)
+    for f, why in fields.items():
+        unread.setdefault((f, why), []).append(point)
+    d = config.model_dump()
+    for f in fields:  # a group (hiz, lines) is written whole, as the render resolves it
+        head = f.partition(".")[0]
+        value = getattr(read, head)
+        d["pipeline"][head] = dict(value) if isinstance(value, dict) else value
+    return RenderConfig.model_validate(d)
+
+
+def _warn_unread(unread: dict, n_points: int, source: str, lines: dict | None) -> None:
+    import warnings
+
+    import sim
+
+    for (field, why), points in unread.items():
+        key = ("pipeline", *field.split("."))
+        where = (lines or {}).get(key) or (lines or {}).get(("sweep", "pipeline." + field)) or source
+        which = "" if n_points == 1 else f" in {len(points)} of {n_points} sweep points (e.g. {points[0]})"
+        whom = "the point is" if n_points == 1 else "those points are"
+        warnings.warn(f"{where}: pipeline.{field} is set but not read{which}: {why}; {whom} rendered and "
+                      "stored as if it were left at its default", sim.UnreadParameterWarning, stacklevel=3)
 
 
 def _grouped(bad: list[tuple[dict, str]]) -> str:
@@ -179,25 +228,27 @@ def point_columns(config: RenderConfig) -> dict:
     return flatten({"point": d})
 
 
-# Page tables ({{table:NAME}} in outputs.text, experiments/report/tables.py) that read timing figures.
-TIMING_TABLES = frozenset({"methods_table", "methods_claim", "methods_pareto", "pareto_members", "gpu_vs_tile",
-                           "gpu_table2", "gpu_early_depth"})
 # Plot fields that are presentation only (never a result column).
 _PRESENTATION = ("title", "xlabel", "ylabel", "format", "paper", "kind", "logx", "logy", "stacked", "pareto",
                  "fit", "echo", "optional")
+# A placeholder of the page prose (experiments/report/prose.py): {...} but not {{table:NAME}}.
+_PLACEHOLDER = re.compile(r"(?<!\{)\{(?!\{)([^{}]+)\}(?!\})")
 
 
 def reads_timing(outputs) -> bool:
-    """Whether a page's outputs read the timing model: a `timing.` column named by a derived expression
-    or a plot (its columns, `where:` and `labels:` keys; titles and labels aside), or a table of
-    TIMING_TABLES included in its text. Prose in the text reads nothing."""
+    """Whether a page's outputs read the timing model: a `timing.` column named by a derived expression,
+    a plot (its columns, `where:` and `labels:` keys; titles and labels aside) or a placeholder of the
+    page prose (`text:`, `summary:`). A named table that reads timing figures says so where it is
+    registered (experiments/report/tables.py), and tests/test_prose.py checks that every page placing
+    one reads timing by one of these."""
     named = list(outputs.derived.values())
     for spec in outputs.plots:
         d = spec.model_dump(exclude=set(_PRESENTATION))
         named += [*d.pop("where", {}), *d.pop("labels", {})]
         named += [json.dumps(v) for v in d.values() if v is not None]
-    tables = re.findall(r"\{\{table:([A-Za-z0-9_]+)\}\}", outputs.text or "")
-    return any(_TIMING_COLUMN.search(str(n)) for n in named) or any(t in TIMING_TABLES for t in tables)
+    for text in (outputs.text, getattr(outputs, "summary", None)):
+        named += _PLACEHOLDER.findall(text or "")
+    return any(_TIMING_COLUMN.search(str(n)) for n in named)
 
 
 _TIMING_COLUMN = re.compile(r"(?<![A-Za-z0-9_.])timing\.")

@@ -1,4 +1,4 @@
-"""Continuous collision detection with a conservative 3D rasterizer (002_95ea0844b256f75b.txt §3,
+"""Continuous collision detection with a conservative 3D rasterizer ([Nilsson 2012] §3,
 Fig. 4-6).
 
 Two moving objects are rasterized conservatively (sim.conservative_raster: 1 x 1 tiles, no sample
@@ -106,7 +106,7 @@ def may_collide(a: Tris, b: Tris, **kw) -> bool:
 
 
 def may_collide_depth_only(a: Tris, b: Tris, **kw) -> bool:
-    """Govindaraju et al.'s test as 002 describes it: overlap in depth only (time ignored)."""
+    """Govindaraju et al.'s test as [Nilsson 2012] describes it: overlap in depth only (time ignored)."""
     return all(v.z_pixels > 0 for v in overlap(a, b, **kw).values())
 
 
@@ -127,7 +127,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    lines = ["# Continuous collision detection (002 §3, Fig. 4-6)", "",
+    lines = ["# Continuous collision detection ([Nilsson 2012] §3, Fig. 4-6)", "",
              "Command: `python -m experiments.examples.ccd`. Per view: pixels whose tz-boxes overlap in depth only, "
              "and in time and depth. Images: blue = overlap in depth, red = overlap in time (purple: both).", "",
              "| case | view | depth-overlap px | tz-overlap px |", "|---|---|---|---|"]

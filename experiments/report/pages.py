@@ -23,7 +23,7 @@ from ..config import ConfigError, RenderConfig, load_dict, validate
 from ..run import images_dir, results_dir, run_sweep
 from .figures import render_plot
 from .frames import PlotError, apply_derived
-from .tables import TABLES, md_table
+from .tables import TABLES, VALUES, md_table
 
 # --quick: every point at most QUICK_SIZE pixels on a side (aspect kept when the config gives both),
 # the same samples per pixel, sweeps and pages.
@@ -66,17 +66,17 @@ def section_markdown(config: RenderConfig, config_path: Path, df, out_dir: Path,
     times, engine and revision only when volatile)."""
     o = config.outputs
     lines = [f"## {o.title or config.name}", ""]
-    if o.text:
-        text = o.text.strip()
-        for key, fn in TABLES.items():
-            marker = "{{table:" + key + "}}"
-            if marker in text:
-                text = text.replace(marker, "\n".join(fn(df, config)))
-        lines += [text, ""]
     try:
         dfd = apply_derived(df, o.derived)
     except PlotError as e:
         return lines + [f"**Error:** {e}", ""]
+    # The summary and the text are templates over the page's data (experiments/report/prose.py), filled
+    # when the page is assembled (fill_prose), once every section of the page has its rows.
+    if o.summary:
+        lines += [SUMMARY_BEGIN.format(name=config.name), prose_token(config.name, "summary"), SUMMARY_END, ""]
+    if o.text:
+        lines += [prose_token(config.name, "text"), ""]
+    PROSE_DATA[config.name] = (config, df, dfd)
     if o.images and "config_hash" in dfd.columns:  # the points' images, for image_grid plots
         dfd = dfd.assign(**{"image.path": [str(images_dir(config.name) / f"{h}.png") for h in dfd["config_hash"]]})
     shown: list = []  # data tables already on the page, by figure
@@ -172,6 +172,67 @@ def section_markdown(config: RenderConfig, config_path: Path, df, out_dir: Path,
     return lines
 
 
+# ---- prose: the templates of a section's summary and text (experiments/report/prose.py) --------------
+
+SUMMARY_BEGIN, SUMMARY_END = "<!-- summary:{name} -->", "<!-- /summary -->"
+_TOKEN = "\x00prose:{name}:{part}\x00"
+# {config name: (config, rows, rows with derived columns)} of the sections written in this process
+PROSE_DATA: dict = {}
+
+
+def prose_token(name: str, part: str) -> str:
+    return _TOKEN.format(name=name, part=part)
+
+
+def _ok(df):
+    return df[df["status"] == "ok"] if "status" in df.columns else df
+
+
+def _with_keys(df, config):
+    """df with attrs["keys"]: its columns that a sweep key of config sets (what tells its rows apart), by
+    which the prose pairs the rows of two references."""
+    swept = [k for k in config.sweep if k != "zip"]
+    df = df.copy()
+    df.attrs["keys"] = [str(c) for c in df.columns if any(str(c) == k or str(c).startswith(k + ".") for k in swept)]
+    return df
+
+
+def fill_prose(lines: list[str], names: list[str]) -> tuple[list[str], int]:
+    """The page's lines with each section's summary and text filled from the page's data: a section's own
+    rows (derived columns included), the other sections of the page by config name, the section's named
+    value tables (tables.VALUES) by table name, and its named tables ({{table:NAME}}) placed. Returns
+    (lines, number of prose errors); an error is printed on the page in place of the paragraph."""
+    from .prose import ProseError, Sources, fill
+
+    frames = {n: _with_keys(_ok(PROSE_DATA[n][2]), PROSE_DATA[n][0]) for n in names if n in PROSE_DATA}
+    out, errors = [], 0
+    for line in lines:
+        if not line.startswith("\x00prose:"):
+            out.append(line)
+            continue
+        name, part = line.strip("\x00").split(":")[1:3]
+        config, df, dfd = PROSE_DATA[name]
+        template = (config.outputs.summary if part == "summary" else config.outputs.text or "").strip()
+        values = {k: (lambda fn=fn: fn(_ok(dfd), config)) for k, fn in VALUES.items()}
+        sources = Sources(frames.get(name, _with_keys(_ok(dfd), config)), {n: f for n, f in frames.items() if n != name},
+                          values)
+        try:
+            text = fill(template, sources)
+            if part == "summary":  # one paragraph, as the README quotes it
+                text = " ".join(text.split())
+        except ProseError as e:
+            errors += 1
+            print(f"{name}: prose error: {e}", file=sys.stderr)
+            out.append(f"**Prose error:** {e}")
+            continue
+        for key, fn in TABLES.items():
+            marker = "{{table:" + key + "}}"
+            if marker in text:
+                text = text.replace(marker, "\n".join(fn(df, config)))
+        out.append(text)
+    return out, errors
+
+
 def _configs_root(config_path: Path) -> Path | None:
     """The configs folder a config file belongs to (the nearest parent named configs), or None."""
     for parent in Path(config_path).resolve().parents:
@@ -224,6 +285,7 @@ def write_config_page(config: RenderConfig, config_path, df, overrides=(), echo:
     cmd = "rast5d run " + str(config_path) + "".join(f" --set {shlex.quote(s)}" for s in overrides)
     lines = [f"# {config.outputs.page or config.name}", ""]
     lines += section_markdown(config, Path(config_path), df, out_dir, cmd, overrides, echo=echo)
+    lines, _ = fill_prose(lines, [config.name])
     page = out_dir / f"{config.name}.md"
     page.write_text("\n".join(lines) + "\n")
     return page
@@ -357,11 +419,17 @@ def _main(only, workers, scheduler, force, quick, configs_dir, reports_dir, retr
                    "paper's." if quick else ""), ""]
         for _, _, md, _ in parts:
             text += md
+        text, prose_errors = fill_prose(text, [name for _, name, _, _ in parts])
+        failures += prose_errors
         (page_dir / f"{page}.md").write_text("\n".join(text) + "\n")
         print(f"wrote {paths.display(page_dir / f'{page}.md')}")
     # The index lists the pages on disk, so a partial run that wrote a paper page refreshes it too.
     if not only or any(folder == "paper" for folder, _ in sections):
         write_index(out_root, out_root / "paper", quick, time.perf_counter() - t_all, counts, reports_root)
+    if not quick:  # the README's Results section, from the summaries of the pages on disk
+        from .readme import write_results
+
+        write_results(reports_root)
     return 1 if failures else 0
 
 

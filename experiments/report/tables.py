@@ -104,13 +104,36 @@ def powerlaw_table(spec, d, hues) -> tuple[list[str], list[dict]]:
 # ---- named tables --------------------------------------------------------------------------------
 
 TABLES: dict = {}
+# name -> the result columns (prefixes ending in ".") a named table reads besides the rows' config; a page
+# that places the table must read them (tests/test_prose.py: timing figures need a page that reads timing)
+READS: dict = {}
+# name -> fn(df, config) -> DataFrame: a named table's values, tidy (one row per cell, df.attrs["keys"] the
+# key columns), for the page prose: {NAME.column[key=value]} (experiments/report/prose.py)
+VALUES: dict = {}
 
 
-def named_table(name: str):
-    """Register a page table fn(df, config) -> Markdown lines under ``name`` (for {{table:NAME}}). The escape
-    hatch: prefer `derived:` columns and `table` plots."""
+def named_table(name: str, reads: tuple[str, ...] = ()):
+    """Register a page table fn(df, config) -> Markdown lines under ``name`` (for {{table:NAME}}); ``reads``:
+    the result columns it needs beyond those any render row has (e.g. "timing."). The escape hatch: prefer
+    `derived:` columns and `table` plots."""
     def deco(fn):
         TABLES[name] = fn
+        READS[name] = tuple(reads)
+        return fn
+
+    return deco
+
+
+def named_values(name: str):
+    """Register fn(df, config) -> DataFrame (tidy, ``attrs["keys"]`` its key columns) as the values the
+    prose may quote as {NAME.column[key=value]}; a named table of the same name prints the same values."""
+    def deco(fn):
+        def tidy(df, config):
+            out = fn(df, config)
+            out.attrs["keys"] = list(out.attrs.get("keys", []))
+            return out
+
+        VALUES[name] = tidy
         return fn
 
     return deco
@@ -118,13 +141,37 @@ def named_table(name: str):
 
 SCENE_ORDER = ["bunny", "spot", "modern_hall", "mixed_sizes"]
 
-# 001 Table 2, StoneGiant: culled share and Gops for none / h_i / H_j / both / INTERVAL.
+# [Akenine-Möller 2012] Table 2, StoneGiant: culled share and Gops for none / h_i / H_j / both / INTERVAL.
 PAPER_T2 = {10: (["0%", "30%", "62%", "65%", "27%"], ["23", "19", "10", "10", "17"]),
             50: (["0%", "79%", "72%", "86%", "66%"], ["83", "24", "26", "18", "29"])}
 
 
 def _ok(df):
     return df[df["status"] == "ok"] if "status" in df.columns else df
+
+
+def _fact(algorithm, name: str):
+    """A traversal-registry fact (sim.algorithm_info) of an algorithm name, or None for an unknown one."""
+    import sim
+
+    try:
+        return getattr(sim.algorithm_info(str(algorithm)), name)
+    except sim.ConfigError:
+        return None
+
+
+def _is_lines(algorithm) -> bool:
+    """The algorithm tests line samples (sim.algorithm_info(name).samples)."""
+    return _fact(algorithm, "samples") == "lines"
+
+
+def _is_gpu(algorithm) -> bool:
+    """The algorithm runs the conventional-GPU pipeline (sim.algorithm_info(name).pipeline)."""
+    return _fact(algorithm, "pipeline") == "gpu"
+
+
+def _lines_mask(df) -> np.ndarray:
+    return np.array([_is_lines(a) for a in df["pipeline.algorithm"]], dtype=bool)
 
 
 def _first(df, keys: dict):
@@ -139,42 +186,65 @@ def _scenes(df) -> list:
     return [s for s in SCENE_ORDER if s in present] + [s for s in present if s not in SCENE_ORDER]
 
 
-@named_table("table2_culling")
-def table2_culling(df, config) -> list[str]:
-    """Culled share = 1 - tested / tested(no half-space test), per scene and R, beside the paper's."""
+T2_MODES = [("none", "tile", False, False), ("h_i", "tile", True, False), ("H_j", "tile", False, True),
+            ("h_i+H_j", "tile", True, True), ("INTERVAL", "interval", True, True)]
+
+
+@named_values("table2_culling")
+def table2_values(df, config):
+    """Per scene, R, mode (none, h_i, H_j, h_i+H_j, INTERVAL) and cost model: the culled share
+    1 - tested / tested(no half-space test) and Gops."""
+    import pandas as pd
+
     df = _ok(df)
-    modes = [("none", "tile", False, False), ("h_i", "tile", True, False), ("H_j", "tile", False, True),
-             ("h_i+H_j", "tile", True, True), ("INTERVAL", "interval", True, True)]
     rows = []
     for s in _scenes(df):
         for coc in sorted(df["camera.coc_px"].unique()):
             sub = df[(df["scene.name"] == s) & (df["camera.coc_px"] == coc)]
             models = list(dict.fromkeys(sub["pipeline.cost_model"])) if "pipeline.cost_model" in sub.columns else [None]
-            tested, gops = {}, {m: {} for m in models}
-            for name, algo, h, H in modes:
+            tested = {}
+            for name, algo, h, H in T2_MODES:
                 r = sub[(sub["pipeline.algorithm"] == algo) & (sub["pipeline.halfspace.h"] == h)
                         & (sub["pipeline.halfspace.H"] == H)]
                 tested[name] = float(r["raster.samples_tested"].iloc[0]) if len(r) else math.nan
                 for model in models:  # the samples tested do not depend on the cost model (oracle off)
                     rm = r if model is None else r[r["pipeline.cost_model"] == model]
-                    gops[model][name] = float(rm["ops.total"].iloc[0]) / 1e9 if len(rm) else math.nan
-            base = tested["none"]
-            rows.append([s, f"{coc:g}", "culled"] + [f"{100 * (1 - tested[m[0]] / base):.0f}%" for m in modes])
-            for model in models:
-                label = "Gops" if model is None else f"Gops ({model})"
-                rows.append([s, f"{coc:g}", label] + [f"{gops[model][m[0]]:.2f}" for m in modes])
+                    rows.append({"scene": s, "R": float(coc), "mode": name, "cost_model": model,
+                                 "tested": tested[name], "gops": float(rm["ops.total"].iloc[0]) / 1e9 if len(rm) else math.nan})
+    out = pd.DataFrame(rows)
+    base = out[out["mode"] == "none"].set_index(["scene", "R", "cost_model"])["tested"]
+    out["culled"] = [1 - t / base.get((s, r, m), math.nan) for s, r, m, t in
+                     zip(out["scene"], out["R"], out["cost_model"], out["tested"])]
+    out.attrs["keys"] = ["scene", "R", "mode", "cost_model"]
+    return out
+
+
+@named_table("table2_culling")
+def table2_culling(df, config) -> list[str]:
+    """Culled share = 1 - tested / tested(no half-space test), per scene and R, beside the paper's."""
+    v = table2_values(df, config)
+    rows = []
+    for (s, coc), g in v.groupby(["scene", "R"], sort=False):
+        first = g[g["cost_model"] == g["cost_model"].iloc[0]]
+        culled = dict(zip(first["mode"], first["culled"]))
+        rows.append([s, f"{coc:g}", "culled"] + [f"{100 * culled[m[0]]:.0f}%" for m in T2_MODES])
+        for model, gm in g.groupby("cost_model", sort=False):
+            gops = dict(zip(gm["mode"], gm["gops"]))
+            rows.append([s, f"{coc:g}", "Gops" if model is None else f"Gops ({model})"]
+                        + [f"{gops[m[0]]:.2f}" for m in T2_MODES])
     for coc, (cull, g) in PAPER_T2.items():
         rows.append(["**paper: StoneGiant**", str(coc), "culled"] + cull)
         rows.append(["**paper: StoneGiant**", str(coc), "Gops"] + g)
-    return md_table(["scene", "R", "row"] + [m[0] for m in modes], rows)
+    return md_table(["scene", "R", "row"] + [m[0] for m in T2_MODES], rows)
 
 
 @named_table("fig15_trends")
 def fig15_trends(df, config) -> list[str]:
     """Is tile (2x2, and 1x1) the cheapest of the arbitrary-pattern algorithms at every CoC?"""
     df = _ok(df)
-    lines = ["Trend checks (001 §6.2: OUR is the cheapest at every CoC):", ""]
+    lines = ["Trend checks ([Akenine-Möller 2012] §6.2: OUR is the cheapest at every CoC):", ""]
     models = list(dict.fromkeys(df["pipeline.cost_model"])) if "pipeline.cost_model" in df.columns else [None]
+    losing = []
     for s, model in [(s, m) for s in _scenes(df) for m in models]:
         sub = df[df["scene.name"] == s]
         if model is not None:
@@ -191,20 +261,26 @@ def fig15_trends(df, config) -> list[str]:
                     fails.append(f"CoC {c:g}: {mine.iloc[0] / best:.2f}x the best other")
             return "yes" if not fails else "no (" + "; ".join(fails) + ")"
 
+        two, one = cheapest(2), cheapest(1)
+        if two != "yes":
+            losing.append((s, one == "yes"))
         bf = sub[sub["pipeline.algorithm"] == "bruteforce"].sort_values("camera.coc_px")["ops.total"]
         growth = bf.iloc[-1] / bf.iloc[0] if len(bf) > 1 else math.nan
         where = s if model is None else f"{s} ({model})"
-        lines.append(f"- {where}: `tile` 2x2 cheaper than bruteforce and interval at every CoC: **{cheapest(2)}**; "
-                     f"`tile` 1x1: **{cheapest(1)}**; bruteforce ops grow {growth:.1f}x from the smallest to "
+        lines.append(f"- {where}: `tile` 2x2 cheaper than bruteforce and interval at every CoC: **{two}**; "
+                     f"`tile` 1x1: **{one}**; bruteforce ops grow {growth:.1f}x from the smallest to "
                      "the largest CoC.")
-    lines += ["", "Where `tile` with 2x2 tiles loses to `interval` (micro-triangle workloads such as the bunny, "
-              "close to the focus plane), the 2x2 tile is coarser than the triangles: the exact active region of a "
-              "2x2 tile holds more samples than INTERVAL's per-pixel bounds for a lens cell. With 1x1 tiles `tile` "
-              "competes again; the best tile size depends on the triangle-size distribution."]
+    if losing:  # where the paper's claim does not hold here, and what 1x1 tiles do there
+        names = ", ".join(s for s, _ in losing)
+        rescued = [s for s, ok in losing if ok]
+        lines += ["", f"Where `tile` with 2x2 tiles loses ({names}), the 2x2 tile is coarser than the triangles: the "
+                  "exact active region of a 2x2 tile holds more samples than INTERVAL's per-pixel bounds for a lens "
+                  "cell." + (f" With 1x1 tiles `tile` is the cheapest at every CoC on {', '.join(rescued)}." if rescued
+                             else "")]
     return lines
 
 
-@named_table("pareto_members")
+@named_table("pareto_members", reads=("timing.",))
 def pareto_members(df, config) -> list[str]:
     """Which (sample-table kind, algorithm) pairs make up the RMSE Pareto front against each cost."""
     df = _ok(df)
@@ -228,7 +304,7 @@ def pareto_members(df, config) -> list[str]:
             + md_table(["scene", "cost", "front points", "members"], rows))
 
 
-# 002 §8: shader-invocation increase with a 1024-entry shading cache, against one view.
+# [Nilsson 2012] §8: shader-invocation increase with a 1024-entry shading cache, against one view.
 PAPER_MULTIVIEW = {2: "+10%", 7: "+15%"}
 
 
@@ -253,7 +329,7 @@ def multiview_increase(df, config) -> list[str]:
                      "cache hit rate", "paper"], rows)
 
 
-# 001 Table 3: quad shading requests / supersampled shades for OUR and INTERVAL.
+# [Akenine-Möller 2012] Table 3: quad shading requests / supersampled shades for OUR and INTERVAL.
 PAPER_T3 = {"tile": {0: 1, 10: 2, 20: 4, 30: 6, 50: 9}, "interval": {0: 10, 10: 12, 20: 14, 30: 16, 50: 19}}
 
 
@@ -389,7 +465,7 @@ def _on(df, name) -> np.ndarray:
 def method_label(row) -> str:
     """'stratified 64 / tile', 'lines 16', 'lines 16 clip', with ' +LoD' when level of detail is on."""
     get = row.get if hasattr(row, "get") else (lambda k, d=None: d)
-    if get("pipeline.algorithm") == "lines":
+    if _is_lines(get("pipeline.algorithm")):
         n = get("samples.n_lines")
         s = f"lines {int(n) if n == n and n is not None else '?'}"
         if str(get("pipeline.lines.tile_clip")) == "True":
@@ -432,11 +508,11 @@ def _families(sub):
     for lod in (False, True):
         part = sub[_on(sub, "pipeline.lod.enabled") == lod]
         tag = " +LoD" if lod else ""
-        pts = part[part["pipeline.algorithm"] != "lines"]
+        pts = part[~_lines_mask(part)]
         for (kind, algo), g in pts.groupby(["samples.kind", "pipeline.algorithm"]):
             if g["samples.spp"].nunique() >= 2:
                 out.append((f"points {kind} / {algo}{tag}", g))
-        is_line = (part["pipeline.algorithm"] == "lines").to_numpy()
+        is_line = _lines_mask(part)
         for clip in (False, True):
             ln = part[is_line & (_on(part, "pipeline.lines.tile_clip") == clip)]
             if len(ln) >= 2:
@@ -444,7 +520,7 @@ def _families(sub):
     return out
 
 
-@named_table("methods_table")
+@named_table("methods_table", reads=("timing.",))
 def methods_table(df, config) -> list[str]:
     """Scene x CoC x method: work, estimated cycles, wall time, RMSE and FLIP."""
     df = _ok(df)
@@ -452,7 +528,7 @@ def methods_table(df, config) -> list[str]:
     for s in _scenes(df):
         for coc in sorted(df[df["scene.name"] == s]["camera.coc_px"].unique()):
             sub = df[(df["scene.name"] == s) & (df["camera.coc_px"] == coc)]
-            recs = sorted((r for _, r in sub.iterrows()), key=lambda r: (method_label(r).startswith("lines"), _work(r)))
+            recs = sorted((r for _, r in sub.iterrows()), key=lambda r: (_is_lines(r["pipeline.algorithm"]), _work(r)))
             for r in recs:
                 rows.append([s, f"{coc:g}", method_label(r), f"{_work(r):.3g}", f"{float(r['ops.total']):.3g}",
                              fmt(r.get("timing.cycles", math.nan), "{:.3g}"), f"{float(r['time.wall_s']):.2f}",
@@ -460,24 +536,40 @@ def methods_table(df, config) -> list[str]:
     return md_table(["scene", "CoC", "method", "ops (all)", "ops.total", "est. cycles", "wall [s]", "RMSE", "FLIP"], rows)
 
 
-@named_table("methods_alpha")
-def methods_alpha(df, config) -> list[str]:
-    """alpha in RMSE ∝ work^-alpha per method family, with a 95% confidence interval (t, n - 2 dof)."""
+@named_values("methods_alpha")
+def methods_alpha_values(df, config):
+    """alpha in RMSE ∝ work^-alpha per (scene, CoC, method family), its 95% half-width and points; an
+    interleaved family also before its lens floor (`before_floor` true)."""
+    import pandas as pd
+
     df = _ok(df).dropna(subset=["metric.rmse"])
     rows = []
     for s in _scenes(df):
         for coc in sorted(df[df["scene.name"] == s]["camera.coc_px"].unique()):
             sub = df[(df["scene.name"] == s) & (df["camera.coc_px"] == coc)]
             for fam, g in _families(sub):
-                parts = [(fam, g)]
+                parts = [(fam, g, False, math.nan)]
                 pre = _before_lens_floor(g)
                 if pre is not None:
-                    parts.append((f"{fam} (spp ≤ {int(pre[1])}, before the floor)", pre[0]))
-                for name, part in parts:
+                    parts.append((fam, pre[0], True, pre[1]))
+                for name, part, before, n_lens in parts:
                     work = [_work(r) for _, r in part.iterrows()]
                     a, hw, n = _fit_alpha(work, part["metric.rmse"].to_numpy(float))
-                    ci = "" if hw != hw else f"[{a - hw:.2f}, {a + hw:.2f}]"
-                    rows.append([s, f"{coc:g}", name, f"{a:.2f}", ci, str(n)])
+                    rows.append({"scene": s, "coc": float(coc), "family": name, "before_floor": before, "n_lens": n_lens,
+                                 "alpha": a, "halfwidth": hw, "points": n})
+    out = pd.DataFrame(rows)
+    out.attrs["keys"] = ["scene", "coc", "family", "before_floor"]
+    return out
+
+
+@named_table("methods_alpha")
+def methods_alpha(df, config) -> list[str]:
+    """alpha in RMSE ∝ work^-alpha per method family, with a 95% confidence interval (t, n - 2 dof)."""
+    rows = []
+    for r in methods_alpha_values(df, config).itertuples():
+        name = r.family + (f" (spp ≤ {int(r.n_lens)}, before the floor)" if r.before_floor else "")
+        ci = "" if r.halfwidth != r.halfwidth else f"[{r.alpha - r.halfwidth:.2f}, {r.alpha + r.halfwidth:.2f}]"
+        rows.append([r.scene, f"{r.coc:g}", name, f"{r.alpha:.2f}", ci, str(r.points)])
     return md_table(["scene", "CoC", "method family", "alpha (RMSE ∝ ops^-alpha)", "95% CI", "points"], rows)
 
 
@@ -521,18 +613,26 @@ def _cycles(r) -> float:
     return float(r.get("timing.cycles", math.nan))
 
 
-@named_table("methods_claim")
-def methods_claim(df, config) -> list[str]:
-    """004's claim, 16 lines against 256 points (4-5x faster at better quality), on our scenes: the
-    ratios at 256 points, and at equal RMSE (the work, cycles and wall time the point family needs to
-    reach the 16 lines' RMSE, interpolated along its spp sweep) against `tile` and `bruteforce`."""
+# [Tzeng 2012] Table 1: frames per second of its point sampler (256 point samples per pixel) and of its line
+# sampler (16 lines per pixel) in the same tiled GPU renderer (GTX 580, 800 x 800), per mesh.
+PAPER_TZENG_T1 = {"Dragon": (0.64, 2.86), "Cessna": (2.12, 9.01), "Hand": (1.12, 4.47), "Geckcheck": (11.54, 49.31),
+                  "SDCC": (0.49, 2.04), "Teapot": (1.93, 5.11)}
+
+
+@named_values("methods_claim")
+def methods_claim_values(df, config):
+    """Per scene and CoC, 16 lines against 256 points: both RMSEs and FLIPs, the operations of 256 points
+    (tile, bruteforce) over the lines', and at equal RMSE (the point family's cost interpolated to the 16
+    lines' RMSE along its spp sweep) the work, cycles and wall time of tile and bruteforce over the lines'."""
+    import pandas as pd
+
     df = _ok(df)
     rows = []
     for s in _scenes(df):
         for coc in sorted(df[df["scene.name"] == s]["camera.coc_px"].unique()):
             sub = df[(df["scene.name"] == s) & (df["camera.coc_px"] == coc)
                      & ~_on(df, "pipeline.lod.enabled")]
-            is16 = (sub["pipeline.algorithm"] == "lines").to_numpy() & (np.asarray(_col(sub, "samples.n_lines"), float) == 16)
+            is16 = _lines_mask(sub) & (np.asarray(_col(sub, "samples.n_lines"), float) == 16)
             ln = sub[is16 & ~_on(sub, "pipeline.lines.tile_clip")]
             lc = sub[is16 & _on(sub, "pipeline.lines.tile_clip")]
             tile = sub[(sub["pipeline.algorithm"] == "tile") & (sub["samples.kind"] == "stratified")]
@@ -544,19 +644,38 @@ def methods_claim(df, config) -> list[str]:
             l, p = ln.iloc[0], p256.iloc[0]
             c = lc.iloc[0] if len(lc) else None
             lw, target = _work(l), float(l["metric.rmse"])
-            bf256 = _work(b256.iloc[0]) if len(b256) else math.nan
 
             def ratio(g, cost, of=l):
-                return f"{_interp_work(g, target, cost) / cost(of):.2f}" if len(g) >= 2 else ""
+                return _interp_work(g, target, cost) / cost(of) if len(g) >= 2 else math.nan
 
-            rows.append([s, f"{coc:g}", f"{target:.4f}", f"{float(p['metric.rmse']):.4f}",
-                         f"{_work(p) / lw:.2f}", f"{bf256 / lw:.2f}",
-                         ratio(tile, _work), ratio(tile, _work, c) if c is not None else "",
-                         ratio(tile, _cycles), ratio(tile, _wall),
-                         ratio(bf, _work), ratio(bf, _wall),
-                         fmt(l.get("metric.flip", math.nan), "{:.4f}"), fmt(p.get("metric.flip", math.nan), "{:.4f}")])
-    rows.append(["**004 (GTX 580, 6 scenes)**", "", "lower noise", "", "", "4-5 (fps, naive point sampler)", "",
-                 "", "", "4.2-4.8 (fps)", "", "", "", ""])
+            rows.append({"scene": s, "coc": float(coc), "rmse_lines": target, "rmse_points": float(p["metric.rmse"]),
+                         "tile256_ops": _work(p) / lw, "bf256_ops": _work(b256.iloc[0]) / lw if len(b256) else math.nan,
+                         "eq_tile_ops": ratio(tile, _work), "eq_tile_clip_ops": ratio(tile, _work, c) if c is not None else math.nan,
+                         "eq_tile_cycles": ratio(tile, _cycles), "eq_tile_wall": ratio(tile, _wall),
+                         "eq_bf_ops": ratio(bf, _work), "eq_bf_wall": ratio(bf, _wall),
+                         "flip_lines": float(l.get("metric.flip", math.nan)), "flip_points": float(p.get("metric.flip", math.nan))})
+    out = pd.DataFrame(rows)
+    out["lines_better"] = out["rmse_lines"] < out["rmse_points"]
+    out.attrs["keys"] = ["scene", "coc"]
+    return out
+
+
+@named_table("methods_claim", reads=("timing.",))
+def methods_claim(df, config) -> list[str]:
+    """[Tzeng 2012]'s claim, 16 lines against 256 points (4-5x faster at better quality), on our scenes: the
+    ratios at 256 points, and at equal RMSE (the work, cycles and wall time the point family needs to reach
+    the 16 lines' RMSE, interpolated along its spp sweep) against `tile` and `bruteforce`; then [Tzeng 2012]'s
+    own Table 1 and what it measured against."""
+    f = lambda v, spec="{:.2f}": "" if v != v else spec.format(v)  # noqa: E731
+    rows = [[r.scene, f"{r.coc:g}", f"{r.rmse_lines:.4f}", f"{r.rmse_points:.4f}", f(r.tile256_ops), f(r.bf256_ops),
+             f(r.eq_tile_ops), f(r.eq_tile_clip_ops), f(r.eq_tile_cycles), f(r.eq_tile_wall), f(r.eq_bf_ops),
+             f(r.eq_bf_wall), f(r.flip_lines, "{:.4f}"), f(r.flip_points, "{:.4f}")]
+            for r in methods_claim_values(df, config).itertuples()]
+    fps = [line / point for point, line in PAPER_TZENG_T1.values()]
+    rows.append([f"**[Tzeng 2012] Table 1** ({len(PAPER_TZENG_T1)} meshes, GTX 580, 800 x 800)", "", "lower noise (its Fig. 9)",
+                 "", "", f"frame rate, lines / points: {min(fps):.2f}–{max(fps):.2f} (per mesh "
+                 + ", ".join(f"{m} {line / point:.2f}" for m, (point, line) in PAPER_TZENG_T1.items())
+                 + "; its own tiled GPU point sampler at 256 spp, not a tile-test rasterizer)", "", "", "", "", "", "", "", ""])
     return md_table(["scene", "CoC", "RMSE 16 lines", "RMSE 256 pts", "ops 256 pts (tile) / 16 lines",
                      "ops 256 pts (bruteforce) / 16 lines", "equal RMSE: ops tile / lines",
                      "equal RMSE: ops tile / lines clip", "equal RMSE: est. cycles tile / lines",
@@ -574,21 +693,37 @@ def _pareto(points):
     return front
 
 
-@named_table("methods_pareto")
-def methods_pareto(df, config) -> list[str]:
-    """The Pareto fronts (RMSE against all counted operations and against wall time) per scene and
-    CoC: the methods on the front, cheapest first, with their RMSE."""
+@named_values("methods_pareto")
+def methods_pareto_values(df, config):
+    """Per scene, CoC and cost axis (ops (all), wall): the Pareto front's size, the line methods on it, and
+    its lowest RMSE and the method there."""
+    import pandas as pd
+
     df = _ok(df).dropna(subset=["metric.rmse"])
     rows = []
     for s in _scenes(df):
         for coc in sorted(df[df["scene.name"] == s]["camera.coc_px"].unique()):
             sub = df[(df["scene.name"] == s) & (df["camera.coc_px"] == coc)]
             for axis, cost in (("ops (all)", _work), ("wall", _wall)):
-                pts = [(cost(r), float(r["metric.rmse"]), method_label(r)) for _, r in sub.iterrows()]
-                front = _pareto(pts)
-                n_lines = sum(lab.startswith("lines") for _c, _e, lab in front)
-                rows.append([s, f"{coc:g}", axis, f"{n_lines} / {len(front)}",
-                             "; ".join(f"{lab} ({e:.4f})" for _c, e, lab in front)])
+                front = _pareto([(cost(r), float(r["metric.rmse"]), method_label(r)) for _, r in sub.iterrows()])
+                line_labels = {method_label(r) for _, r in sub.iterrows() if _is_lines(r["pipeline.algorithm"])}
+                n_lines = sum(lab in line_labels for _c, _e, lab in front)
+                rows.append({"scene": s, "coc": float(coc), "axis": axis, "front": len(front), "lines": n_lines,
+                             "members": "; ".join(f"{lab} ({e:.4f})" for _c, e, lab in front),
+                             "best_rmse": front[-1][1], "best_method": front[-1][2],
+                             "lines_on_front": f"{s} CoC {coc:g}: {n_lines} of {len(front)}",
+                             "best_on_front": f"{s} CoC {coc:g}: {front[-1][2]}"})
+    out = pd.DataFrame(rows)
+    out.attrs["keys"] = ["scene", "coc", "axis"]
+    return out
+
+
+@named_table("methods_pareto", reads=("timing.",))
+def methods_pareto(df, config) -> list[str]:
+    """The Pareto fronts (RMSE against all counted operations and against wall time) per scene and
+    CoC: the methods on the front, cheapest first, with their RMSE."""
+    rows = [[r.scene, f"{r.coc:g}", r.axis, f"{r.lines} / {r.front}", r.members]
+            for r in methods_pareto_values(df, config).itertuples()]
     return md_table(["scene", "CoC", "cost", "lines on the front", "front, cheapest first (RMSE)"], rows)
 
 
@@ -605,7 +740,7 @@ def methods_lod(df, config) -> list[str]:
         base = df[~_on(df, "pipeline.lod.enabled")]
         for k, v in keys.items():
             base = base[base[k] == v]
-        if r["pipeline.algorithm"] == "lines":
+        if _is_lines(r["pipeline.algorithm"]):
             base = base[np.asarray(base["samples.n_lines"], float) == float(r["samples.n_lines"])]
         if "pipeline.lines.tile_clip" in df.columns:
             base = base[_on(base, "pipeline.lines.tile_clip") == (str(r["pipeline.lines.tile_clip"]) == "True")]
@@ -626,7 +761,7 @@ def methods_lod(df, config) -> list[str]:
 def methods_segments(df, config) -> list[str]:
     """Segment-buffer statistics by CoC, and what the tile clip saved."""
     df = _ok(df)
-    ln = df[(df["pipeline.algorithm"] == "lines").to_numpy() & ~_on(df, "pipeline.lod.enabled")]
+    ln = df[_lines_mask(df) & ~_on(df, "pipeline.lod.enabled")]
     rows = []
     for s in _scenes(ln):
         for coc in sorted(ln[ln["scene.name"] == s]["camera.coc_px"].unique()):
@@ -655,24 +790,27 @@ def methods_segments(df, config) -> list[str]:
 
 GPU_METHODS = ["gpu_hexagon3d", "gpu_wedge", "gpu_reduced_wedge", "gpu_hexagon2d", "gpu_pe_triangle",
                "gpu_vr_triangle", "gpu_convex_hull", "gpu_adaptive"]
-# 000 Table 1: vertices, triangles, computation, usability (003's hull and 000 §4.7 are not in it).
+# [Toth 2008] Table 1: vertices, triangles, computation, usability ([McGuire 2010]'s hull and [Toth 2008] §4.7 are not in it).
 PAPER_GPU_T1 = {"gpu_hexagon3d": ("12", "20/16", "heavy", "excellent"), "gpu_wedge": ("6", "8", "medium", "good"),
                 "gpu_reduced_wedge": ("5", "4", "intense", "excellent"),
                 "gpu_hexagon2d": ("6", "4", "medium", "mediocre"), "gpu_pe_triangle": ("3", "1", "light", "poor"),
                 "gpu_vr_triangle": ("3", "1", "medium", "very poor")}
-# 000 Table 2: total output floats (none / triangle / strip constants), bump-mapped textured surface.
+# [Toth 2008] Table 2: total output floats (none / triangle / strip constants), bump-mapped textured surface.
 PAPER_GPU_T2 = {"gpu_hexagon3d": (858, 788, 123), "gpu_hexagon2d": (234, 164, 59)}
 
 
 def _gpu_rows(df):
     df = _ok(df)
-    return df[df["pipeline.algorithm"].astype(str).str.startswith("gpu_")]
+    return df[[_is_gpu(a) for a in df["pipeline.algorithm"]]]
 
 
-@named_table("gpu_table1")
-def gpu_table1(df, config) -> list[str]:
-    """000 Table 1 measured at CoC 8 px: per input triangle (mean over the scenes) output vertices, strip
-    triangles, geometry-shader ops, output floats; bound area and fragments against hit fragments."""
+@named_values("gpu_table1")
+def gpu_table1_values(df, config):
+    """Per GPU method at CoC 8 px (mean over the scenes): output vertices, strip triangles, geometry-shader
+    ops and output floats per input triangle; bound area and fragments per hit fragment; share of fragments
+    outside the setup box; the pixel-shader STE."""
+    import pandas as pd
+
     df = _gpu_rows(df)
     coc = 8 if (df["camera.coc_px"] == 8).any() else sorted(df["camera.coc_px"].unique())[0]
     df = df[df["camera.coc_px"] == coc]
@@ -684,13 +822,27 @@ def gpu_table1(df, config) -> list[str]:
         n = sub["gpu.gs_triangles_in"].astype(float)
         hit = (sub["gpu.fragments"] - sub["gpu.fragments_zero_hit"]).astype(float)
         per = lambda c: float((sub[c].astype(float) / n).mean())  # noqa: E731
-        area = float((sub["gpu.bound_area"].astype(float) / 1000.0 / hit).mean())
-        frag = float((sub["gpu.fragments"].astype(float) / hit).mean())
-        outside = float((sub["gpu.fragments_outside_box"].astype(float) / sub["gpu.fragments"].astype(float)).mean())
-        paper = PAPER_GPU_T1.get(m, ("", "", "", ""))
-        rows.append([m, f"{per('gpu.gs_vertices'):.2f}", paper[0], f"{per('gpu.gs_triangles'):.2f}", paper[1],
-                     f"{per('gpu.gs_ops'):.0f}", paper[2], f"{per('gpu.gs_floats'):.0f}", f"{area:.2f}", f"{frag:.2f}",
-                     f"{100 * outside:.1f}%", f"{float(sub['raster.ste'].mean()):.3f}", paper[3]])
+        rows.append({"method": m, "vertices": per("gpu.gs_vertices"), "triangles": per("gpu.gs_triangles"),
+                     "gs_ops": per("gpu.gs_ops"), "floats": per("gpu.gs_floats"),
+                     "area": float((sub["gpu.bound_area"].astype(float) / 1000.0 / hit).mean()),
+                     "fragments": float((sub["gpu.fragments"].astype(float) / hit).mean()),
+                     "outside": float((sub["gpu.fragments_outside_box"].astype(float) / sub["gpu.fragments"].astype(float)).mean()),
+                     "ste": float(sub["raster.ste"].mean())})
+    out = pd.DataFrame(rows)
+    out.attrs["keys"] = ["method"]
+    return out
+
+
+@named_table("gpu_table1")
+def gpu_table1(df, config) -> list[str]:
+    """[Toth 2008] Table 1 measured at CoC 8 px: per input triangle (mean over the scenes) output vertices,
+    strip triangles, geometry-shader ops, output floats; bound area and fragments against hit fragments."""
+    rows = []
+    for r in gpu_table1_values(df, config).itertuples():
+        paper = PAPER_GPU_T1.get(r.method, ("", "", "", ""))
+        rows.append([r.method, f"{r.vertices:.2f}", paper[0], f"{r.triangles:.2f}", paper[1], f"{r.gs_ops:.0f}", paper[2],
+                     f"{r.floats:.0f}", f"{r.area:.2f}", f"{r.fragments:.2f}", f"{100 * r.outside:.1f}%", f"{r.ste:.3f}",
+                     paper[3]])
     return md_table(["method", "vertices / tri", "paper", "triangles / tri", "paper", "GS ops / tri", "paper",
                      "floats / tri", "bound area / hit px", "fragments / hit fragment", "fragments outside setup box",
                      "PS STE", "paper usability"], rows)
@@ -698,7 +850,7 @@ def gpu_table1(df, config) -> list[str]:
 
 @named_table("gpu_fallbacks")
 def gpu_fallbacks(df, config) -> list[str]:
-    """Fallbacks by cause (000 §4.8) summed over the sweep, per method."""
+    """Fallbacks by cause ([Toth 2008] §4.8) summed over the sweep, per method."""
     df = _gpu_rows(df)
     cols = ["gpu.fallback_near", "gpu.fallback_motion", "gpu.fallback_degenerate", "gpu.fallback_vr",
             "gpu.fallback_reduced", "gpu.volume_clipped", "gpu.adaptive_pe", "gpu.adaptive_hexagon"]
@@ -710,32 +862,46 @@ def gpu_fallbacks(df, config) -> list[str]:
     return md_table(["method", "triangles"] + [c.split(".", 1)[1] for c in cols], rows)
 
 
-@named_table("gpu_vs_tile")
-def gpu_vs_tile(df, config) -> list[str]:
-    """Per scene and CoC: the GPU method with the fewest ops and the one with the fewest estimated
-    cycles, and their ratios to tile."""
+@named_values("gpu_vs_tile")
+def gpu_vs_tile_values(df, config):
+    """Per scene and CoC: tile's Mops and kcycles, the GPU method with the fewest ops and the one with the
+    fewest estimated cycles, their ratios to tile, the GPU's bottleneck."""
+    import pandas as pd
+
     df = _ok(df)
     rows = []
     for s in _scenes(df):
         for coc in sorted(df["camera.coc_px"].unique()):
             sub = df[(df["scene.name"] == s) & (df["camera.coc_px"] == coc)]
             tile = sub[sub["pipeline.algorithm"] == "tile"]
-            gpu = sub[sub["pipeline.algorithm"].astype(str).str.startswith("gpu_")]
+            gpu = sub[[_is_gpu(a) for a in sub["pipeline.algorithm"]]]
             if not len(tile) or not len(gpu):
                 continue
             t_ops, t_cyc = float(tile["ops.total"].iloc[0]), float(tile["timing.cycles"].iloc[0])
             bo = gpu.loc[gpu["ops.total"].astype(float).idxmin()]
             bc = gpu.loc[gpu["timing.cycles"].astype(float).idxmin()]
-            rows.append([s, f"{coc:g}", f"{t_ops / 1e6:.2f}", bo["pipeline.algorithm"],
-                         f"{float(bo['ops.total']) / t_ops:.2f}", f"{t_cyc / 1e3:.1f}", bc["pipeline.algorithm"],
-                         f"{float(bc['timing.cycles']) / t_cyc:.2f}", str(bc["timing.bottleneck"])])
+            rows.append({"scene": s, "coc": float(coc), "tile_mops": t_ops / 1e6, "best_ops": bo["pipeline.algorithm"],
+                         "ops_ratio": float(bo["ops.total"]) / t_ops, "tile_kcycles": t_cyc / 1e3,
+                         "best_cycles": bc["pipeline.algorithm"], "cycles_ratio": float(bc["timing.cycles"]) / t_cyc,
+                         "bottleneck": str(bc["timing.bottleneck"])})
+    out = pd.DataFrame(rows)
+    out.attrs["keys"] = ["scene", "coc"]
+    return out
+
+
+@named_table("gpu_vs_tile", reads=("timing.",))
+def gpu_vs_tile(df, config) -> list[str]:
+    """Per scene and CoC: the GPU method with the fewest ops and the one with the fewest estimated
+    cycles, and their ratios to tile."""
+    rows = [[r.scene, f"{r.coc:g}", f"{r.tile_mops:.2f}", r.best_ops, f"{r.ops_ratio:.2f}", f"{r.tile_kcycles:.1f}",
+             r.best_cycles, f"{r.cycles_ratio:.2f}", r.bottleneck] for r in gpu_vs_tile_values(df, config).itertuples()]
     return md_table(["scene", "CoC [px]", "tile Mops", "best GPU (ops)", "ops GPU / tile", "tile kcycles",
                      "best GPU (cycles)", "cycles GPU / tile", "GPU bottleneck"], rows)
 
 
-@named_table("gpu_table2")
+@named_table("gpu_table2", reads=("timing.",))
 def gpu_table2(df, config) -> list[str]:
-    """000 Table 2 in kind: per input triangle output floats, per fragment interpolated floats and
+    """[Toth 2008] Table 2 in kind: per input triangle output floats, per fragment interpolated floats and
     re-derived setup ops, per constant type; the paper's output floats beside."""
     df = _gpu_rows(df)
     rows = []
@@ -767,9 +933,12 @@ def _equal_error_spp(spp, err, target):
     return math.nan
 
 
-@named_table("accumulation_k")
-def accumulation_k(df, config) -> list[str]:
-    """k = N / (stratified spp of equal RMSE) per scene, CoC and N passes; RMSE and ghosting beside."""
+@named_values("accumulation_k")
+def accumulation_k_values(df, config):
+    """Per scene, CoC and N passes: RMSE of accumulation and of stratified at N spp, the stratified spp of
+    equal RMSE, k = N / that spp, the ghosting of both."""
+    import pandas as pd
+
     df = _ok(df)
     rows = []
     for s in _scenes(df):
@@ -781,43 +950,380 @@ def accumulation_k(df, config) -> list[str]:
                 continue
             for _, r in ac.iterrows():
                 n = int(r["samples.spp"])
-                e = float(r["metric.rmse"])
-                eq = _equal_error_spp(st["samples.spp"], st["metric.rmse"], e)
+                eq = _equal_error_spp(st["samples.spp"], st["metric.rmse"], float(r["metric.rmse"]))
                 same = st[st["samples.spp"] == n]
-                e_st = float(same["metric.rmse"].iloc[0]) if len(same) else math.nan
-                g_st = float(same["metric.ghosting"].iloc[0]) if len(same) else math.nan
-                k = n / eq if eq == eq else math.nan
-                rows.append([s, f"{coc:g}", str(n), f"{e:.4f}", f"{e_st:.4f}", f"{eq:.1f}" if eq == eq else "out of range",
-                             f"{k:.2f}" if k == k else "", f"{float(r['metric.ghosting']):.2f}", f"{g_st:.2f}", "~4"])
+                rows.append({"scene": s, "coc": float(coc), "passes": n, "rmse_acc": float(r["metric.rmse"]),
+                             "rmse_strat": float(same["metric.rmse"].iloc[0]) if len(same) else math.nan,
+                             "equal_spp": eq, "k": n / eq if eq == eq else math.nan,
+                             "ghost_acc": float(r["metric.ghosting"]),
+                             "ghost_strat": float(same["metric.ghosting"].iloc[0]) if len(same) else math.nan})
+    out = pd.DataFrame(rows)
+    out.attrs["keys"] = ["scene", "coc", "passes"]
+    return out
+
+
+@named_table("accumulation_k")
+def accumulation_k(df, config) -> list[str]:
+    """k = N / (stratified spp of equal RMSE) per scene, CoC and N passes; RMSE and ghosting beside."""
+    rows = [[r.scene, f"{r.coc:g}", str(r.passes), f"{r.rmse_acc:.4f}", f"{r.rmse_strat:.4f}",
+             f"{r.equal_spp:.1f}" if r.equal_spp == r.equal_spp else "out of range",
+             f"{r.k:.2f}" if r.k == r.k else "", f"{r.ghost_acc:.2f}", f"{r.ghost_strat:.2f}", "~4"]
+            for r in accumulation_k_values(df, config).itertuples()]
     return md_table(["scene", "CoC [px]", "N passes", "RMSE accumulation", "RMSE stratified (N spp)",
                      "stratified spp of equal RMSE", "k", "ghosting accumulation", "ghosting stratified",
-                     "paper k (000 §9.1, perceived)"], rows)
+                     "paper k ([Toth 2008] §9.1, perceived)"], rows)
 
 
-@named_table("gpu_early_depth")
-def gpu_early_depth(df, config) -> list[str]:
-    """Per scene, CoC and algorithm: HiZ off against on (000 §9.7's depth interval for the gpu_*
-    pipeline, ẑ against HiZ for tile): fragments rejected before the pixel shader, pixel-shader sample
-    tests saved, ops and cycles with HiZ over without, and the GPU/tile cycle ratio with HiZ in both."""
+@named_values("gpu_early_depth")
+def gpu_early_depth_values(df, config):
+    """Per scene, CoC and algorithm: HiZ off against on: fragments depth-culled (GPU), sample tests saved,
+    ops and cycles with HiZ over without, GPU / tile cycles with HiZ in both."""
+    import pandas as pd
+
     df = _ok(df)
     on_col = "pipeline.hiz.enabled"
     rows = []
     for s in _scenes(df):
         for coc in sorted(df["camera.coc_px"].unique()):
             sub = df[(df["scene.name"] == s) & (df["camera.coc_px"] == coc)]
-            t_on = _first(sub, {"pipeline.algorithm": "tile", on_col: True})
+            t_on, t_off = _first(sub, {"pipeline.algorithm": "tile", on_col: True}), _first(sub, {"pipeline.algorithm": "tile", on_col: False})
             for alg in list(dict.fromkeys(sub["pipeline.algorithm"].astype(str))):
                 off, on = _first(sub, {"pipeline.algorithm": alg, on_col: False}), _first(sub, {"pipeline.algorithm": alg, on_col: True})
                 if off is None or on is None:
                     continue
-                gpu = alg.startswith("gpu_")
-                culled = float(on["gpu.fragments_depth_culled"]) if gpu else math.nan
+                gpu = _is_gpu(alg)
                 frags = float(off["gpu.fragments"]) if gpu else math.nan
                 saved = (float(off["gpu.ps_samples_tested"]) - float(on["gpu.ps_samples_tested"])) if gpu else \
                     float(on["zcull.samples_culled"])
-                vs_tile = f"{float(on['timing.cycles']) / float(t_on['timing.cycles']):.2f}" if gpu and t_on is not None else ""
-                rows.append([s, f"{coc:g}", alg, f"{100 * culled / frags:.1f}%" if gpu and frags else "",
-                             f"{saved:.3g}", f"{float(on['ops.total']) / float(off['ops.total']):.3f}",
-                             f"{float(on['timing.cycles']) / float(off['timing.cycles']):.3f}", vs_tile])
+                rows.append({"scene": s, "coc": float(coc), "algorithm": alg, "gpu": gpu,
+                             "culled": float(on["gpu.fragments_depth_culled"]) / frags if gpu and frags else math.nan,
+                             "saved": saved, "ops_ratio": float(on["ops.total"]) / float(off["ops.total"]),
+                             "cycles_ratio": float(on["timing.cycles"]) / float(off["timing.cycles"]),
+                             "vs_tile": float(on["timing.cycles"]) / float(t_on["timing.cycles"]) if gpu and t_on is not None else math.nan,
+                             "vs_tile_off": float(off["timing.cycles"]) / float(t_off["timing.cycles"]) if gpu and t_off is not None else math.nan})
+    out = pd.DataFrame(rows)
+    tile_saved = out[~out["gpu"]].set_index(["scene", "coc"])["saved"]
+    out["saved_vs_tile"] = [r.saved / tile_saved.get((r.scene, r.coc), math.nan) if r.gpu else math.nan
+                            for r in out.itertuples()]
+    out.attrs["keys"] = ["scene", "coc", "algorithm"]
+    return out
+
+
+@named_table("gpu_early_depth", reads=("timing.",))
+def gpu_early_depth(df, config) -> list[str]:
+    """Per scene, CoC and algorithm: HiZ off against on ([Toth 2008] §9.7's depth interval for the gpu_*
+    pipeline, ẑ against HiZ for tile)."""
+    rows = [[r.scene, f"{r.coc:g}", r.algorithm, f"{100 * r.culled:.1f}%" if r.gpu else "", f"{r.saved:.3g}",
+             f"{r.ops_ratio:.3f}", f"{r.cycles_ratio:.3f}", f"{r.vs_tile:.2f}" if r.gpu else ""]
+            for r in gpu_early_depth_values(df, config).itertuples()]
     return md_table(["scene", "CoC [px]", "algorithm", "fragments depth-culled", "sample tests saved",
                      "ops HiZ / none", "cycles HiZ / none", "cycles GPU / tile (both HiZ)"], rows)
+
+
+# ---- the numerical-precision study (configs/paper/precision_*.yaml, point kind precision) ---------------
+
+def _pct(x) -> str:
+    return "n/a" if x is None or x != x else f"{100 * float(x):.3f} %"
+
+
+def _yes(v) -> str:
+    return "yes" if str(v) == "True" else "NO"
+
+
+def _arith(r) -> str:
+    a = r.get("point.options.arithmetic")
+    return f"fixed, frac_bits {int(r['point.options.frac_bits'])}" if a == "fixed" else str(a)
+
+
+def _num(r, k):
+    return r.get(f"numerics.{k}")
+
+
+def _precision_rows(df, keys=("point.options.viewport",)):
+    df = _ok(df)
+    order = {"float32": 0, "float64": 1, "fixed": 2}
+    recs = [r for _, r in df.iterrows()]
+    return sorted(recs, key=lambda r: (*[str(r.get(k)) if k == "point.options.cls" else float(r.get(k)) for k in keys],
+                                       order.get(r.get("point.options.arithmetic"), 3),
+                                       float(r.get("point.options.frac_bits") or 0)))
+
+
+@named_table("precision_2d")
+def precision_2d(df, config) -> list[str]:
+    """The 2D tile test and sample test per viewport and arithmetic (study 2d)."""
+    rows = []
+    for r in _precision_rows(df):
+        v = int(r["point.options.viewport"])
+        if r["point.options.arithmetic"] == "fixed":
+            rows.append([v, _arith(r), int(_num(r, "int_bits_tile")), int(_num(r, "int_bits_sample")),
+                         int(_num(r, "total_bits")), _yes(_num(r, "safe")),
+                         f"{int(_num(r, 'int_bits_bound'))} ({int(_num(r, 'bound_total_bits'))}), {_yes(_num(r, 'bound_safe'))}",
+                         int(_num(r, "triangles")), int(_num(r, "samples")), _pct(_num(r, "differ")),
+                         f"{_num(r, 'dmax'):.4g}", int(_num(r, "tiles")), int(_num(r, "tile_violations")),
+                         _pct(_num(r, "cull_lost")), int(_num(r, "below_overflows"))])
+        else:
+            rows.append([v, _arith(r), "-", "-", 32, _yes(_num(r, "safe")), "-", int(_num(r, "triangles")),
+                         int(_num(r, "samples")), _pct(_num(r, "differ")), f"{_num(r, 'dmax'):.4g}", int(_num(r, "tiles")),
+                         int(_num(r, "tile_violations")), _pct(_num(r, "cull_lost")), "-"])
+    return md_table(["viewport [px]", "arithmetic", "fewest int_bits: tile test (set-up)", "fewest int_bits: sample test",
+                     "total bits", "safe", "closed-form int_bits (total bits), safe", "triangles", "samples",
+                     "samples differing from float64", "max distance of a differing sample [px]", "tiles",
+                     "tiles culled beyond DELTA", "tile culls lost", "overflows at int_bits - 1"], rows)
+
+
+@named_table("precision_4d")
+def precision_4d(df, config) -> list[str]:
+    """The 4D tile test per viewport and arithmetic (study 4d)."""
+    rows = []
+    for r in _precision_rows(df):
+        fixed = r["point.options.arithmetic"] == "fixed"
+        rows.append([int(r["point.options.viewport"]), _arith(r), int(_num(r, "triangles")), int(_num(r, "tiles")),
+                     int(_num(r, "culled64")), _pct(_num(r, "cull_lost")), f"{int(_num(r, 'checked'))} / {int(_num(r, 'hits'))}",
+                     f"{int(_num(r, 'int_bits_band'))} ({int(_num(r, 'total_bits'))})" if fixed else "-",
+                     int(_num(r, "int_bits_all")) if fixed else "-", int(_num(r, "below_overflows")) if fixed else "-"])
+    return md_table(["viewport [px]", "arithmetic", "triangles", "tiles", "lens cells culled (float64)", "cull lost",
+                     "culled pairs checked: samples / ray-cast hits", "fewest int_bits in band (total bits)",
+                     "fewest int_bits all", "overflowing tests at all - 1"], rows)
+
+
+@named_table("precision_box")
+def precision_box(df, config) -> list[str]:
+    """INTERVAL's box bounds per viewport and arithmetic (study box)."""
+    rows = []
+    for r in _precision_rows(df):
+        fixed = r["point.options.arithmetic"] == "fixed"
+        rows.append([int(r["point.options.viewport"]), _arith(r), int(_num(r, "triangles")), int(_num(r, "boxes")),
+                     int(_num(r, "hits")), f"{int(_num(r, 'outside'))} / {int(_num(r, 'outside64'))}",
+                     f"{_num(r, 'grow_mean'):.3g} / {_num(r, 'grow_max'):.3g}",
+                     f"{int(_num(r, 'int_bits_band'))} ({int(_num(r, 'total_bits'))})" if fixed else "-",
+                     int(_num(r, "int_bits_all")) if fixed else "-", int(_num(r, "below_overflows")) if fixed else "-"])
+    return md_table(["viewport [px]", "arithmetic", "triangles", "boxes", "ray-cast hits",
+                     "hits outside (format / float64)", "growth mean / max [px]", "fewest int_bits in band (total bits)",
+                     "fewest int_bits all", "overflowing boxes at all - 1"], rows)
+
+
+@named_table("precision_5d")
+def precision_5d(df, config) -> list[str]:
+    """The motion tile tests per viewport, class and arithmetic (study 5d)."""
+    rows = []
+    for r in _precision_rows(df, ("point.options.viewport", "point.options.cls")):
+        fixed = r["point.options.arithmetic"] == "fixed"
+        rows.append([int(r["point.options.viewport"]), r["point.options.cls"], _arith(r), int(_num(r, "triangles")),
+                     int(_num(r, "samples")), int(_num(r, "hits")), int(_num(r, "culled64")), _pct(_num(r, "cull_lost")),
+                     f"{int(_num(r, 'outside'))} / {int(_num(r, 'outside64'))}",
+                     f"{int(_num(r, 'int_bits_band'))} / {int(_num(r, 'int_bits_band_h5'))} ({int(_num(r, 'total_bits'))})"
+                     if fixed else "-",
+                     f"{int(_num(r, 'int_bits_all'))} / {int(_num(r, 'int_bits_all_h5'))}" if fixed else "-",
+                     int(_num(r, "below_overflows")) if fixed else "-"])
+    return md_table(["viewport [px]", "class", "arithmetic", "triangles", "samples", "ray-cast hits", "excluded by float64",
+                     "cull lost", "hits excluded (format / float64)",
+                     "fewest int_bits in band: t̂ + lens sets / H5 (total bits)", "fewest int_bits all: t̂ + lens sets / H5",
+                     "overflowing tests at all - 1"], rows)
+
+
+@named_table("precision_nd")
+def precision_nd(df, config) -> list[str]:
+    """The sample test per viewport, class and arithmetic (study nd)."""
+    rows = []
+    for r in _precision_rows(df, ("point.options.viewport", "point.options.cls")):
+        fixed = r["point.options.arithmetic"] == "fixed"
+        rows.append([int(r["point.options.viewport"]), r["point.options.cls"], _arith(r), int(_num(r, "samples")),
+                     int(_num(r, "sample_bad")), _pct(_num(r, "differ")), f"{_num(r, 'dmax'):.4g}", _pct(_num(r, "in_band")),
+                     int(_num(r, "int_bits_band")) if fixed else "-", int(_num(r, "int_bits_all")) if fixed else "-"])
+    return md_table(["viewport [px]", "class", "arithmetic", "samples", "beyond stated", "differing beyond 10^-3 px",
+                     "max distance of a differing sample [px]", "in band", "fewest int_bits (in band)",
+                     "fewest int_bits (all)"], rows)
+
+
+def precision_label(r) -> str:
+    """'default', 'sample fixed 4', 'tile float32', 'tile + sample fixed 4, 14 int bits', 'depth fixed 16' of a
+    render row, from its pipeline.precision columns."""
+    parts, bits = [], set()
+    for stage, default in (("tile", "float64"), ("sample", "float32"), ("depth", "float32")):
+        plain = r.get(f"pipeline.precision.{stage}")
+        F = r.get(f"pipeline.precision.{stage}.fixed.frac_bits")
+        if F is not None and F == F:
+            parts.append((stage, f"fixed {int(F)}"))
+            bits.add(int(r.get(f"pipeline.precision.{stage}.fixed.int_bits")))
+        elif isinstance(plain, str) and plain != default:
+            parts.append((stage, plain))
+    if not parts:
+        return "default"
+    kinds = {k for _, k in parts}
+    text = (" + ".join(s for s, _ in parts) + " " + kinds.pop()) if len(kinds) == 1 else ", ".join(f"{s} {k}" for s, k in parts)
+    small = [b for b in bits if b < 40 and b != 1]
+    return text + (f", {small[0]} int bits" if small else "")
+
+
+@named_values("precision_render")
+def precision_render_values(df, config):
+    """Per render (CoC, precision label): the image RMSE, samples differing and their share, the samples tested
+    and 2D tiles and H5 cells culled against the default precision's, and the overflow counters."""
+    import pandas as pd
+
+    out = []
+    for _, r in _ok(df).iterrows():
+        tested, base = float(r["raster.samples_tested"]), float(r["numerics.tested_base"])
+        c2, c2b = float(r.get("tile.culled_2d", 0)), float(r["numerics.culled_2d_base"])
+        h5, h5b = float(r.get("tile.H5_cells_culled", 0)), float(r["numerics.culled_H5_base"])
+        out.append({"coc": float(r["camera.coc_px"]), "label": precision_label(r),
+                    "spacing": r.get("scene.params.spacing"),
+                    "frac_bits": r.get("pipeline.precision.depth.fixed.frac_bits"),
+                    "rmse": float(r["numerics.rmse"]), "differ": int(r["numerics.samples_differ"]),
+                    "samples": int(r["numerics.samples"]),
+                    "differ_share": float(r["numerics.samples_differ"]) / float(r["numerics.samples"]),
+                    "tested": tested, "tested_base": base, "tested_ratio": tested / base, "tested_rise": tested / base - 1,
+                    "culled_2d": c2, "culled_2d_base": c2b, "culled_2d_lost": 1 - c2 / c2b if c2b else 0.0,
+                    "culled_H5": h5, "culled_H5_base": h5b, "culled_H5_lost": 1 - h5 / h5b if h5b else 0.0,
+                    "sample_overflows": int(r.get("precision.sample_overflows", 0)),
+                    "tile_overflows": int(r.get("precision.tile_overflows", 0)),
+                    "tile4d_overflows": int(r.get("precision.tile4d_overflows", 0)),
+                    "tile5d_overflows": int(r.get("precision.tile5d_overflows", 0))})
+    frame = pd.DataFrame(out)
+    frame.attrs["keys"] = ["coc", "label", "spacing", "frac_bits"]
+    return frame
+
+
+@named_table("precision_render")
+def precision_render(df, config) -> list[str]:
+    """Image error and culls lost at fewer bits (study render on spot)."""
+    v = precision_render_values(df, config)
+    rows = [[f"{r.coc:g}", r.label, f"{r.rmse:.3g}", f"{r.differ} of {r.samples}", f"{r.culled_2d:.0f} ({r.culled_2d_base:.0f})",
+             _pct(r.culled_2d_lost), f"{r.tested_ratio:.4f}", r.sample_overflows, r.tile_overflows, r.tile4d_overflows]
+            for r in v.itertuples()]
+    return md_table(["CoC [px]", "precision", "image RMSE", "samples differing", "2D tiles culled (default)",
+                     "tile culls lost", "samples tested / default", "sample overflows", "2D tile overflows",
+                     "4D tile-test overflows"], rows)
+
+
+@named_table("precision_motion")
+def precision_motion(df, config) -> list[str]:
+    """Moving triangles: culls lost at fewer bits in renders (study render on motion_field)."""
+    v = precision_render_values(df, config)
+    rows = [[f"{r.coc:g}", r.label, f"{r.differ} of {r.samples}", f"{r.tested_ratio:.4f}",
+             f"{r.culled_H5:.0f} ({r.culled_H5_base:.0f})", r.tile5d_overflows] for r in v.itertuples()]
+    return md_table(["CoC [px]", "tile precision", "samples differing", "samples tested / default",
+                     "H5 cells culled (default)", "motion tile-test overflows"], rows)
+
+
+@named_table("precision_depth")
+def precision_depth(df, config) -> list[str]:
+    """A fixed-point depth buffer (study render on depth_layers) beside the closed-form resolved gap at w = 2."""
+    v = precision_render_values(df, config)
+    near = float(_ok(df)["camera.near"].iloc[0]) if "camera.near" in df.columns else 0.01
+    rows = [[f"{r.spacing:g}", f"{int(r.frac_bits)}", f"{r.differ} of {r.samples}", f"{2.0 ** -r.frac_bits * 4 / near:.3g}"]
+            for r in v.itertuples() if r.frac_bits == r.frac_bits]
+    return md_table(["spacing", "frac_bits", "samples differing from float32", "smallest resolved gap at w = 2 (closed form)"],
+                    rows)
+
+
+# ---- the line-sample wheel (configs/paper/methods_wheel.yaml) ---------------------------------------
+
+def _case_label(r) -> str:
+    return f"{r['scene.name']} {int(r['camera.width'])} px, CoC {float(r['camera.coc_px']):g}"
+
+
+@named_values("wheel_choice")
+def wheel_choice_values(df, config):
+    """Per (case, wheel): RMSE at the case's typical work (the geometric mean work of its points) from a
+    power-law fit of RMSE against work over the wheel's points, over the best wheel's; per wheel the mean
+    over the cases (geometric, as `mean_ratio`; `excess` = mean_ratio - 1); `chosen` the wheel of least
+    excess, `best_wheel` each case's best."""
+    import pandas as pd
+
+    df = _ok(df).dropna(subset=["metric.rmse"])
+    rows = []
+    for case, g in df.groupby(df.apply(_case_label, axis=1), sort=False):
+        work = np.array([_work(r) for _, r in g.iterrows()])
+        at = math.exp(float(np.mean(np.log(work))))
+        est = {}
+        for wheel, gw in g.groupby("samples.wheel"):
+            w = np.log([_work(r) for _, r in gw.iterrows()])
+            e = np.log(gw["metric.rmse"].to_numpy(float))
+            slope, icpt = np.polyfit(w, e, 1) if len(set(w)) > 1 else (0.0, float(np.mean(e)))
+            est[int(wheel)] = math.exp(icpt + slope * math.log(at))
+        best = min(est, key=est.get)
+        for wheel, v in est.items():
+            rows.append({"case": case, "wheel": wheel, "work": at, "rmse_at": v, "ratio": v / est[best],
+                         "best_wheel": best})
+    frame = pd.DataFrame(rows)
+    mean = frame.groupby("wheel")["ratio"].apply(lambda r: float(np.exp(np.mean(np.log(r)))))
+    frame["mean_ratio"] = frame["wheel"].map(mean)
+    frame["excess"] = frame["mean_ratio"] - 1.0
+    frame["chosen"] = frame["wheel"] == int(mean.idxmin())
+    frame.attrs["keys"] = ["case", "wheel"]
+    return frame
+
+
+@named_table("wheel_choice")
+def wheel_choice(df, config) -> list[str]:
+    """Each wheel's RMSE at equal operations over the best wheel's, per case; the mean; the chosen wheel."""
+    v = wheel_choice_values(df, config)
+    wheels = sorted(v["wheel"].unique())
+    rows = []
+    for case, g in v.groupby("case", sort=False):
+        ratio = dict(zip(g["wheel"], g["ratio"]))
+        rows.append([case, f"{g['work'].iloc[0]:.3g}"] + [f"{ratio.get(w, math.nan):.3f}" for w in wheels]
+                    + [str(int(g["best_wheel"].iloc[0]))])
+    mean = dict(zip(v["wheel"], v["mean_ratio"]))
+    chosen = int(v.loc[v["chosen"], "wheel"].iloc[0])
+    rows.append(["**mean (geometric)**", ""] + [f"**{mean[w]:.3f}**" for w in wheels] + [f"**chosen: {chosen}**"])
+    return md_table(["case", "work at [ops]"] + [f"wheel of {w}: RMSE / best" for w in wheels] + ["best wheel"], rows)
+
+
+# ---- sampled simulation's bin size (configs/paper/sampling.yaml) --------------------------------------
+
+SAMPLING_COUNTERS = ("raster.samples_tested", "ops.total", "raster.samples_hit")
+
+
+def _binom_cdf(k: int, n: int, p: float) -> float:
+    """P(X <= k) for X ~ Binomial(n, p)."""
+    return sum(math.comb(n, i) * p ** i * (1 - p) ** (n - i) for i in range(k + 1))
+
+
+@named_values("bin_choice")
+def bin_choice_values(df, config):
+    """Per (bin size, counter): the sampled strata, the draws, the coverage of the 95% intervals against the
+    whole frame (exact point of the same bin size), the mean half-width over the frame's value, the one-sided
+    binomial p-value of that coverage against 95%; per bin size `valid` (strata >= sim.sampling.FEW_STRATA
+    and every counter's p >= 0.05) and `chosen` (the largest valid bin size)."""
+    import pandas as pd
+    from sim.sampling import FEW_STRATA
+
+    df = _ok(df)
+    rows = []
+    for b, g in df.groupby("pipeline.bin_size"):
+        exact = g[g["pipeline.sample_fraction"] == 1.0]
+        drawn = g[g["pipeline.sample_fraction"] < 1.0]
+        if not len(exact) or not len(drawn):
+            continue
+        for c in SAMPLING_COUNTERS:
+            truth = float(exact[c].iloc[0])
+            est, hw = drawn[c].to_numpy(float), drawn[f"{c}.ci95"].to_numpy(float)
+            n, k = len(est), int(np.sum(np.abs(est - truth) <= hw))
+            rows.append({"bin_size": int(b), "counter": c, "strata": float(drawn["sample.strata"].mean()), "draws": n,
+                         "covered": k, "coverage": k / n, "p": _binom_cdf(k, n, 0.95),
+                         "halfwidth": float(np.mean(hw)) / truth, "wall_s": float(drawn["time.wall_s"].mean()),
+                         "wall_exact_s": float(exact["time.wall_s"].iloc[0])})
+    frame = pd.DataFrame(rows)
+    valid = {b: bool(g["strata"].iloc[0] >= FEW_STRATA and (g["p"] >= 0.05).all()) for b, g in frame.groupby("bin_size")}
+    frame["valid"] = frame["bin_size"].map(valid)
+    chosen = max((b for b, ok in valid.items() if ok), default=None)
+    frame["chosen"] = frame["bin_size"] == chosen
+    frame.attrs["keys"] = ["bin_size", "counter"]
+    return frame
+
+
+@named_table("bin_choice")
+def bin_choice(df, config) -> list[str]:
+    """Per bin size: strata, coverage and half-width per counter, validity, the chosen size."""
+    v = bin_choice_values(df, config)
+    rows = []
+    for b, g in v.groupby("bin_size"):
+        cov = "; ".join(f"{r.counter}: {r.covered}/{r.draws} ({r.coverage:.0%}, p {r.p:.2g})" for r in g.itertuples())
+        hw = " / ".join(f"{r.halfwidth:.2%}" for r in g.itertuples())
+        rows.append([str(b), f"{g['strata'].iloc[0]:.0f}", cov, hw, f"{g['wall_s'].iloc[0]:.2f} ({g['wall_exact_s'].iloc[0]:.2f})",
+                     ("**chosen**" if g["chosen"].iloc[0] else "valid") if g["valid"].iloc[0] else "no"])
+    return md_table(["bin [px]", "strata", "coverage of the 95% intervals (p against 95%)",
+                     "mean half-width / frame value (" + " / ".join(SAMPLING_COUNTERS) + ")",
+                     "wall time of a draw [s] (whole frame)", "valid"], rows)

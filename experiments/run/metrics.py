@@ -6,7 +6,7 @@ All metrics compare linear RGB images clipped to [0, 1] (the engine's output ran
 - ssim: scikit-image's structural_similarity (Wang et al. 2004; Gaussian-free 7x7 window,
   data_range 1, mean over the channels);
 - flip: mean LDR-FLIP (flip-evaluator; Andersson et al. 2020) on the sRGB-encoded images;
-- ghosting: the lag-one spatial autocorrelation of the error (000 §2.2: accumulation buffering's
+- ghosting: the lag-one spatial autocorrelation of the error ([Toth 2008] §2.2: accumulation buffering's
   ghosts are coherent copies, so neighbouring pixels err alike; per-pixel stochastic noise does not).
 
 The reference images they compare against: experiments/run/references.py.
@@ -48,7 +48,7 @@ def flip(test: np.ndarray, ref: np.ndarray) -> float:
 def ghosting(test: np.ndarray, ref: np.ndarray) -> float:
     """Spatial coherence of the error e = test - ref (channel mean, image mean removed): the mean
     over horizontal and vertical neighbour pairs of e(p) e(q), divided by the mean of e^2. About 0
-    for independent per-pixel noise, towards 1 for ghosting (000 §2.2, §8); 0 for identical images."""
+    for independent per-pixel noise, towards 1 for ghosting ([Toth 2008] §2.2, §8); 0 for identical images."""
     test, ref = _pair(test, ref)
     e = test - ref
     if e.ndim == 3:

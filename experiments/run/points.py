@@ -10,6 +10,9 @@ and the row it leaves in the result store.
 - transparency, sampler, soft_shadows, caustics, glossy: the uses of the rasterizer (sim.uses, run by
   experiments/run/uses.py with `point.options`): the image and counters of the use's main pass and its
   figures (sim.uses.FIGURES).
+- precision: one row of the numerical-precision study (experiments/run/precision.py, `point.options`):
+  the engine's kernels in an arithmetic against float64 and the ray caster, or the point's render in its
+  pipeline.precision against the default precision; its figures are numerics.* (sim/figures.py).
 - retime: sim.timing.estimate on the stored work records of the point's render (store.records_path;
   rendered once on first use) with `point.hardware` merged over the hardware section; the render's
   counters and the re-timed `timing.*` figures.
@@ -24,6 +27,7 @@ from pathlib import Path
 from ..config import RESULT_EXCLUDE, RenderConfig, build, build_scene, config_hash, flatten, point_columns, timing_needed
 from ..config.inputs import input_digests, tracking_reads
 from .store import cached_records, disk_fault, engine_id, git_rev, store_pictures, store_records
+from .precision import precision_point
 from .uses import USE_KINDS
 
 
@@ -162,6 +166,7 @@ def _retime(config, row, image_path, threads):
 POINT_KINDS = {"render": _render, "occlusion_query": _occlusion_query, "conservative": _conservative,
                "retime": _retime}
 POINT_KINDS.update(USE_KINDS)  # the uses of the rasterizer (experiments/run/uses.py)
+POINT_KINDS["precision"] = precision_point  # the numerical-precision study (experiments/run/precision.py)
 
 
 def render_point(config: RenderConfig, image_path: str | Path | None = None, threads: int | None = None,

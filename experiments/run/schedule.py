@@ -16,8 +16,11 @@ import functools
 import heapq
 import itertools
 
+import sim
+
 from ..config import RenderConfig
 from .executors import timed_point, worker_init
+
 from .points import run_point
 from .runner import hashed_sweep, point_args, render_hash, stored_row
 from .store import claim, images_dir as store_images_dir, records_path, release, store_point
@@ -37,7 +40,11 @@ def estimate_cost(config: RenderConfig, spp: int | None = None) -> float:
         spp = 4 * (config.samples.n_lines or 4)
     coc = cam.coc_px or 0.0
     alg = config.pipeline.algorithm or "tile"
-    weight = 1.0 if alg.startswith("gpu_") else _ALGORITHM_WEIGHT.get(alg, 1.0)
+    try:
+        gpu = sim.algorithm_info(alg).pipeline == "gpu"
+    except sim.ConfigError:
+        gpu = False
+    weight = 1.0 if gpu else _ALGORITHM_WEIGHT.get(alg, 1.0)
     return float(w) * float(h) * spp * (1.0 + coc / 10.0) * weight
 
 

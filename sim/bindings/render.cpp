@@ -274,6 +274,21 @@ void register_render(py::module_& m) {
       l.append(py::make_tuple(a.name, a.description, a.needs_interleaved_table));
     return l;
   });
+
+  m.def("algorithm_facts", []() {
+    py::dict d;
+    for (const auto& a : algorithms()) {
+      py::dict f;
+      f["description"] = a.description;
+      f["samples"] = a.samples;
+      f["tables"] = a.tables;
+      f["depth_cull"] = a.depth_cull;
+      f["pipeline"] = a.pipeline;
+      d[py::str(a.name)] = f;
+    }
+    return d;
+  }, "{name: {description, samples ('points' | 'lines'), tables ('points' | 'interleaved' | 'lines'), "
+     "depth_cull, pipeline ('sample' | 'gpu')}}: the traversal registry's facts about every algorithm.");
 }
 
 }  // namespace rast5d::bindings

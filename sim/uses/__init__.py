@@ -1,5 +1,5 @@
-"""Uses of the 5D rasterizer beyond blur (002_95ea0844b256f75b.txt §4-§7) and stochastic
-transparency (003_53fb3558c3c934ea.txt): each is a scene (models/uses.py) run through the shared
+"""Uses of the 5D rasterizer beyond blur ([Nilsson 2012] §4-§7) and stochastic
+transparency ([McGuire 2010]): each is a scene (models/uses.py) run through the shared
 engine (sim.render, sim.conservative_raster) plus a little numpy around it, returning a UseResult
 (image, counters of its passes and its own figures, declared once in FIGURES).
 

@@ -1,4 +1,4 @@
-"""Caustic volumes as moving triangles (002_95ea0844b256f75b.txt §4, Fig. 7-8).
+"""Caustic volumes as moving triangles ([Nilsson 2012] §4, Fig. 7-8).
 
 Each caustic beam is a generator triangle of the refracting surface at t = 0 and its end triangle on
 the receiver at t = 1; the moving triangle is rasterized in the conservative mode (1 x 1 tiles, no
@@ -202,7 +202,7 @@ def caustic_volumes(scene, camera, table=None, pipeline=None, *, hardware=None, 
         picture = np.zeros((H, W, 3), np.float32)
         picture[..., 0] = picture[..., 1] = picture[..., 2] = 0.18 * light
         picture += (0.03 * vol)[..., None] * np.array([0.5, 0.8, 1.0], np.float32)
-    else:  # 002 Fig. 8 in kind: shader invocations per pixel, moving triangles | hull, one heat scale
+    else:  # [Nilsson 2012] Fig. 8 in kind: shader invocations per pixel, moving triangles | hull, one heat scale
         picture = _heat(np.concatenate([moving_px, prism_px], axis=1) / max(1, prism_px.max()))
     fill_moving = int(exact.sum())
     flat.update(figures(caustics__volumes=n_vol, caustics__fill_tiles=int(len(rec)),

@@ -1,6 +1,6 @@
-"""What every use shares: the result type, the declaration of the use figures (name, unit,
-description; merged into sim.counter_docs() and docs/counters.md) and float64 ray geometry that is
-independent of the engine (the references and the look-ups of the uses)."""
+"""What every use shares: the result type, the check of the use figures (declared in sim/figures.py,
+merged into sim.counter_docs() and docs/counters.md) and float64 ray geometry that is independent of
+the engine (the references and the look-ups of the uses)."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -9,71 +9,7 @@ import numpy as np
 
 from ..errors import ConfigError
 
-# Every figure a use adds to its flat_stats, declared once: name -> (unit, description).
-FIGURES: dict[str, tuple[str, str]] = {
-    # stochastic transparency (003)
-    "transparency.rmse": ("linear RGB", "RMS error of the stochastic-transparency image against sorted alpha blending "
-                                        "at the same sample positions"),
-    "transparency.max_layers": ("layers", "Most layers any sample position sees: the passes depth peeling needs"),
-    "transparency.peel_samples_tested": ("samples", "Depth peeling's sample tests: max_layers passes of the opaque "
-                                                    "render at the same spp"),
-    "transparency.peel_ops": ("ops", "Depth peeling's operations: max_layers x (ops.total + ops.interp) of the opaque "
-                                     "render at the same spp"),
-    "transparency.ops": ("ops", "Stochastic transparency's operations: ops.total + ops.interp of its one pass"),
-    # the rasterizer as a sampler (002 §5)
-    "sampler.points": ("samples", "Sample points the rasterizer placed inside the simploids (sample tests that hit)"),
-    "sampler.expected_points": ("samples", "E[N] = density x volume of the simploids (closed form)"),
-    "sampler.chi2_p": ("probability", "p-value of the chi-square test of uniformity of the points inside the "
-                                      "simploids (large = consistent with uniform)"),
-    "sampler.chi2_dof": ("cells", "Degrees of freedom of that chi-square test"),
-    "sampler.void_points": ("samples", "Points inside the voids (must be 0)"),
-    "sampler.candidates_per_test": ("ratio", "sampler.points / raster.samples_tested: candidates per sample test"),
-    # motion-blurred soft shadows (002 §7)
-    "shadow.light_samples": ("samples", "Fixed (u, v, t) samples of the 5D shadow map (2D shadow maps in the array)"),
-    "shadow.map_texels": ("texels", "Shadow-map texels over all light samples (map pixels x light samples)"),
-    "shadow.onepass_ops": ("ops", "ops.total + ops.interp of the one-pass 5D shadow map"),
-    "shadow.accum_ops": ("ops", "ops.total + ops.interp of the accumulation-buffer shadow maps (one pass per light "
-                                "sample)"),
-    "shadow.onepass_setups": ("triangles", "Triangle setups of the one-pass 5D shadow map"),
-    "shadow.accum_setups": ("triangles", "Triangle setups of the accumulation passes"),
-    "shadow.maps_equal": ("bool", "The one-pass 5D map equals the accumulation passes' maps sample for sample"),
-    "shadow.lookups": ("lookups", "Shadow-map look-ups of the camera pass (one per camera sample that hits)"),
-    "shadow.penumbra_measured": ("world units", "Penumbra width measured on the receiver (plane over plane)"),
-    "shadow.penumbra_formula": ("world units", "Penumbra width by similar triangles: light width x "
-                                               "(receiver - occluder) / occluder distance"),
-    "shadow.rmse": ("linear RGB", "RMS error of the soft-shadow image against a many-light-sample reference"),
-    "shadow.bands": ("levels", "Distinct visibility levels in the penumbra (banding: at most light_samples + 1)"),
-    # caustic volumes (002 §4)
-    "caustics.volumes": ("volumes", "Caustic volumes (generator triangles)"),
-    "caustics.fill_tiles": ("pairs", "(volume, pixel) pairs the conservative 1 x 1 tile test passes with a non-empty "
-                                     "t̂ (the rasterizer's candidates)"),
-    "caustics.fill_moving": ("invocations", "Pixel-shader invocations of the volumes as moving triangles: (volume, "
-                                            "pixel) pairs whose pixel centre has a non-empty exact time interval"),
-    "caustics.fill_prism": ("invocations", "Pixel-shader invocations of the bounding-volume approach: pixel centres "
-                                           "inside the convex hull of the beam's six vertices (a lower bound for any "
-                                           "bounding prism)"),
-    "caustics.fill_prism_tiles": ("pairs", "(volume, pixel) pairs of that hull under the conservative 1 x 1 tile "
-                                           "test"),
-    "caustics.fill_ratio": ("ratio", "caustics.fill_moving / caustics.fill_prism"),
-    "caustics.zhat_misses": ("pixels", "Sampled pixel centres whose ray-marched beam hits fall outside ẑ (must be 0)"),
-    "caustics.light_error": ("ratio", "Relative L1 difference of the accumulated surface light and a brute-force "
-                                      "photon splat of the same beams (both blurred by 2 px)"),
-    "caustics.folded": ("volumes", "Volumes whose end triangle is flipped against the generator (fold over)"),
-    "caustics.zhat_over_path": ("ratio", "Mean over covered pixel centres of the ẑ width over the ray-marched path "
-                                         "length inside the beam (>= 1: ẑ is conservative)"),
-    # planar glossy reflections (002 §6)
-    "glossy.texels": ("texels", "Texels of the reflection map"),
-    "glossy.samples_per_texel": ("samples", "Samples per reflection-map texel (the lens samples of the glossy lobe)"),
-    "glossy.ops_per_texel": ("ops/texel", "(ops.total + ops.interp) of the reflection-map pass per texel"),
-    "glossy.tests_per_texel": ("samples/texel", "raster.samples_tested of the reflection-map pass per texel"),
-    "glossy.map_rmse": ("linear RGB", "RMS error of the reflection map against a converged map (1024 samples per "
-                                      "texel)"),
-    "glossy.image_rmse": ("linear RGB", "RMS error of the final image against the one with the converged map"),
-}
-
-
-def figure_docs() -> dict[str, tuple[str, str]]:
-    return dict(FIGURES)
+from ..figures import FIGURES, figure_docs  # noqa: F401 - declared beside the counters
 
 
 def figures(**values) -> dict:
@@ -98,7 +34,7 @@ class UseResult:
 
     @property
     def stats(self) -> dict:
-        from ..stats import nest
+        from ..derived import nest
 
         return nest(self.flat_stats)
 
@@ -204,13 +140,6 @@ def ray_triangle(origin, direction, tri) -> tuple[np.ndarray, np.ndarray, np.nda
     return hit, t, bary
 
 
-def lerp_scene(positions, positions_t1, t):
-    """World vertices at scene time t (scalar or broadcastable)."""
-    t = np.asarray(t, np.float64)
-    return positions + t[..., None, None] * (positions_t1 - positions) if t.ndim else \
-        positions + float(t) * (positions_t1 - positions)
-
-
 def chi2_sf(x: float, dof: int) -> float:
     """P(X >= x) for X ~ chi-square(dof): the regularized upper incomplete gamma Q(dof/2, x/2), by its
     series below a + 1 and its continued fraction above (Numerical Recipes §6.2)."""
@@ -257,4 +186,17 @@ def chi2_uniform(counts: np.ndarray, expected: np.ndarray) -> tuple[float, int]:
     keep = expected > 0
     stat = float(np.sum((counts[keep] - expected[keep]) ** 2 / expected[keep]))
     dof = int(keep.sum()) - 1
+    return chi2_sf(stat, dof), dof
+
+
+def chi2_stratified(counts: np.ndarray, expected: np.ndarray, variance: np.ndarray) -> tuple[float, int]:
+    """(p-value, degrees of freedom) of sum (count - expected)^2 / variance over the cells with a positive
+    variance: chi-square with one degree per cell when each count is independent with that mean and
+    variance (the counts of pixel-stratified samples, whose total is not fixed)."""
+    counts = np.asarray(counts, np.float64).ravel()
+    expected = np.asarray(expected, np.float64).ravel()
+    variance = np.asarray(variance, np.float64).ravel()
+    keep = variance > 0
+    stat = float(np.sum((counts[keep] - expected[keep]) ** 2 / variance[keep]))
+    dof = int(keep.sum())
     return chi2_sf(stat, dof), dof

@@ -1,4 +1,4 @@
-"""Planar glossy reflections and refractions (002_95ea0844b256f75b.txt §6, Fig. 13-14).
+"""Planar glossy reflections and refractions ([Nilsson 2012] §6, Fig. 13-14).
 
 The reflection map is rendered by a camera at the primary camera's mirror image under the glossy
 plane, its lens parallel to the plane and its focus plane on the plane (which is also where its near
@@ -9,7 +9,7 @@ uniformly and stratified (4D rasterization, no time), so each texel averages the
 directions in one pass; the resolved map is then looked up (bilinear) where the primary camera sees the
 plane. Error is against a converged map (1024 samples per texel), work per texel is the map pass's.
 Refraction moves the primary camera along the plane normal onto the refracted central ray (exact for
-that ray, progressively approximate towards the edges, as 002 says) and looks down through the plane.
+that ray, progressively approximate towards the edges, as [Nilsson 2012] says) and looks down through the plane.
 """
 from __future__ import annotations
 
@@ -29,7 +29,7 @@ class _Sub:
 
 def reflection_camera(camera: Camera, rect, roughness: float, texels: int, mode: str = "reflection",
                       ior: float = 1.33) -> Camera:
-    """The map camera for the plane y = 0 and the glossy rectangle rect = (x0, x1, z0, z1) (002 Fig. 13):
+    """The map camera for the plane y = 0 and the glossy rectangle rect = (x0, x1, z0, z1) ([Nilsson 2012] Fig. 13):
     reflection: at the primary camera's mirror image, looking up (+y); refraction: the primary camera
     translated along the plane normal onto the refracted central ray (the ray through the centre of the
     image, refracted with index ior), looking down (-y). Either way the lens is parallel to the plane, the

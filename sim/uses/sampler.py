@@ -1,4 +1,4 @@
-"""The rasterizer as a sampler (002_95ea0844b256f75b.txt §5): a moving triangle carves a
+"""The rasterizer as a sampler ([Nilsson 2012] §5): a moving triangle carves a
 (2,1)-simploid out of xyt space (with a lens, a (2,1,1,1)-simploid of xyuvt); the sample table fills
 that space with uniform samples and the sample tests pick those inside, so the hits are uniform
 samples of the simploid with E[N] = density x volume. A domain tessellated into non-overlapping
@@ -17,7 +17,7 @@ import numpy as np
 
 from ..errors import ConfigError
 from ..render import _scene_arrays, render
-from .common import UseResult, chi2_uniform, figures, tiled_samples
+from .common import UseResult, chi2_stratified, chi2_uniform, figures, tiled_samples
 
 
 def _screen(camera, points):
@@ -30,6 +30,16 @@ def _area(xy):
     """Signed area of screen triangles (..., 3, 2)."""
     a, b, c = xy[..., 0, :], xy[..., 1, :], xy[..., 2, :]
     return 0.5 * ((b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1]) - (b[..., 1] - a[..., 1]) * (c[..., 0] - a[..., 0]))
+
+
+def _coverage_variance(lo, hi) -> float:
+    """sum f (1 - f) over the pixels an axis-aligned square [lo, hi] covers a share f of."""
+    def shares(a, b):
+        cells = np.arange(int(np.floor(a)), int(np.ceil(b)))
+        return np.clip(np.minimum(cells + 1, b) - np.maximum(cells, a), 0.0, 1.0)
+
+    f = np.outer(shares(lo[1], hi[1]), shares(lo[0], hi[0]))
+    return float(np.sum(f * (1 - f)))
 
 
 def sample_simploids(scene, camera, table, pipeline=None, *, hardware=None, domain: str = "simploids",
@@ -110,7 +120,12 @@ def sample_simploids(scene, camera, table, pipeline=None, *, hardware=None, doma
         expected_n = float(spp * area.sum())
         square = ids // 2
         counts = np.bincount(square, minlength=len(area))
-        p, dof = chi2_uniform(counts, len(pts) * area / area.sum())
+        # Every pixel holds exactly spp samples, so a square's count is not multinomial: it is spp per whole
+        # pixel inside it plus, for a pixel it covers a share f of, Binomial(spp, f) when the table's samples
+        # are independent in the pixel (a random table). chi-square of the counts against that null: mean
+        # spp * area, variance spp * sum f (1 - f) over its pixels (a stratified table is more even: p near 1).
+        var = spp * np.array([_coverage_variance(lo[q], hi[q]) for q in range(len(area))])
+        p, dof = chi2_stratified(counts, spp * area, var)
         # brute force: every sample position inside some kept square, counted once
         flat_s = S.reshape(-1, 5)
         inside = np.zeros(len(flat_s), np.int64)

@@ -1,14 +1,14 @@
-"""Motion-blurred soft shadows from a 5D shadow map (002_95ea0844b256f75b.txt §7, Fig. 15).
+"""Motion-blurred soft shadows from a 5D shadow map ([Nilsson 2012] §7, Fig. 15).
 
 The area light is the light camera's lens: a square light of half-size R is a "square" lens of
 aperture radius R with the focus plane at infinity (a large focus distance), so lens position (u, v)
 is the light point (u R, v R) and every lens position sees the same directions. A fixed set of N
-(u, v, t) samples, the same in every shadow-map pixel (a programmable sample table, 002 §2), makes
+(u, v, t) samples, the same in every shadow-map pixel (a programmable sample table, [Nilsson 2012] §2), makes
 the one-pass render an array of N 2D shadow maps indexed by sample (the 5D shadow map). The camera
 pass is a motion-blurred render whose sample s has the same t_s; each of its hits is shadow-tested
 against map s (a traditional look-up with that sample's light position). Accumulation buffering
 renders the same N maps in N passes of one sample each. With N fixed samples the penumbra shows N+1
-visibility levels at most: the banding 002 mentions.
+visibility levels at most: the banding [Nilsson 2012] mentions.
 """
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ from ..render import _scene_arrays, render
 from ..sample_table import SampleTable
 from .common import UseResult, figures, ops_all, pinhole_rays, tiled_samples
 
-_FOCUS_AT_INFINITY = 1.0e4  # light focus distance: far beyond the scene (002 Fig. 15)
+_FOCUS_AT_INFINITY = 1.0e4  # light focus distance: far beyond the scene ([Nilsson 2012] Fig. 15)
 
 
 def light_samples(n: int, seed: int = 0) -> np.ndarray:

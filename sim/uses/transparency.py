@@ -1,10 +1,10 @@
-"""Stochastic transparency (003_53fb3558c3c934ea.txt, "Stochastic Transparency"): screen-door
+"""Stochastic transparency ([McGuire 2010], "Stochastic Transparency"): screen-door
 transparency with a random mask per sample, order independent, in one pass of the engine.
 
 The engine keeps a covered sample of a triangle with opacity alpha with probability alpha
 (backend/alpha.h; the scene's ``alpha``), so after the depth test each sample holds the nearest
 surviving layer and the resolved pixel is, on average, the sorted "over" blend
-c = a1 c1 + (1 - a1)(a2 c2 + (1 - a2)(...)) (003, "Correct on average"). The reference,
+c = a1 c1 + (1 - a1)(a2 c2 + (1 - a2)(...)) ([McGuire 2010], "Correct on average"). The reference,
 ``sorted_blend``, is a float64 ray cast that sorts every layer per sample position and blends;
 depth peeling reaches the same image exactly in as many passes as the most layers any sample sees.
 """

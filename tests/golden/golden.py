@@ -34,11 +34,11 @@ SCENES = {
 @functools.cache
 def algorithms() -> tuple[tuple[str, ...], tuple[str, ...]]:
     """(algorithms for arbitrary tables, algorithms that need an interleaved table), in registry order,
-    read from the registry (sim.algorithm_names(), sim.interleaved_algorithms())."""
+    read from the registry (sim.algorithm_names("points"), sim.interleaved_algorithms())."""
     import sim
 
     interleaved = set(sim.interleaved_algorithms())
-    names = sim.algorithm_names()
+    names = sim.algorithm_names("points")
     return (tuple(n for n in names if n not in interleaved), tuple(n for n in names if n in interleaved))
 
 

@@ -45,7 +45,7 @@ def compute(case) -> dict[str, float]:
     cam = sim.Camera(width=w, height=h, fov_y_deg=hint.get("fov_y_deg", 45.0),
                      focus_distance=hint["focus_distance"], coc_px=10)
     if algo in sim.line_algorithms():
-        table = sim.SampleTable.lines(n_lines=8, seed=3)
+        table = sim.SampleTable.lines(n_lines=8, seed=3, wheel=4)  # the wheel the figures were recorded with
     elif algo in sim.interleaved_algorithms():
         table = sim.SampleTable.interleaved(spp=16, n_lens=64, seed=3)
     else:

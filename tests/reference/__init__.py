@@ -1,19 +1,19 @@
-"""Independent numpy references for the engine tests.
+"""Independent numpy references for the engine tests: the package's (experiments/reference: the ray
+caster, the hard cases, the generators, the engine probes) and the tests' own.
 
-    raycaster    float64 thin-lens ray caster: coverage, depth, nearest-hit visibility
     closed_form  closed-form coverage of defocused and moving squares
-    generators   random cameras, triangles, samples and scenes
-    hardcases    named hard inputs with their expected setup counters
-    compare      engine probes, float32 tolerances and the engine-vs-reference comparators
+    compare      float32 tolerances and the engine-vs-reference comparators
 """
 from .closed_form import fronto_square, overlap, overlap_integral, rect_coverage
 from .compare import (DEPTH_TOL_REL, EDGE_TOL_PX, EPS32, KAPPA_FACTOR, NEAR_TOL_REL, Z_ROUND, check_resolved,
                       compare_probe, compare_resolved, depth_condition, depth_tolerances, engine_params,
                       engine_probe, lens_homogeneous, table_points)
-from .generators import KINDS, Tris, lens_uv, make_scene, random_camera, random_triangle, sample_points
-from .hardcases import hard_cases
-from .raycaster import (edge_distance_px, near_rel_distance, pinhole_scales, proj_scales, ray_cast,
-                        resolve_nearest, sample_rays, screen_to_world, triangle_at, world_from_pixel, world_to_view)
+from experiments.reference.generators import (KINDS, Tris, lens_uv, make_scene, random_camera, random_triangle,
+                                              sample_points)
+from experiments.reference.hardcases import hard_cases
+from experiments.reference.raycaster import (edge_distance_px, near_rel_distance, pinhole_scales, proj_scales,
+                                             ray_cast, resolve_nearest, sample_rays, screen_to_world, triangle_at,
+                                             world_from_pixel, world_to_view)
 
 __all__ = [
     "DEPTH_TOL_REL", "EDGE_TOL_PX", "EPS32", "KAPPA_FACTOR", "KINDS", "NEAR_TOL_REL", "Z_ROUND",

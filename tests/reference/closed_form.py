@@ -7,7 +7,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from .raycaster import screen_to_world
+from experiments.reference.raycaster import screen_to_world
 
 def _clip_antiderivative(s, lo, hi):
     """C(s) with C' = clip(s, lo, hi)."""

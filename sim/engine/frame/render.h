@@ -78,10 +78,17 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
 // rest are validate_frame_params (core/validate.h).
 void validate_params(const RenderParams& p, const SampleTable& table);
 
-// (name, description, needs an interleaved table) of every registered traversal algorithm.
+// The registry's facts about every traversal algorithm: its name and description, whether it needs
+// an interleaved table, the samples it tests ("points" or "lines"), the sample tables it accepts
+// ("points": any point table, "interleaved": point tables with discrete lens coordinates, "lines": line
+// tables), whether it runs the depth-cull stage (HiZ, occlusion queries) and its pipeline ("sample": the 5D
+// sample pipeline, "gpu": a conventional GPU's).
 struct AlgorithmEntry {
   std::string name, description;
   bool needs_interleaved_table;
+  std::string samples, tables;
+  bool depth_cull;
+  std::string pipeline;
 };
 std::vector<AlgorithmEntry> algorithms();
 

@@ -11,7 +11,11 @@ namespace rast5d {
 std::vector<AlgorithmEntry> algorithms() {
   std::vector<AlgorithmEntry> out;
   for (const auto& [name, info] : TraversalRegistry::entries())
-    out.push_back({name, info.description, info.needs_interleaved_table});
+    out.push_back({name, info.description, info.needs_interleaved_table, info.line_samples() ? "lines" : "points",
+                   info.tables == TableKinds::kLines         ? "lines"
+                   : info.tables == TableKinds::kInterleaved ? "interleaved"
+                                                             : "points",
+                   info.depth_cull, info.pipeline == PipelineKind::kGpu ? "gpu" : "sample"});
   return out;
 }
 
@@ -38,16 +42,19 @@ void validate_params(const RenderParams& p, const SampleTable& table) {
     fail("algorithm: occlusion queries are answered by the algorithms with a depth-cull stage (" + names + "); got '" +
          p.algorithm + "'");
   }
-  const bool lines_algo = p.algorithm == "lines";
+  const bool lines_algo = it->second.line_samples();
+  const std::string quoted = "'" + p.algorithm + "'";
   if (lines_algo != p.table_lines)
-    fail(lines_algo ? "algorithm: 'lines' needs a line-sample table (SampleTable.lines), got a point-sample table"
-                    : "algorithm: '" + p.algorithm +
-                          "' tests point samples, got a line-sample table (SampleTable.lines needs algorithm 'lines')");
+    fail(lines_algo ? "algorithm: " + quoted + " tests line samples and needs a line-sample table (SampleTable.lines), "
+                      "got a point-sample table"
+                    : "algorithm: " + quoted +
+                          " tests point samples, got a line-sample table (SampleTable.lines needs a line-sample "
+                          "algorithm)");
   if (lines_algo && p.lens_shape != LensShape::kDisk)
-    fail("lens_shape: line samples (algorithm 'lines') cross the disk lens through its centre; got a non-disk lens");
+    fail("lens_shape: line samples (algorithm " + quoted + ") cross the disk lens through its centre; got a non-disk lens");
   if (lines_algo && p.shading == ShadingMode::kPerLensCell)
-    fail("shading: line samples have no lens-grid cells, so 'per_lens_cell' does not apply to algorithm 'lines'; "
-         "use 'none', 'per_sample', 'msaa' or 'cache'");
+    fail("shading: line samples have no lens-grid cells, so 'per_lens_cell' does not apply to algorithm " + quoted +
+         "; use 'none', 'per_sample', 'msaa' or 'cache'");
   if (p.lens_grid != table.grid())
     fail("lens_grid: the sample table was bucketed for G=" + std::to_string(table.grid()) +
          ", got " + std::to_string(p.lens_grid));

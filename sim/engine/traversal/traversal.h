@@ -51,11 +51,22 @@ constexpr bool runs_depth_cull() {
     return false;
 }
 
+// The sample tables an algorithm accepts: any point-sample table, only point tables with discrete
+// lens coordinates (SampleTable.interleaved, accumulation), or only line-sample tables
+// (SampleTable.lines). The sample kind (point or line samples) follows from it.
+enum class TableKinds { kPoints, kInterleaved, kLines };
+// The pipeline an algorithm's samples go through: the 5D sample pipeline (traversal/sample_pipeline.h)
+// or a conventional GPU's (gpu/gpu_pipeline.h: geometry shader, 2D raster, pixel-shader sample test).
+enum class PipelineKind { kSample, kGpu };
+
 struct TraversalInfo {
   std::string description;
-  bool needs_interleaved_table = false;
-  bool depth_cull = false;  // answers occlusion queries (runs_depth_cull)
+  bool needs_interleaved_table = false;  // tables == kInterleaved
+  bool depth_cull = false;  // answers occlusion queries and reads HiZ (runs_depth_cull)
   std::function<std::unique_ptr<Traversal>(const Frame&, ThreadState&, bool exact)> create;
+  TableKinds tables = TableKinds::kPoints;
+  PipelineKind pipeline = PipelineKind::kSample;
+  bool line_samples() const { return tables == TableKinds::kLines; }
 };
 
 class TraversalRegistry {
@@ -70,15 +81,16 @@ class TraversalRegistry {
   }
 };
 
-#define RAST5D_REGISTER_TRAVERSAL(NAME, DESCRIPTION, NEEDS_INTERLEAVED, CLASS)                   \
+#define RAST5D_REGISTER_TRAVERSAL(NAME, DESCRIPTION, TABLES, PIPELINE, CLASS)                   \
   static const bool kRegistered_##CLASS = ::rast5d::TraversalRegistry::add(                       \
       NAME, ::rast5d::TraversalInfo{                                                              \
-                DESCRIPTION, NEEDS_INTERLEAVED,                                                   \
+                DESCRIPTION, (TABLES) == ::rast5d::TableKinds::kInterleaved,                      \
                 ::rast5d::runs_depth_cull<CLASS<::rast5d::FastArith>>(),                          \
                 [](const ::rast5d::Frame& f, ::rast5d::ThreadState& ts,                           \
                    bool exact) -> std::unique_ptr<::rast5d::Traversal> {                          \
                   if (exact) return std::make_unique<CLASS<::rast5d::ExactArith>>(f, ts);         \
                   return std::make_unique<CLASS<::rast5d::FastArith>>(f, ts);                     \
-                }})
+                },                                                                                \
+                (TABLES), (PIPELINE)})
 
 }  // namespace rast5d

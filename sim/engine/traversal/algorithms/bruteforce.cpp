@@ -32,7 +32,7 @@ class BruteForce final : public Traversal {
 
 RAST5D_REGISTER_TRAVERSAL("bruteforce",
                           "Test every sample in the triangle's screen bounds over the whole lens "
-                          "and shutter (001 §6)",
-                          false, BruteForce);
+                          "and shutter ([Akenine-Möller 2012] §6)",
+                          TableKinds::kPoints, PipelineKind::kSample, BruteForce);
 
 }  // namespace rast5d

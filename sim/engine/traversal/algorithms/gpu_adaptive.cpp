@@ -10,7 +10,7 @@ using GpuAdaptive = gpu::GpuBounding<A, gpu::Method::kAdaptive>;
 }  // namespace
 
 RAST5D_REGISTER_TRAVERSAL("gpu_adaptive",
-                          "000 §4.7 per-triangle choice: parallel-edge triangle for small blur, 2D hexagon for large, 3D hexagon across the near plane, convex hull when moving; pixel-shader stochastic test",
-                          false, GpuAdaptive);
+                          "[Toth 2008] §4.7 per-triangle choice: parallel-edge triangle for small blur, 2D hexagon for large, 3D hexagon across the near plane, convex hull when moving; pixel-shader stochastic test",
+                          TableKinds::kPoints, PipelineKind::kGpu, GpuAdaptive);
 
 }  // namespace rast5d

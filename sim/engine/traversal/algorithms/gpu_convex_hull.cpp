@@ -10,7 +10,7 @@ using GpuConvexHull = gpu::GpuBounding<A, gpu::Method::kConvexHull>;
 }  // namespace
 
 RAST5D_REGISTER_TRAVERSAL("gpu_convex_hull",
-                          "003 (2+1)D convex hull of the vertices' confusion boxes at both shutter ends (motion and defocus; clip-and-box across z = 0), pixel-shader stochastic test",
-                          false, GpuConvexHull);
+                          "[McGuire 2010] (2+1)D convex hull of the vertices' confusion boxes at both shutter ends (motion and defocus; clip-and-box across z = 0), pixel-shader stochastic test",
+                          TableKinds::kPoints, PipelineKind::kGpu, GpuConvexHull);
 
 }  // namespace rast5d

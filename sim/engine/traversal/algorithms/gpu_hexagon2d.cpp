@@ -10,7 +10,7 @@ using GpuHexagon2D = gpu::GpuBounding<A, gpu::Method::kHexagon2D>;
 }  // namespace
 
 RAST5D_REGISTER_TRAVERSAL("gpu_hexagon2d",
-                          "000 §4.4 2D bounding hexagon (6 vertices, 4 triangles), rasterized, then a pixel-shader stochastic test of every sample of each fragment",
-                          false, GpuHexagon2D);
+                          "[Toth 2008] §4.4 2D bounding hexagon (6 vertices, 4 triangles), rasterized, then a pixel-shader stochastic test of every sample of each fragment",
+                          TableKinds::kPoints, PipelineKind::kGpu, GpuHexagon2D);
 
 }  // namespace rast5d

@@ -10,7 +10,7 @@ using GpuHexagon3D = gpu::GpuBounding<A, gpu::Method::kHexagon3D>;
 }  // namespace
 
 RAST5D_REGISTER_TRAVERSAL("gpu_hexagon3d",
-                          "000 §4.4 3D hexagonal bounding volume (12 vertices, 20 triangles), rasterized, pixel-shader stochastic test",
-                          false, GpuHexagon3D);
+                          "[Toth 2008] §4.4 3D hexagonal bounding volume (12 vertices, 20 triangles), rasterized, pixel-shader stochastic test",
+                          TableKinds::kPoints, PipelineKind::kGpu, GpuHexagon3D);
 
 }  // namespace rast5d

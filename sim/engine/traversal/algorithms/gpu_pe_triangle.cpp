@@ -10,7 +10,7 @@ using GpuPETriangle = gpu::GpuBounding<A, gpu::Method::kPETriangle>;
 }  // namespace
 
 RAST5D_REGISTER_TRAVERSAL("gpu_pe_triangle",
-                          "000 §4.5 parallel-edge bounding triangle (2D; 3 vertices, 1 triangle), rasterized, then a pixel-shader stochastic test of every sample of each fragment",
-                          false, GpuPETriangle);
+                          "[Toth 2008] §4.5 parallel-edge bounding triangle (2D; 3 vertices, 1 triangle), rasterized, then a pixel-shader stochastic test of every sample of each fragment",
+                          TableKinds::kPoints, PipelineKind::kGpu, GpuPETriangle);
 
 }  // namespace rast5d

@@ -10,7 +10,7 @@ using GpuReducedWedge = gpu::GpuBounding<A, gpu::Method::kReducedWedge>;
 }  // namespace
 
 RAST5D_REGISTER_TRAVERSAL("gpu_reduced_wedge",
-                          "000 §4.5 reduced bounding wedge (the wedge's silhouette as one strip; the full wedge when the volume reaches the near plane), pixel-shader stochastic test",
-                          false, GpuReducedWedge);
+                          "[Toth 2008] §4.5 reduced bounding wedge (the wedge's silhouette as one strip; the full wedge when the volume reaches the near plane), pixel-shader stochastic test",
+                          TableKinds::kPoints, PipelineKind::kGpu, GpuReducedWedge);
 
 }  // namespace rast5d

@@ -10,7 +10,7 @@ using GpuVRTriangle = gpu::GpuBounding<A, gpu::Method::kVRTriangle>;
 }  // namespace
 
 RAST5D_REGISTER_TRAVERSAL("gpu_vr_triangle",
-                          "000 §4.6 variable-radius bounding triangle (2D; tangent to the confusion circles; falls back to the parallel-edge triangle), pixel-shader stochastic test",
-                          false, GpuVRTriangle);
+                          "[Toth 2008] §4.6 variable-radius bounding triangle (2D; tangent to the confusion circles; falls back to the parallel-edge triangle), pixel-shader stochastic test",
+                          TableKinds::kPoints, PipelineKind::kGpu, GpuVRTriangle);
 
 }  // namespace rast5d

@@ -10,7 +10,7 @@ using GpuWedge = gpu::GpuBounding<A, gpu::Method::kWedge>;
 }  // namespace
 
 RAST5D_REGISTER_TRAVERSAL("gpu_wedge",
-                          "000 §4.5 bounding wedge (3D; 6 vertices, 8 triangles), rasterized, pixel-shader stochastic test",
-                          false, GpuWedge);
+                          "[Toth 2008] §4.5 bounding wedge (3D; 6 vertices, 8 triangles), rasterized, pixel-shader stochastic test",
+                          TableKinds::kPoints, PipelineKind::kGpu, GpuWedge);
 
 }  // namespace rast5d

@@ -287,15 +287,15 @@ using Accumulation = Interleave<A, false, true>;
 }  // namespace
 
 RAST5D_REGISTER_TRAVERSAL("interleave",
-                          "001 §5.3 INTERLEAVE: one pass per discrete lens coordinate, 2D test of that "
+                          "[Akenine-Möller 2012] §5.3 INTERLEAVE: one pass per discrete lens coordinate, 2D test of that "
                           "coordinate's samples",
-                          true, InterleaveFlat);
+                          TableKinds::kInterleaved, PipelineKind::kSample, InterleaveFlat);
 RAST5D_REGISTER_TRAVERSAL("hinterleave",
-                          "001 §5.3 HINTERLEAVE: INTERLEAVE plus an 8x8 tile vs static-triangle test per pass",
-                          true, InterleaveHier);
+                          "[Akenine-Möller 2012] §5.3 HINTERLEAVE: INTERLEAVE plus an 8x8 tile vs static-triangle test per pass",
+                          TableKinds::kInterleaved, PipelineKind::kSample, InterleaveHier);
 RAST5D_REGISTER_TRAVERSAL("accumulation",
-                          "000 §2.2 accumulation buffering: one pinhole pass per lens position of an "
+                          "[Toth 2008] §2.2 accumulation buffering: one pinhole pass per lens position of an "
                           "accumulation table (triangle re-sent and set up every pass), 2D test",
-                          true, Accumulation);
+                          TableKinds::kInterleaved, PipelineKind::kSample, Accumulation);
 
 }  // namespace rast5d

@@ -175,7 +175,7 @@ class Interval final : public Traversal {
 }  // namespace
 
 RAST5D_REGISTER_TRAVERSAL("interval",
-                          "001 §5.2 INTERVAL: one pass per lens-grid cell, triangle bounded over the cell",
-                          false, Interval);
+                          "[Akenine-Möller 2012] §5.2 INTERVAL: one pass per lens-grid cell, triangle bounded over the cell",
+                          TableKinds::kPoints, PipelineKind::kSample, Interval);
 
 }  // namespace rast5d

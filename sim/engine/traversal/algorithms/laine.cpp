@@ -103,8 +103,8 @@ class Laine final : public Traversal {
 }  // namespace
 
 RAST5D_REGISTER_TRAVERSAL("laine",
-                          "Laine et al. 2011 as in 001 §6.3: per-tile axis-aligned lens bounds, every sample "
+                          "[Laine 2011] as in [Akenine-Möller 2012] §6.3: per-tile axis-aligned lens bounds, every sample "
                           "checked against them, no tile-level early out",
-                          false, Laine);
+                          TableKinds::kPoints, PipelineKind::kSample, Laine);
 
 }  // namespace rast5d

@@ -137,8 +137,8 @@ class Laine5D final : public Traversal {
 }  // namespace
 
 RAST5D_REGISTER_TRAVERSAL("laine5d",
-                          "after Laine et al. 2011, motion and defocus: per-tile time interval and lens bounds, "
+                          "after [Laine 2011], motion and defocus: per-tile time interval and lens bounds, "
                           "every sample checked against them, no tile-level early out",
-                          false, Laine5D);
+                          TableKinds::kPoints, PipelineKind::kSample, Laine5D);
 
 }  // namespace rast5d

@@ -318,9 +318,9 @@ class Lines final : public Traversal {
 }  // namespace
 
 RAST5D_REGISTER_TRAVERSAL("lines",
-                          "Line samples in the lens (004 §3-4): analytic line-triangle intervals, segment "
+                          "Line samples in the lens ([Tzeng 2012] §3-4): analytic line-triangle intervals, segment "
                           "buffers with heuristics, κ-weighted composite; needs a line table "
                           "(SampleTable.lines), static triangles only",
-                          false, Lines);
+                          TableKinds::kLines, PipelineKind::kSample, Lines);
 
 }  // namespace rast5d

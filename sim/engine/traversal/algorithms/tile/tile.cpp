@@ -553,10 +553,10 @@ using TileInterleaved = Tile<A, true>;
 }  // namespace
 
 RAST5D_REGISTER_TRAVERSAL("tile",
-                          "001 §5.1 (OUR): per tile, h_i uv-boxes, H_j lens-cell bitmask, per-sample h_i test",
-                          false, TileArbitrary);
+                          "[Akenine-Möller 2012] §5.1 (OUR): per tile, h_i uv-boxes, H_j lens-cell bitmask, per-sample h_i test",
+                          TableKinds::kPoints, PipelineKind::kSample, TileArbitrary);
 RAST5D_REGISTER_TRAVERSAL("tile_interleaved",
-                          "001 OUR (i): the tile algorithm on an interleaved table, 2D test per lens coordinate",
-                          true, TileInterleaved);
+                          "[Akenine-Möller 2012] OUR (i): the tile algorithm on an interleaved table, 2D test per lens coordinate",
+                          TableKinds::kInterleaved, PipelineKind::kSample, TileInterleaved);
 
 }  // namespace rast5d
