@@ -78,7 +78,7 @@ class EnergyTable:
 
 
 DEFAULT = EnergyTable("horowitz45", {
-    # One counted operation (001 §6.2: ADD, MUL, MADD, CMP, MIN, MAX, RCP count one each). The counters do
+    # One counted operation ([Akenine-Möller 2012] §6.2: ADD, MUL, MADD, CMP, MIN, MAX, RCP count one each). The counters do
     # not split the mix, so each is charged as a fused multiply-add (an add plus a multiply), an upper
     # bound for the adds and compares.
     "op.robust": EnergyEntry(0.9 + 3.7, "op", f"32-bit float add 0.9 pJ + multiply 3.7 pJ; {HOROWITZ}"),

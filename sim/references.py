@@ -2,9 +2,9 @@
 ([Akenine-Möller 2012]) and full citation. docs/references.md is generated from it
 (`python -m experiments.config.docs`); user-facing text cites a paper by its key.
 
-The engine's declarations (counters.def, params.def) name the five papers the simulator implements by
-their number (000 to 004); cite() prints them by key wherever a declaration reaches a user
-(sim.counter_docs(), PipelineConfig.field_docs(), docs/config.md, docs/counters.md).
+The papers' own files number the five the simulator implements (000 to 004); cite() turns such a
+number into the key wherever one reaches a user (sim.counter_docs(), PipelineConfig.field_docs(),
+docs/config.md, docs/counters.md); the project's sources cite by key.
 """
 from __future__ import annotations
 

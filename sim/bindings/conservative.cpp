@@ -1,4 +1,4 @@
-// Conservative rasterization mode (002_95ea0844b256f75b.txt Fig. 2).
+// Conservative rasterization mode ([Nilsson 2012] Fig. 2).
 #include "bindings.h"
 
 #include <pybind11/stl.h>

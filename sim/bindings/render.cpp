@@ -258,7 +258,7 @@ void register_render(py::module_& m) {
         return py::make_tuple(order, counts, offsets);
       },
       py::arg("samples"), py::arg("grid"),
-      "Lens-grid buckets (001 Fig. 10): (order (P,P,spp), counts (P,P,G*G), offsets (P,P,G*G)).");
+      "Lens-grid buckets ([Akenine-Möller 2012] Fig. 10): (order (P,P,spp), counts (P,P,G*G), offsets (P,P,G*G)).");
 
   m.def("counter_docs", []() {
     py::dict d;

@@ -1,4 +1,4 @@
-// Per-sample alpha coverage: stochastic transparency (003_53fb3558c3c934ea.txt, "Stochastic
+// Per-sample alpha coverage: stochastic transparency ([McGuire 2010], "Stochastic
 // Transparency": screen-door + multi-sampling + random masks). A covered sample of a triangle with
 // alpha < 1 survives with probability alpha, decided by an integer hash of (pixel, sample, triangle,
 // seed); a discarded sample neither tests nor writes depth. The hashes of different triangles are
@@ -48,7 +48,7 @@ inline std::uint32_t alpha_permute(std::uint32_t x, std::uint32_t n, std::uint32
   return x;
 }
 
-// Stratified masks (003, "pixel shader sets the mask as a pseudo-random function of alpha, x, y,
+// Stratified masks ([McGuire 2010], "pixel shader sets the mask as a pseudo-random function of alpha, x, y,
 // prim ID"): sample s of a pixel gets the value (perm(s) / spp + r) mod 1 with a random permutation
 // and offset per (pixel, triangle), so a triangle keeps floor or ceil of alpha x spp of the pixel's
 // samples, each still with probability alpha (correct on average); the permutation keeps the masks of

@@ -1,4 +1,4 @@
-// HiZ (002_95ea0844b256f75b.txt §3, 000_de06ed5e73318ec6.txt §5.4): per HiZ tile (tile x tile
+// HiZ ([Nilsson 2012] §3, [Toth 2008] §5.4): per HiZ tile (tile x tile
 // pixels of a screen bin) the min and max of the per-sample depths, +inf while any sample is empty.
 // A traversal marks the HiZ tiles it may have written (mark) and the bin's buffers call update()
 // after each triangle, which recomputes the marked tiles from the depth buffer (as hardware does on

@@ -13,7 +13,7 @@
 //    INTERVAL, a lens coordinate for INTERLEAVE / HINTERLEAVE), or, for BRUTEFORCE, which walks
 //    each triangle's pixels once per bin, the whole triangle in the bin. Algorithms mark visit ends
 //    with SamplePipeline::end_visit(); a visit never spans two triangles or two bins.
-//  - Modes (001_3248aaf17c219d5e.txt §3, §6.4; 002_95ea0844b256f75b.txt §2):
+//  - Modes ([Akenine-Möller 2012] §3, §6.4; [Nilsson 2012] §2):
 //      none          shading work is not modelled (no shade.* / tex.* counts; the default, the
 //                    fastest; textures still colour the image);
 //      per_sample    supersampling: a lane per (pixel, sample index); a quad = one sample index
@@ -57,7 +57,7 @@ struct ShadeFrame {
   int cache_entries = 1024;      // shading cache (cache mode)
   int texture_count = 0;         // texture slots per shader (0: untextured)
   TexFilter filter = TexFilter::kTrilinear;
-  int sample_dist_tex = -1;      // 000 §5.3 sample-distribution texture (nearest, 1:1 pixels), or -1
+  int sample_dist_tex = -1;      // [Toth 2008] §5.3 sample-distribution texture (nearest, 1:1 pixels), or -1
   int line_bytes = 64;
   TextureSet textures;
   std::vector<std::int32_t> tex_ids;  // n_tri x kMaxTexSlots, -1 = slot unused
@@ -227,7 +227,7 @@ class ShadeState {
         for (int m = 0; m < nlines; ++m) stream_->push_back(static_cast<std::uint32_t>(lines[m]));
       }
     }
-    if (sf.sample_dist_tex >= 0) {  // 000 §5.3: one texel per pixel, 1:1 screen mapping, nearest
+    if (sf.sample_dist_tex >= 0) {  // [Toth 2008] §5.3: one texel per pixel, 1:1 screen mapping, nearest
       const MipLevel& m = ts[sf.sample_dist_tex].levels[0];
       const int x = ((px % m.w) + m.w) % m.w, y = ((py % m.h) + m.h) % m.h;
       ++(*c_)[Counter::tex_fetches];

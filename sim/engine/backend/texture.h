@@ -6,7 +6,7 @@
 // up, row 0 is the top of the image); addressing wraps (repeat). A texel is 4 bytes (RGBA8) in
 // memory, whatever its float value in the model.
 //
-// Level of detail (000_de06ed5e73318ec6.txt §9.2): the UV derivatives are computed analytically
+// Level of detail ([Toth 2008] §9.2): the UV derivatives are computed analytically
 // per triangle from its vertices projected through the lens centre at shutter open, not from
 // differences between neighbouring quad lanes (which stochastic rasterization scatters over the
 // triangle). rho = max(|d(uv)/dx|, |d(uv)/dy|) in level-0 texels, lambda = log2(rho) (OpenGL 4.6

@@ -1,4 +1,4 @@
-// Depth culling of (triangle, tile) pairs against HiZ, and occlusion queries (002_95ea0844b256f75b.txt
+// Depth culling of (triangle, tile) pairs against HiZ, and occlusion queries ([Nilsson 2012]
 // §3, Appendix A; docs/intervals.md). A traversal that has accepted a pair by its tile test asks
 // check() with the pair's (x, y, u, v, t) box: ẑ (intervals/depth_interval.h) against the HiZ tile's
 // zmax culls the pair (zmax-culling), against zmin lets its samples skip depth reads (zmin-culling).

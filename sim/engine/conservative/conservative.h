@@ -1,7 +1,7 @@
-// Conservative rasterization mode (002_95ea0844b256f75b.txt §2, Fig. 2 bottom right): 1 x 1 pixel
+// Conservative rasterization mode ([Nilsson 2012] §2, Fig. 2 bottom right): 1 x 1 pixel
 // tiles, no sample test; every (triangle, pixel) pair whose tile test passes emits a fragment
 // record with the tile's intervals (û, v̂, t̂) and depth interval ẑ, or is reduced per pixel into a
-// tz-box (min t_lo, min z_lo, max t_hi, max z_hi; 002 §3, continuous collision detection).
+// tz-box (min t_lo, min z_lo, max t_hi, max z_hi; [Nilsson 2012] §3, continuous collision detection).
 //
 // Contract: for every sample (x, y, u, v, t) the exact sample test hits in pixel (px, py), the
 // triangle's record of that pixel exists and contains (u, v, t) in its intervals and the hit's

@@ -1,4 +1,4 @@
-// Operation accounting (ARCHITECTURE.md §Operation accounting; 001_3248aaf17c219d5e.txt §6.2).
+// Operation accounting (docs/op_costs.md; [Akenine-Möller 2012] §6.2).
 //
 // Contract: every kernel that does arithmetic the hardware would do is a template over its
 // scalar type and uses only the operators and helpers below. Each of ADD/SUB, MUL, MADD (FMA),

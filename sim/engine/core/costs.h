@@ -1,5 +1,5 @@
 // Documented operation costs of every kernel (ops per executed kernel; ADD, MUL, MADD, CMP, MIN,
-// MAX and RCP count one each, 001_3248aaf17c219d5e.txt §6.2). The fast path charges these
+// MAX and RCP count one each, [Akenine-Möller 2012] §6.2). The fast path charges these
 // constants; tests/test_op_costs.py runs each kernel on the counting scalar type and checks that
 // the tallies equal them, and test_invariants checks whole renders in both modes agree.
 // docs/op_costs.md explains each figure.
@@ -34,7 +34,7 @@ inline constexpr std::uint64_t kEdges2DSetup = 28;      // 3 edges x 3 x (MUL + 
 inline constexpr std::uint64_t kTile2D = 9;             // 3 x (2 MADD + CMP)
 inline constexpr std::uint64_t kBBoxTile = 4;           // 4 CMP against the triangle's bounds
 inline constexpr std::uint64_t kOrientation = 45;       // 3 det (9 each), 2 MUL, 4 corners x (2 ADD, 2 CMP)
-inline constexpr std::uint64_t kOracleSimplified = 6;   // per edge: 2 SUB, 3 MUL, CMP (001 Eq. 15, 13)
+inline constexpr std::uint64_t kOracleSimplified = 6;   // per edge: 2 SUB, 3 MUL, CMP ([Akenine-Möller 2012] Eq. 15, 13)
 inline constexpr std::uint64_t kOracleFull = 18;        // per edge: 4 SUB, 2 x F(a,b) (5 each), 3 MUL, CMP
 inline constexpr std::uint64_t kOracleBudget = 1;       // per triangle: MUL (tiles x tile cost)
 // Screen bounds over a lens box (tiletest/box_bounds.h, box_bounds_cost): per vertex 2 MIN + 2 MAX
@@ -55,7 +55,7 @@ inline constexpr std::uint64_t kH5SubEdges = 2 + 3 * (2 * kH5EdgeFields + 6 + 6 
 inline constexpr std::uint64_t kH5OrientCorner = 72 + 4 + 5 + 8;
 inline constexpr std::uint64_t kH5SubSetup5D = kH5SubEdges + 4 * (12 + kH5OrientCorner);  // 559
 inline constexpr std::uint64_t kH5SubSetup3D = kH5SubEdges + kH5OrientCorner;             // 244
-// Selective oracle per sub-interval (001 Eq. 15 and 13): mid vertices 3 x (3 x (ADD + MUL) + RCP +
+// Selective oracle per sub-interval ([Akenine-Möller 2012] Eq. 15 and 13): mid vertices 3 x (3 x (ADD + MUL) + RCP +
 // 2 MUL), budget MUL, per edge 2 SUB, 3 MUL, CMP.
 inline constexpr std::uint64_t kH5Oracle = 3 * 9 + 1 + 3 * 6;  // 46
 // Per (tile, sub-interval): s_lo, s_hi 2 MADD, SUB, 2 MUL (remainder factor), 2 SUB (s - 1).
@@ -155,7 +155,7 @@ inline constexpr std::uint64_t zhat_plane_cost(bool lens) { return lens ? kZhatP
 // ẑ against the HiZ tile (backend/zcull.h): 2 CMP (zmax, zmin).
 inline constexpr std::uint64_t kHiZCompare = 2;
 
-// ---- line samples (lines/coverage.h, lines/segment_buffer.h; 004 §3-4) ----
+// ---- line samples (lines/coverage.h, lines/segment_buffer.h; [Tzeng 2012] §3-4) ----
 // Per (screen point, triangle): 6 MADD relative coordinates; per edge e 2 MUL + SUB, d/du and d/dv
 // MUL + MADD each; det, d/du, d/dv MUL + 2 MADD each; sum and its gradients 2 ADD each; the near
 // function and its gradients 3 MADD.

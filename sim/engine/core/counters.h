@@ -1,4 +1,4 @@
-// Counter registry (STYLE.md §Counters): declared once in counters.def; per thread; merged by
+// Counter registry (docs/architecture.md, "a counter"): declared once in counters.def; per thread; merged by
 // summation at the end of a render (integer sums, so the merge order never matters).
 #pragma once
 

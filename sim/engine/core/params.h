@@ -45,8 +45,8 @@ template <>
 struct ChoiceTraits<OracleMode> {
   static constexpr std::string_view registry = "oracle_modes";
   static constexpr std::array<ChoiceInfo, 2> table = {{
-      {"simplified", "N = R_S / 2 |X_q - X_p| |Y_q - Y_p| (001 Eq. 15, the paper's)"},
-      {"full", "N = R_S / 8 F(a, b) F(c, d) (001 Eq. 9-12)"},
+      {"simplified", "N = R_S / 2 |X_q - X_p| |Y_q - Y_p| ([Akenine-Möller 2012] Eq. 15, the paper's)"},
+      {"full", "N = R_S / 8 F(a, b) F(c, d) ([Akenine-Möller 2012] Eq. 9-12)"},
   }};
 };
 template <>
@@ -69,7 +69,7 @@ template <>
 struct ChoiceTraits<ZhatMode> {
   static constexpr std::string_view registry = "zhat_modes";
   static constexpr std::array<ChoiceInfo, 2> table = {{
-      {"planes", "moving box + moving planes (002 App. A)"},
+      {"planes", "moving box + moving planes ([Nilsson 2012] App. A)"},
       {"vertex", "vertex min/max"},
   }};
 };
@@ -137,7 +137,7 @@ struct ChoiceTraits<ShadingMode> {
       {"per_sample", "supersampling: a lane per (pixel, sample index)"},
       {"msaa", "a lane per pixel per visit"},
       {"per_lens_cell", "a lane per (pixel, lens-grid cell) per visit"},
-      {"cache", "a memoising shading cache keyed by (triangle, shading-grid point) (002 §2)"},
+      {"cache", "a memoising shading cache keyed by (triangle, shading-grid point) ([Nilsson 2012] §2)"},
       {"none", "shading work is not modelled (no shade.*/tex.* counts)"},
   }};
 };
@@ -164,7 +164,7 @@ struct ChoiceTraits<TexLayout> {
   }};
 };
 
-// The gpu_constants parameter (000 §9.6): where the contained triangle's data lives for the
+// The gpu_constants parameter ([Toth 2008] §9.6): where the contained triangle's data lives for the
 // conventional-GPU pipeline's pixel shader.
 enum class GpuConstants : int { kNone = 0, kTriangle = 1, kStrip = 2 };
 template <>

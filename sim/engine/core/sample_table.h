@@ -1,11 +1,11 @@
-// The programmable sample table as the engine sees it (ARCHITECTURE.md §sample table).
+// The programmable sample table as the engine sees it (docs/conventions.md, the sample table).
 //
 // A P x P block of pixels repeats over the screen; pixel (px mod P, py mod P) holds spp samples
 // (x, y, u, v, t): x, y in [0, 1) inside the pixel, (u, v) in the lens shape inside [-1, 1]^2,
 // t in [0, 1). A sample's *canonical index* s (its position in the table) names its slot in the
 // depth buffer, so every algorithm, whatever order it visits samples in, writes the same slots.
 //
-// Lens-grid buckets (001_3248aaf17c219d5e.txt §5.1, Fig. 10): the lens square [-1, 1]^2 is cut
+// Lens-grid buckets ([Akenine-Möller 2012] §5.1, Fig. 10): the lens square [-1, 1]^2 is cut
 // into G x G cells; cell (i, j) = (clamp(floor((u + 1) G / 2)), clamp(floor((v + 1) G / 2))),
 // index j * G + i. Per pixel, `cell_order` lists canonical indices sorted by cell (stable) and
 // `cell_offsets[c] .. cell_offsets[c + 1]` is cell c's range.

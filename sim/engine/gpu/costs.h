@@ -1,6 +1,6 @@
 // Documented operation costs of the conventional-GPU pipeline (gpu/): the geometry shader's
 // bounding-geometry kernels, the 2D rasterizer's edge tests and the pixel shader's per-fragment
-// re-derived setup. Units as core/costs.h (001_3248aaf17c219d5e.txt §6.2: ADD, MUL, MADD, CMP,
+// re-derived setup. Units as core/costs.h ([Akenine-Möller 2012] §6.2: ADD, MUL, MADD, CMP,
 // MIN, MAX, RCP one each), plus SQRT counted as one operation (a special-function op like RCP).
 // The fast path charges these constants per executed kernel; the counting path tallies the same
 // kernels on Counted<T>, and tests/test_invariants.py (documented == exact, every algorithm)
@@ -28,15 +28,15 @@ inline constexpr std::uint64_t support_cost(bool disk) { return disk ? kSupportD
 inline constexpr std::uint64_t kVRRadiusDisk = 1;
 inline constexpr std::uint64_t kVRRadiusSquare = 3;
 inline constexpr std::uint64_t kVRTangent = 18;
-// Adaptive choice (000 §4.7): per vertex MUL + MADD (squared blur radius), 2 MAX, MUL + CMP.
+// Adaptive choice ([Toth 2008] §4.7): per vertex MUL + MADD (squared blur radius), 2 MAX, MUL + CMP.
 inline constexpr std::uint64_t kAdaptiveChoice = 10;
-// (2+1)D convex hull (003): 4 ADD/SUB for the corners of one confusion box; per comparison of the
+// (2+1)D convex hull ([McGuire 2010]): 4 ADD/SUB for the corners of one confusion box; per comparison of the
 // sort 3 CMP; per orientation test 4 SUB, 2 MUL, SUB, CMP; per hull edge 2 SUB, MUL + MADD.
 inline constexpr std::uint64_t kHullCorners = 4;
 inline constexpr std::uint64_t kHullCompare = 3;
 inline constexpr std::uint64_t kHullCross = 8;
 inline constexpr std::uint64_t kHullEdge = 4;
-// 3D volumes (000 §4.4-4.5) in the view-like space (X s, Y s, W): vertex scaling 6 MUL; two edge
+// 3D volumes ([Toth 2008] §4.4-4.5) in the view-like space (X s, Y s, W): vertex scaling 6 MUL; two edge
 // vectors 6 SUB; normal 6 MUL + 3 SUB; two normalisations 2 x (MUL, 2 MADD, SQRT, RCP, 3 MUL);
 // in-plane axis 6 MUL + 3 SUB; 2D coordinates 4 x (MUL, 2 MADD); degeneracy CMP; 3 x (SUB) |W - F|.
 inline constexpr std::uint64_t kPlane = 6 + 6 + 9 + 16 + 9 + 12 + 1 + 3;  // 62
@@ -57,10 +57,10 @@ inline constexpr std::uint64_t kRasterEdge = 3;       // per pixel and edge: MUL
 
 // ---- pixel shader (traversal/algorithms/gpu_pipeline.h; ops.ps_setup) ----
 // Sample-kernel constants the pixel shader re-derives per fragment without triangle constants
-// (000 §9.6): static shear coefficients 6 MADD (core kSetupShear); motion deltas 9 SUB.
+// ([Toth 2008] §9.6): static shear coefficients 6 MADD (core kSetupShear); motion deltas 9 SUB.
 inline constexpr std::uint64_t kRederiveShear = 6;
 inline constexpr std::uint64_t kRederiveMotion = 9;
-// Perturbation texture (000 §5.3): its texture coordinate is the fragment's screen position
+// Perturbation texture ([Toth 2008] §5.3): its texture coordinate is the fragment's screen position
 // scaled to one texel per pixel of the repeating block, 2 MUL per fragment; then one texel fetch
 // (u, v, t: a 16-byte RGBA32F texel) per sample, counted in gpu.perturb_fetches, not in ops.
 inline constexpr std::uint64_t kPerturbCoord = 2;

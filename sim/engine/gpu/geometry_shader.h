@@ -1,5 +1,5 @@
-// The geometry shader of the conventional-GPU pipeline (000_de06ed5e73318ec6.txt §3.3, §4;
-// 003_53fb3558c3c934ea.txt "(2+1)D rasterization"): per triangle, a bounding polygon in screen
+// The geometry shader of the conventional-GPU pipeline ([Toth 2008] §3.3, §4;
+// [McGuire 2010] "(2+1)D rasterization"): per triangle, a bounding polygon in screen
 // space that contains every pixel position a sample can hit the triangle at, for every lens point
 // (u, v) of the sample table and every time t of the shutter.
 //
@@ -18,22 +18,22 @@
 // that support, so every method is conservative by construction; the methods differ in how
 // many half-planes (output vertices, triangles) they spend and how tight they are.
 //
-// Methods (000 Table 1, 003):
-//   pe_triangle   3 half-planes parallel to the edges (000 §4.5, 2D)
-//   vr_triangle   3 half-planes tangent to the two confusion circles of each edge (000 §4.6); falls
+// Methods ([Toth 2008] Table 1, [McGuire 2010]):
+//   pe_triangle   3 half-planes parallel to the edges ([Toth 2008] §4.5, 2D)
+//   vr_triangle   3 half-planes tangent to the two confusion circles of each edge ([Toth 2008] §4.6); falls
 //                 back to pe_triangle when a circle encloses the other or the bound inverts
-//   hexagon2d     the 3 edge half-planes plus 3 at each vertex with the averaged normal (000 §4.4)
+//   hexagon2d     the 3 edge half-planes plus 3 at each vertex with the averaged normal ([Toth 2008] §4.4)
 //   wedge         3D: the pe construction in the triangle's plane with the discs of confusion
-//                 projected to it, extruded along the normal to enclose the largest disc (000 §4.5)
-//   reduced_wedge the wedge's silhouette as one strip (000 §4.5); needs the volume in front of the
+//                 projected to it, extruded along the normal to enclose the largest disc ([Toth 2008] §4.5)
+//   reduced_wedge the wedge's silhouette as one strip ([Toth 2008] §4.5); needs the volume in front of the
 //                 near plane (the silhouette from the pinhole exists), else the full wedge
-//   hexagon3d     3D: the hexagon construction in the triangle's plane, extruded (000 §4.4)
-//   convex_hull   003's (2+1)D hull: the convex hull of the confusion boxes of the vertex positions
+//   hexagon3d     3D: the hexagon construction in the triangle's plane, extruded ([Toth 2008] §4.4)
+//   convex_hull   [McGuire 2010]'s (2+1)D hull: the convex hull of the confusion boxes of the vertex positions
 //                 at both shutter ends; clip-and-box (the triangle's setup box) across z = 0
-//   adaptive      000 §4.7 per triangle: pe_triangle when the blur is small against the triangle,
+//   adaptive      [Toth 2008] §4.7 per triangle: pe_triangle when the blur is small against the triangle,
 //                 else hexagon2d; hexagon3d across the near plane; convex_hull when moving
-// Special cases (000 §4.8), each counted: 2D methods with a vertex behind the near plane (inverted
-// planes) use clip-and-box; 000's methods (defocus only) on moving triangles use convex_hull;
+// Special cases ([Toth 2008] §4.8), each counted: 2D methods with a vertex behind the near plane (inverted
+// planes) use clip-and-box; [Toth 2008]'s methods (defocus only) on moving triangles use convex_hull;
 // triangles degenerate in image space use the box; 3D volumes reaching behind the near plane are
 // clipped there (the clipped volume's projection is still conservative: accepted hits have W >= near).
 //
@@ -72,7 +72,7 @@ enum class Method : int {
   kBox,  // fallback only: the triangle's setup box
 };
 
-// Why a triangle did not get its method's own bound (000 §4.8), counted per triangle.
+// Why a triangle did not get its method's own bound ([Toth 2008] §4.8), counted per triangle.
 enum class Fallback : int { kNone = 0, kNear, kMotion, kDegenerate, kVR, kReduced };
 
 inline constexpr int kMaxPlanes = 64;
@@ -176,7 +176,7 @@ inline double polygon_area(const double* x, const double* y, int n) {
 }
 
 // The fallback box: the triangle's setup bounds (for a triangle across the near plane, those of
-// its near-clipped polygon: 003's clip-and-box). No geometry-shader work (setup's).
+// its near-clipped polygon: [McGuire 2010]'s clip-and-box). No geometry-shader work (setup's).
 inline void box_bound(const TriSetup& tri, Bound& b) {
   b.n_planes = 0;
   const double m = margin_for(std::max({std::fabs(tri.lo_x), std::fabs(tri.hi_x), std::fabs(tri.lo_y),
@@ -284,7 +284,7 @@ class GeometryShader {
     }
     if (tri.moving) {
       if (method != Method::kConvexHull && method != Method::kAdaptive) b.fallback = Fallback::kMotion;
-      if (tri.full_bounds) {  // may cross the near plane during the shutter: 003's box
+      if (tri.full_bounds) {  // may cross the near plane during the shutter: [McGuire 2010]'s box
         if (b.fallback == Fallback::kNone) b.fallback = Fallback::kNear;
         detail::box_bound(tri, b);
         return b;
@@ -295,7 +295,7 @@ class GeometryShader {
     if (tri.near_clipped) {
       if (method == Method::kAdaptive) return volume(Method::kHexagon3D, tri, b, ops);
       if (three_d) return volume(method, tri, b, ops);
-      b.fallback = Fallback::kNear;  // inverted planes (000 §4.8.1) / z = 0 crossing (003)
+      b.fallback = Fallback::kNear;  // inverted planes ([Toth 2008] §4.8.1) / z = 0 crossing ([McGuire 2010])
       detail::box_bound(tri, b);
       return b;
     }
@@ -313,7 +313,7 @@ class GeometryShader {
     detail::box_bound(tri, b);
   }
 
-  // 003: the hull of the confusion boxes of the vertex positions (both shutter ends if moving).
+  // [McGuire 2010]: the hull of the confusion boxes of the vertex positions (both shutter ends if moving).
   void hull(const TriSetup& tri, Bound& b, std::uint64_t& ops) const {
     D px[kMaxPlanes], py[kMaxPlanes];
     int n = 0;
@@ -423,7 +423,7 @@ class GeometryShader {
         b.out_vertices = 3, b.out_triangles = 1;
         if (close_polygon(nx, ny, h, 3, b, mag, ops)) return b;
       }
-      b.fallback = Fallback::kVR;  // no outer tangent, or the tangents invert (000 §4.6)
+      b.fallback = Fallback::kVR;  // no outer tangent, or the tangents invert ([Toth 2008] §4.6)
       method = Method::kPETriangle;
     }
     if (method == Method::kPETriangle) {
@@ -447,7 +447,7 @@ class GeometryShader {
     return b;
   }
 
-  // 000 §4.6: per edge the outer tangent of the confusion circles at its ends.
+  // [Toth 2008] §4.6: per edge the outer tangent of the confusion circles at its ends.
   bool vr_planes(const Shape s[3], const int o[3], D* nx, D* ny, std::uint64_t& ops) const {
     D r[3];
     for (int j = 0; j < 3; ++j) {
@@ -472,7 +472,7 @@ class GeometryShader {
     return ok;
   }
 
-  // 000 §4.4-4.5, 3D: the hexagon / wedge in the triangle's plane, extruded along its normal, in
+  // [Toth 2008] §4.4-4.5, 3D: the hexagon / wedge in the triangle's plane, extruded along its normal, in
   // the view-like space Q = (X s, Y s, W) where the disc of confusion of a point is the lens set
   // scaled by (kx s (W - F), ky s (W - F)) at constant W; projected (and clipped at the near plane).
   Bound& volume(Method method, const TriSetup& tri, Bound& b, std::uint64_t& ops) const {
@@ -595,7 +595,7 @@ class GeometryShader {
       degenerate(tri, b);
       return b;
     }
-    // Emitted geometry: the hexagon volume 12 vertices / 20 triangles, the wedge 6 / 8 (000
+    // Emitted geometry: the hexagon volume 12 vertices / 20 triangles, the wedge 6 / 8 ([Toth 2008]
     // Table 1); the reduced wedge its silhouette as one strip, when it exists (all in front).
     if (method == Method::kHexagon3D) {
       b.out_vertices = 12, b.out_triangles = 20;

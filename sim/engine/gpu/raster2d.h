@@ -1,4 +1,4 @@
-// The conventional 2D rasterizer of the GPU pipeline (000_de06ed5e73318ec6.txt §3.1): the
+// The conventional 2D rasterizer of the GPU pipeline ([Toth 2008] §3.1): the
 // geometry shader's bounding polygon (gpu/geometry_shader.h) is rasterized conservatively: a
 // pixel is a fragment when its square [px, px + 1] x [py, py + 1] meets every half-plane of the
 // polygon (one fragment per pixel and triangle, as a convex strip dilated by the pixel gives).

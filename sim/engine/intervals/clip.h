@@ -1,4 +1,4 @@
-// User clip planes (002_95ea0844b256f75b.txt §2): an axis-aligned box in (u, v, t).
+// User clip planes ([Nilsson 2012] §2): an axis-aligned box in (u, v, t).
 //
 // Contract: a sample whose (u, v, t) lies outside the closed box is never hit, for every
 // algorithm (backend/sample_backend.h rejects it after the inside test, counted in
@@ -18,7 +18,7 @@ namespace rast5d::iv {
 
 inline constexpr double kInfD = std::numeric_limits<double>::infinity();
 
-// The user clip box (002 §2): samples outside it are never hit.
+// The user clip box ([Nilsson 2012] §2): samples outside it are never hit.
 struct ClipBox {
   double u_lo = -kInfD, u_hi = kInfD, v_lo = -kInfD, v_hi = kInfD, t_lo = -kInfD, t_hi = kInfD;
   bool active_u = false, active_v = false, active_t = false;

@@ -1,4 +1,4 @@
-// Depth intervals ẑ (002_95ea0844b256f75b.txt Appendix A): a conservative interval of the depth a
+// Depth intervals ẑ ([Nilsson 2012] Appendix A): a conservative interval of the depth a
 // (triangle, tile) pair can produce, for HiZ culling and occlusion queries (backend/zcull.h).
 //
 // Contract (tested in tests/test_intervals.py against the brute-force sample test): the depth
@@ -182,7 +182,7 @@ inline double zhat_margin(const TriSetup& tri, const FrameConst& fc, bool lens, 
   return std::isfinite(rho) ? rho : kInfD;
 }
 
-// Per-triangle moving planes (002 App. A Eq. 1): for base time tau in {0, 1} the triangle's plane
+// Per-triangle moving planes ([Nilsson 2012] App. A Eq. 1): for base time tau in {0, 1} the triangle's plane
 // n . P + d = 0 at tau, pushed along its normal by v so that the whole moving triangle stays on
 // the side n . P + d + v |t - tau| <= 0.
 struct MovingPlanes {

@@ -1,4 +1,4 @@
-// H5: the H_j lines of 001_3248aaf17c219d5e.txt §4.3 (Eq. 4-5) extended to time, for moving
+// H5: the H_j lines of [Akenine-Möller 2012] §4.3 (Eq. 4-5) extended to time, for moving
 // triangles: per (screen tile, time sub-interval, lens-grid cell) a conservative test of whether the
 // tile lies outside a triangle edge for every (u, v, t) of the cell and the tile's time interval
 // t̂_k. It refines the (lens cell x t̂_k) boxes that the time intervals and 5D lens sets
@@ -8,7 +8,7 @@
 // has q(s) = q_a + s Δq, r(s) = r_a + s Δr, so Q = q x r is quadratic in s and d = r - q linear:
 // every H_j constant of halfspace_edges.h (a0, a1, b0, b1, cx, cy, c0) is a quadratic
 //     f(s) = f0 + s (f1 - f0) + s (s - 1) f2,      f2 = its s^2 coefficient (from Δq x Δr),
-// and for tile corner c the line of 001 Eq. 4 is H_c(u, v, s) = A(s) u + B(s) v + C(s). On the
+// and for tile corner c the line of [Akenine-Möller 2012] Eq. 4 is H_c(u, v, s) = A(s) u + B(s) v + C(s). On the
 // tile's time interval [s_lo, s_hi] (from t̂_k), with σ in [0, 1] its local time,
 //     H_c = (1 - σ) H_c(u, v, s_lo) + σ H_c(u, v, s_hi) + R_c(u, v) (s_hi - s_lo)^2 σ (σ - 1),
 // where R_c = A2 u + B2 v + C2 (the s^2 coefficients at corner c). As σ (σ - 1) is in [-1/4, 0],
@@ -16,7 +16,7 @@
 // over the lens square. For fixed (u, v) the right side is linear in σ, so its maximum over a lens
 // cell x [s_lo, s_hi] is its maximum over the cell at σ = 0 or σ = 1: the cell is outside corner c's
 // line for the whole interval iff both end lines (each raised by ρ_c) are negative over the cell
-// (line_cells, the 001 §5.1 evaluation at the cell's most positive corner). These are the
+// (line_cells, the [Akenine-Möller 2012] §5.1 evaluation at the cell's most positive corner). These are the
 // separating planes in (u, v, t) of the title: per corner, two lines in the lens plane at the ends
 // of t̂_k and their conservative hull in t.
 //
@@ -24,7 +24,7 @@
 // of the projected edge from the third vertex: sigma * H_c < 0 for all four corners, with sigma the
 // triangle's orientation seen from (u, v, t) (the sign of the sample test's determinant). H_c is
 // affine in the corner, so where its corner gradient keeps its sign one support corner decides (else
-// 2 or 4 corners; 001's two tangent corners are not used: the focus-plane point v of the edge moves
+// 2 or 4 corners; [Akenine-Möller 2012]'s two tangent corners are not used: the focus-plane point v of the edge moves
 // with t, and its nine-region class may change within t̂_k). sigma must be one sign over the lens
 // square and the sub-interval: the orientation det[X', Y', W] is affine in (u, v) and cubic in s,
 // and its tensor Bernstein coefficients over the lens square's corners and [0, 1] bound it (convex
@@ -55,7 +55,7 @@ inline constexpr int kH5Fields = 7;  // a0, a1, b0, b1, cx, cy, c0 (halfspace_ed
 
 // One edge of one sub-interval: f(s) = f0 + s (g + (s - 1) f2) per field (g = f1 - f0).
 struct EdgeH5 {
-  bool active = false;  // false: disabled by the selective oracle (001 Appendix A, per sub-interval)
+  bool active = false;  // false: disabled by the selective oracle ([Akenine-Möller 2012] Appendix A, per sub-interval)
   double f0[kH5Fields], g[kH5Fields], f2[kH5Fields];
 };
 
@@ -105,7 +105,7 @@ inline int h5_orientation(const iv::SubInterval& si, bool lens) {
         W[e][j] = D(si.P[e][j][2]);
       }
     // det[X(s), Y(s), W(s)] is multilinear in the columns: its degree-3 Bernstein coefficients are
-    // the mean determinants with k columns taken at the end (001 Appendix A's shear per column).
+    // the mean determinants with k columns taken at the end ([Akenine-Möller 2012] Appendix A's shear per column).
     const D b0 = det3_columns(X[0], Y[0], W[0]);
     const D b1 = det3_columns(X[1], Y[0], W[0]) + det3_columns(X[0], Y[1], W[0]) + det3_columns(X[0], Y[0], W[1]);
     const D b2 = det3_columns(X[0], Y[1], W[1]) + det3_columns(X[1], Y[0], W[1]) + det3_columns(X[1], Y[1], W[0]);
@@ -122,7 +122,7 @@ inline int h5_orientation(const iv::SubInterval& si, bool lens) {
 
 // Per sub-interval of a moving triangle: the edges' quadratics and the orientation (setup).
 // Cost per sub-interval: cost::kH5SubSetup5D / 3D (when every vertex is in front; else nothing).
-// Selective oracle (001 Appendix A, Eq. 13 and 15, per sub-interval): edge (p, q) of the triangle
+// Selective oracle ([Akenine-Möller 2012] Appendix A, Eq. 13 and 15, per sub-interval): edge (p, q) of the triangle
 // at mid-sub-interval seen from the lens centre culls about N = R_S / 2 |X_q - X_p| |Y_q - Y_p|
 // samples of the shutter, N / S of the sub-interval's; the edge is disabled when N / S * c_sample <
 // n_tiles * c_tile (c_tile: cost::h5_edge_tile_cost). oracle = false keeps every edge.
@@ -206,7 +206,7 @@ inline void h5_setup(const iv::MotionSetup& ms, const FrameConst& fc, const H5Or
 
 // The oracle's C_tile: the expected H5 cost of one edge against one (tile, sub-interval): its
 // constants at both ends, the support corner, and that corner's lines (5D: with their box pre-tests
-// and the cells at both ends over the full G x G grid, as 001's C_tile counts the lines over the grid).
+// and the cells at both ends over the full G x G grid, as [Akenine-Möller 2012]'s C_tile counts the lines over the grid).
 inline std::uint64_t h5_edge_tile_cost(bool lens, int G) {
   const std::uint64_t g = static_cast<std::uint64_t>(G);
   return lens ? cost::kH5EdgeEnds5D + cost::kH5Support5D + cost::kH5CornerOrder + cost::kH5Corner5D +

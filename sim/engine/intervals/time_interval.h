@@ -1,4 +1,4 @@
-// Time intervals t̂ of the 5D pipeline (002_95ea0844b256f75b.txt §2, Fig. 2): per screen tile and
+// Time intervals t̂ of the 5D pipeline ([Nilsson 2012] §2, Fig. 2): per screen tile and
 // time sub-interval, a conservative interval of shutter time for moving triangles, and for
 // defocused ones the lens sets of each sub-interval.
 //
@@ -18,7 +18,7 @@
 //    box enters through its two corners per axis (the forms at u0 and u1 both must be outside).
 //  * W crossing zero: culling is allowed only on the sub-interval's part where every W_j(s) >
 //    w_eps (itself an open interval of s); elsewhere the tile keeps the time.
-//  * 5D lens sets: the 001 h_i lines over the six vertices at the sub-interval's ends (a linearly
+//  * 5D lens sets: the [Akenine-Möller 2012] h_i lines over the six vertices at the sub-interval's ends (a linearly
 //    moving point's projection is monotonic in t, so they bound the sub-interval).
 #pragma once
 

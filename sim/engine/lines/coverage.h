@@ -1,4 +1,4 @@
-// Line samples in the lens (004_da3c211285527fac.txt §3.1): analytic coverage of a lens-space line
+// Line samples in the lens ([Tzeng 2012] §3.1): analytic coverage of a lens-space line
 // by a static (possibly defocused) triangle.
 //
 // Contract:
@@ -6,9 +6,9 @@
 //    lens centre; it covers the lens points p (c, s), p in [-1, 1] (the unit disk lens).
 //  * At a fixed screen point the homogeneous edge functions of the sheared triangle
 //    (sampletest/kernels.h) are linear in (u, v): the u·v terms cancel because every vertex is
-//    sheared by the same K (W_j - F) (004 Eq. 2 in homogeneous form). So are det = Σ W_j e_j and
+//    sheared by the same K (W_j - F) ([Tzeng 2012] Eq. 2 in homogeneous form). So are det = Σ W_j e_j and
 //    sum = Σ e_j. line_point_setup() computes, once per (screen point, triangle), each function's
-//    value at the lens centre and its u and v gradients (004's C_i, A_i, B_i); line_interval()
+//    value at the lens centre and its u and v gradients ([Tzeng 2012]'s C_i, A_i, B_i); line_interval()
 //    restricts them to one direction and intersects the half-lines where every e_i has det's sign
 //    (and, for triangles crossing the near plane, where the hit point has W >= near: det - near·sum
 //    has det's sign). The result is at most two intervals (one per sign of det) of p in [-1, 1]:
@@ -150,10 +150,10 @@ inline F line_depth(F s0, F sg, F d0, F dg, F p, F neg_near) {
   return madd(neg_near, sum * rcp(det), F(1.0f));
 }
 
-// κ weight of an interval of a wagon-wheel line (004 §3.1.2) on the unit disk. Lines through the
+// κ weight of an interval of a wagon-wheel line ([Tzeng 2012] §3.1.2) on the unit disk. Lines through the
 // centre at uniform angles sample the disk with density ∝ 1/|p|; weighting dp by |p| undoes it, and
 // the normalisation makes the whole line [-1, 1] weigh 1: κ(p1, p2) = (p2|p2| - p1|p1|) / 2
-// (004 writes 2(p2|p2| - p1|p1|) for its lens p in [-1/2, 1/2]). Cost: cost::kKappa.
+// ([Tzeng 2012] writes 2(p2|p2| - p1|p1|) for its lens p in [-1/2, 1/2]). Cost: cost::kKappa.
 template <class F>
 inline F kappa(F p1, F p2) {
   return (p2 * vabs(p2) - p1 * vabs(p1)) * F(0.5f);

@@ -1,12 +1,12 @@
-// The per-line segment buffer and its composite (004_da3c211285527fac.txt §4, §4.1, Fig. 3, Fig. 6).
+// The per-line segment buffer and its composite ([Tzeng 2012] §4, §4.1, Fig. 3, Fig. 6).
 //
 // Contract:
 //  * One buffer per line sample holds the segments (lens intervals covered by a triangle, each
 //    shaded once at its midpoint) that reached it. With every heuristic off and no capacity limit
 //    it holds every segment, and composite() is the exact visibility integral of the line up to
 //    the depth order inside each elementary interval (decided at its midpoint; intersecting
-//    segments are ordered there, as 004 §4.1 accepts).
-//  * Heuristics (pipeline.lines.*), in 004 §4.1's order for an incoming segment: occluded (an
+//    segments are ordered there, as [Tzeng 2012] §4.1 accepts).
+//  * Heuristics (pipeline.lines.*), in [Tzeng 2012] §4.1's order for an incoming segment: occluded (an
 //    existing segment covers it and lies entirely in front: dropped; it covers an existing one and
 //    lies entirely in front: that one is removed), merge (depth, colour and gap within thresholds:
 //    the two become one segment over their union with the κ-weighted colour), length (a segment
@@ -15,7 +15,7 @@
 //    drops the incoming one when that is the smallest). The occlusion test never changes the image (it
 //    removes only segments hidden over their whole extent, depth being monotone along a segment);
 //    the others trade bias for storage and work.
-//  * Every operation is counted in 001 §6.2 units through the scalar type F: the functions return
+//  * Every operation is counted in [Akenine-Möller 2012] §6.2 units through the scalar type F: the functions return
 //    the documented count of what they executed (core/costs.h, §line samples), and the counting
 //    path's tally equals it (tests/test_lines.py).
 #pragma once
@@ -140,7 +140,7 @@ inline void segment_insert(std::vector<Segment>& buf, const Segment& n, int capa
   buf[m] = n;
 }
 
-// Composite one line (004 Fig. 3): walk the sorted segment ends; in each elementary interval the
+// Composite one line ([Tzeng 2012] Fig. 3): walk the sorted segment ends; in each elementary interval the
 // nearest covering segment (depth at the interval's midpoint) contributes κ(interval) x colour.
 // scratch: reusable storage. Returns the documented operation count; steps counts the intervals
 // that had a covering segment.

@@ -1,6 +1,6 @@
 // The sample test: is one sample (x, y, u, v, t) inside the triangle placed at its (u, v, t)?
 //
-// Contract (ARCHITECTURE.md §Geometric conventions, docs/conventions.md):
+// Contract (docs/conventions.md, geometric conventions):
 //  * Vertices are pixel-homogeneous (X, Y, W); the sample is the pixel-space point (sx, sy).
 //  * Depth of field shears X' = X + u * cx, cx = Kx * (W - F); time lerps p(t) = p0 + t * (p1 - p0).
 //  * Edge functions are homogeneous 2D (Olano-Greer) evaluated *relative to the sample*:

@@ -1,6 +1,6 @@
 // Per-triangle tile-test setup shared by the tile-based algorithms (tile, tile_interleaved, laine):
 // the lens projection of the footprint vertices (h_i lines), the triangle's orientation over the
-// lens, the per-edge H_j constants and the selective-H oracle (001 Appendix A).
+// lens, the per-edge H_j constants and the selective-H oracle ([Akenine-Möller 2012] Appendix A).
 //
 // Contract: the footprint's lens vertices bound the triangle's projection from every lens point
 // (and, for a moving triangle, every time), so the h_i and H_j lines built on them are
@@ -112,7 +112,7 @@ inline Footprint build_footprint(const TriSetup& tri, const Frame& f, bool with_
     fp.orient_neg = tiletest::line_cells<D>(tiletest::Line{orient.A, orient.B, orient.C + thr}, Gc, 0, Gc - 1, 0, Gc - 1);
     charge<A>(ops, 2 * tiletest::line_cells_cost(Gc, Gc));
   }
-  // Selective H_j oracle (001 Appendix A): N_samples * C_sample < N_tiles * C_tile disables.
+  // Selective H_j oracle ([Akenine-Möller 2012] Appendix A): N_samples * C_sample < N_tiles * C_tile disables.
   const int T = p.tile_size, G = p.lens_grid;
   const double n_tiles = static_cast<double>((tri.bx1 - 1) / T - tri.bx0 / T + 1) *
                          static_cast<double>((tri.by1 - 1) / T - tri.by0 / T + 1);

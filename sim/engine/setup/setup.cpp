@@ -205,7 +205,7 @@ bool setup_triangle(const float* v0, const float* v1, const float* col, std::uin
     for (int i = 0; i < 9; ++i) moving |= (v1[i] != v0[i]);
   o.moving = moving;
 
-  // Near plane: common to all algorithms, not counted (001 §6.2).
+  // Near plane: common to all algorithms, not counted ([Akenine-Möller 2012] §6.2).
   bool any_near;
   if (behind_near(v0, v1, moving, -fc.neg_near, any_near)) {
     ++c[Counter::setup_culled_near];
@@ -289,7 +289,7 @@ bool setup_triangle(const float* v0, const float* v1, const float* col, std::uin
     return false;
   }
   // Optional back-face culling of static triangles back-facing from every lens point. Not counted
-  // (001 §6.2).
+  // ([Akenine-Möller 2012] §6.2).
   if (p.backface_cull && !moving && back_facing(o, fc, defocused)) {
     ++c[Counter::setup_culled_backface];
     return false;

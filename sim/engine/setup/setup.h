@@ -1,4 +1,4 @@
-// Triangle setup (STYLE.md: setup builds per-triangle work, traversal consumes it).
+// Triangle setup (docs/architecture.md: setup builds per-triangle work, traversal consumes it).
 //
 // Contract: setup_triangle() fills a TriSetup whose pixel bounds contain every pixel with a sample
 // the exact sample test can hit, for every (u, v) in [-1, 1]^2 and t in [0, 1]. It classifies the

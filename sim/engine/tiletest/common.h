@@ -1,5 +1,5 @@
 // Tile tests: pure functions from (triangle footprint, screen tile) to conservative lens regions.
-// One header per test (001_3248aaf17c219d5e.txt §4-§5.1; docs/tile_tests.md):
+// One header per test ([Akenine-Möller 2012] §4-§5.1; docs/tile_tests.md):
 //   lens_vertex.h      per-vertex lens projection (setup of the h_i lines)
 //   halfspace_lens.h   h_i lines: the active u and v sets of a tile (uv-boxes), lens-grid cells
 //   halfspace_edges.h  H_j lines: the per-edge lens lines, evaluated over lens-grid cells
@@ -16,7 +16,7 @@
 // (kMarginAbs + kMarginRel * |coordinate| pixels), far larger than the float sample test's error,
 // and invariant 1 (tests/test_tile_invariants.py) checks it against brute force.
 //
-// Geometry (001 §4; mapping in docs/conventions.md). Seen from lens point (u, v), a footprint
+// Geometry ([Akenine-Möller 2012] §4; mapping in docs/conventions.md). Seen from lens point (u, v), a footprint
 // vertex (X, Y, W) with W > 0 lands at pixel
 //     x(u) = X/W + u * Kx * (1 - F/W) = a_x + u b_x,      y(v) = a_y + v b_y.
 // A tile [X0, X1] x [Y0, Y1] can see the triangle from (u, v) only if the projected triangle

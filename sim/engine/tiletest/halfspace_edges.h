@@ -1,4 +1,4 @@
-// H_j lines (001_3248aaf17c219d5e.txt §4.3, Eq. 4-5): per triangle edge, lens lines that cull the
+// H_j lines ([Akenine-Möller 2012] §4.3, Eq. 4-5): per triangle edge, lens lines that cull the
 // lens points from which the tile lies outside the projected edge, evaluated over lens-grid cells.
 //
 // The tile is outside edge (q, r) iff every tile corner T is on the other side of the projected
@@ -8,13 +8,13 @@
 // det[q-L, r-L, s-L] is the triangle's orientation seen from L (its sign sigma is constant over
 // the lens unless the lens sees the triangle edge-on; then H_j culls per lens cell of one sign,
 // setup/footprint.h). All projected edge lines pass through v, the edge's intersection with the
-// focus plane, so only the two tile corners subtending the largest angle at v matter (001's
+// focus plane, so only the two tile corners subtending the largest angle at v matter ([Akenine-Möller 2012]'s
 // nine-region table): the other corners lie in the cone they span. The edge culls lens point L iff
-// BOTH tangent planes have sigma * H < 0. (001 prunes candidates whose plane is not separating and
+// BOTH tangent planes have sigma * H < 0. ([Akenine-Möller 2012] prunes candidates whose plane is not separating and
 // flips the culling direction between uv-box A and B; with the orientation sigma of the whole
 // triangle the two rules coincide, and ANDing both tangent lines is exact in every region case,
 // including the one where both candidates separate.) Region 5 (v inside the tile) gives no line;
-// edges with q_w = r_w = F are ignored (001 §4.3); d_w = 0 edges take the corners from (d_x, d_y).
+// edges with q_w = r_w = F are ignored ([Akenine-Möller 2012] §4.3); d_w = 0 edges take the corners from (d_x, d_y).
 //
 // Contract (tiletest/common.h): line_cells marks a lens cell only where the line is negative over the
 // whole cell, so an edge culls only cells from which the expanded tile is outside the edge.
@@ -32,7 +32,7 @@ namespace rast5d::tiletest {
 // pixel-homogeneous (X, Y, W), the plane through q, r and T = F (Xc, Yc, 1) evaluated at lens
 // point L = (u Kx F, v Ky F, 0), divided by F > 0, is H(u, v) = A u + B v + C with
 //   A = -Kx (Q_x + F d_y) + Kx F d_w Yc,  B = -Ky (Q_y - F d_x) - Ky F d_w Xc,
-//   C = Q_x Xc + Q_y Yc + Q_w                        (001 Eq. 4-5 in our coordinates).
+//   C = Q_x Xc + Q_y Yc + Q_w                        ([Akenine-Möller 2012] Eq. 4-5 in our coordinates).
 struct EdgeH {
   bool active = false;  // false: ignored (q_w = r_w = F), disabled by the oracle, or degenerate
   double a0, a1, b0, b1, cx, cy, c0;
@@ -63,7 +63,7 @@ inline EdgeH edge_setup(const double q[3], const double r[3], D focus, D coc_x, 
     const double nx = -raw(dy), ny = raw(dx);
     e.par_m = (nx >= 0 ? 1 : 0) | (ny >= 0 ? 2 : 0);
     e.par_n = 3 - e.par_m;
-    if (q[2] == raw(focus)) e.active = false;  // q_w = r_w = F: ignored (001 §4.3)
+    if (q[2] == raw(focus)) e.active = false;  // q_w = r_w = F: ignored ([Akenine-Möller 2012] §4.3)
   } else {
     const D t = (focus - qw) * rcp(dw);
     const D inv_f = rcp(focus);
@@ -73,7 +73,7 @@ inline EdgeH edge_setup(const double q[3], const double r[3], D focus, D coc_x, 
   return e;
 }
 
-// The nine-region table (001 §4.3): the two tile corners subtending the largest angle at v.
+// The nine-region table ([Akenine-Möller 2012] §4.3): the two tile corners subtending the largest angle at v.
 // Corners are numbered bit0 = x high, bit1 = y high. Returns false in region 5 (no line).
 // Cost: cost::kTangentCorners (0 for parallel edges).
 template <class D>

@@ -1,21 +1,21 @@
-// h_i lines (001_3248aaf17c219d5e.txt §4.2, Eq. 1-3): the active lens interval set of one axis of
+// h_i lines ([Akenine-Möller 2012] §4.2, Eq. 1-3): the active lens interval set of one axis of
 // a tile, and the uv-boxes (the product of the u and v sets).
 //
 // On the x axis the triangle is left of the tile iff every a_j + u b_j < X0 (lens_vertex.h), an
 // intersection of half-lines in u, one per vertex: u < (X0 - a_j)/b_j for b_j > 0 (behind the
 // focus plane), u > (X0 - a_j)/b_j for b_j < 0 (in front), i.e. an open *gap* of u. Likewise right
 // of the tile: a second gap. The active u set is [-1, 1] minus the two gaps. Vertices with W == F
-// (b = 0) give no line (001: "such vertices are always ignored"), but they still block a gap when
+// (b = 0) give no line ([Akenine-Möller 2012]: "such vertices are always ignored"), but they still block a gap when
 // they project into the tile.
 //
 // At most 2 intervals per axis, so at most 4 uv-boxes. With every vertex on one side of the focus
-// plane both gaps are half-lines (001 Fig. 5): one interval. When the triangle crosses the focus
-// plane (001 Fig. 6-7, the "inner" region is culled), take a vertex p behind it (b_p > 0) and one
+// plane both gaps are half-lines ([Akenine-Möller 2012] Fig. 5): one interval. When the triangle crosses the focus
+// plane ([Akenine-Möller 2012] Fig. 6-7, the "inner" region is culled), take a vertex p behind it (b_p > 0) and one
 // q in front (b_q < 0), and write c_e(j) = (e - a_j)/b_j. The left gap lies inside
 // (c_X0(q), c_X0(p)), the right gap inside (c_X1(p), c_X1(q)); since X1 > X0, c_X1(p) > c_X0(p) and
 // c_X1(q) < c_X0(q), so both being non-empty would need c_X1(q) < c_X0(q) < c_X0(p) < c_X1(p) <
 // c_X1(q): the lines x_p(u) and x_q(u) cross once, and only one of the two gaps can be open. One
-// interior gap leaves two intervals. (001 describes two boxes, A and B; the product of the
+// interior gap leaves two intervals. ([Akenine-Möller 2012] describes two boxes, A and B; the product of the
 // per-axis sets also keeps A's u-range with B's v-range, from which the triangle can be visible.)
 //
 // Contract (tiletest/common.h): a lens coordinate is cut only if every footprint vertex seen from it lies
@@ -166,7 +166,7 @@ inline bool axis_pass(const AxisSet& s, F x) {
 
 // Lens-grid cells of one axis that intersect the active set, as a bit mask (bit i = cell i).
 // Cell i covers [-1 + 2i/G, -1 + 2(i+1)/G). A cell is dropped only if it lies inside a cut
-// (001 §5.1: "clamp them down and up to the nearest grid cell").
+// ([Akenine-Möller 2012] §5.1: "clamp them down and up to the nearest grid cell").
 // Cost: 1 MADD per finite cut end, i.e. s.n_cmp.
 template <class D>
 inline std::uint32_t axis_cells(const AxisSet& s, int grid) {

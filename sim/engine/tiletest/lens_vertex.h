@@ -1,4 +1,4 @@
-// Per-vertex lens projection (setup of the h_i lines, 001_3248aaf17c219d5e.txt §4.2 Eq. 1): a
+// Per-vertex lens projection (setup of the h_i lines, [Akenine-Möller 2012] §4.2 Eq. 1): a
 // footprint vertex seen from lens point (u, v) lands at x(u) = a_x + u b_x, y(v) = a_y + v b_y.
 #pragma once
 

@@ -1,5 +1,5 @@
 // The 4D tile test in a chosen arithmetic (pipeline.precision.tile: float32 or fixed point; docs/precision.md,
-// docs/tile_tests.md "Precision"): the h_i lines (001_3248aaf17c219d5e.txt §4.2 Eq. 1-3), the H_j lines
+// docs/tile_tests.md "Precision"): the h_i lines ([Akenine-Möller 2012] §4.2 Eq. 1-3), the H_j lines
 // (§4.3 Eq. 4-5), the screen bounds over a lens box (INTERVAL, INTERLEAVE) and ẑ. The float64 kernels
 // (halfspace_lens.h, halfspace_edges.h, box_bounds.h) stay the render's counted form: precision changes
 // which lens regions are culled, not what a test costs. Each *_in function below returns the decision
@@ -32,7 +32,7 @@
 //    Kx : Ky for every vertex D = 0 exactly; after snapping D is tiny and |D| (|u v| <= 1) is added to the
 //    bound. In fixed point every product of two snapped inputs is exact (2 frac_bits fraction bits). The
 //    edge culls a cell when sigma O < 0 there for all four tile corners (the AND over the four corners is
-//    what 001's two tangent corners select; the precision form does not rely on the nine-region table,
+//    what [Akenine-Möller 2012]'s two tangent corners select; the precision form does not rely on the nine-region table,
 //    whose focus-plane point would itself be rounded). sigma is the orientation of the footprint seen from
 //    the lens, sum over edges of (P_k x P_k+1), bilinear in (u, v): its sign is taken at the four lens-square
 //    corners and trusted only where value - bound > 0 (or value + bound < 0) at all four; otherwise the

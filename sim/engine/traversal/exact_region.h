@@ -1,6 +1,6 @@
-// INSTRUMENTATION ONLY: the exact active region of 001_3248aaf17c219d5e.txt §4 evaluated
+// INSTRUMENTATION ONLY: the exact active region of [Akenine-Möller 2012] §4 evaluated
 // point-wise in double (no grid, no oracle, no margin), for tile.samples_optimal, the denominator
-// of 001 Table 1. Never used to cull and never counted in ops.*.
+// of [Akenine-Möller 2012] Table 1. Never used to cull and never counted in ops.*.
 #pragma once
 
 #include <algorithm>
@@ -17,7 +17,7 @@
 namespace rast5d::tiletest {
 
 // Does the convex polygon with screen vertices (x[j], y[j]) overlap the tile [x0, x1] x [y0, y1]?
-// Exact separating-axis test in double: the optimal tile test of 001 §4 evaluated point-wise,
+// Exact separating-axis test in double: the optimal tile test of [Akenine-Möller 2012] §4 evaluated point-wise,
 // used for tile.samples_optimal (uncounted instrumentation).
 inline bool polygon_overlaps_tile(const double* x, const double* y, int n, double x0, double x1, double y0,
                                   double y1) {

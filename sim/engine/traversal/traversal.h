@@ -1,5 +1,5 @@
 // Traversal algorithms: one interface, one file per implementation, registered by name
-// (STYLE.md; Ramulator 2's self-registering factory). Adding an algorithm = one .cpp file in
+// (Ramulator 2's self-registering factory; docs/architecture.md). Adding an algorithm = one .cpp file in
 // traversal/algorithms/ (or a folder there, like tile/) with a RAST5D_REGISTER_TRAVERSAL line.
 //
 // Calling protocol (one instance per worker thread, created once per render):

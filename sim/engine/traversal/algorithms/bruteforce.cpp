@@ -1,4 +1,4 @@
-// BRUTEFORCE (001_3248aaf17c219d5e.txt §6): test every sample of every pixel inside the triangle's
+// BRUTEFORCE ([Akenine-Möller 2012] §6): test every sample of every pixel inside the triangle's
 // conservative screen bounds over the whole lens and shutter. No tile test. Shading visit
 // (backend/shading.h): the whole triangle in the bin, since each pixel is walked once per triangle.
 #include <algorithm>

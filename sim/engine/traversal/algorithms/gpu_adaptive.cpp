@@ -1,4 +1,4 @@
-// GPU_ADAPTIVE: the conventional-GPU pipeline (traversal/algorithms/gpu_pipeline.h) with the 000 §4.7 per-triangle choice: parallel-edge triangle for small blur bound.
+// GPU_ADAPTIVE: the conventional-GPU pipeline (traversal/algorithms/gpu_pipeline.h) with the [Toth 2008] §4.7 per-triangle choice: parallel-edge triangle for small blur bound.
 #include "traversal/algorithms/gpu_pipeline.h"
 
 namespace rast5d {

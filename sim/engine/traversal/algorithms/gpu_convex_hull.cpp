@@ -1,4 +1,4 @@
-// GPU_CONVEX_HULL: the conventional-GPU pipeline (traversal/algorithms/gpu_pipeline.h) with the 003 bound.
+// GPU_CONVEX_HULL: the conventional-GPU pipeline (traversal/algorithms/gpu_pipeline.h) with the [McGuire 2010] bound.
 #include "traversal/algorithms/gpu_pipeline.h"
 
 namespace rast5d {

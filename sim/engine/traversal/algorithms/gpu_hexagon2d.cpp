@@ -1,4 +1,4 @@
-// GPU_HEXAGON2D: the conventional-GPU pipeline (traversal/algorithms/gpu_pipeline.h) with the 000 §4.4 2D bounding hexagon bound.
+// GPU_HEXAGON2D: the conventional-GPU pipeline (traversal/algorithms/gpu_pipeline.h) with the [Toth 2008] §4.4 2D bounding hexagon bound.
 #include "traversal/algorithms/gpu_pipeline.h"
 
 namespace rast5d {

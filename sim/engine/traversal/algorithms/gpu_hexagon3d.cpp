@@ -1,4 +1,4 @@
-// GPU_HEXAGON3D: the conventional-GPU pipeline (traversal/algorithms/gpu_pipeline.h) with the 000 §4.4 3D hexagonal bounding volume bound.
+// GPU_HEXAGON3D: the conventional-GPU pipeline (traversal/algorithms/gpu_pipeline.h) with the [Toth 2008] §4.4 3D hexagonal bounding volume bound.
 #include "traversal/algorithms/gpu_pipeline.h"
 
 namespace rast5d {

@@ -1,4 +1,4 @@
-// GPU_PE_TRIANGLE: the conventional-GPU pipeline (traversal/algorithms/gpu_pipeline.h) with the 000 §4.5 parallel-edge bounding triangle bound.
+// GPU_PE_TRIANGLE: the conventional-GPU pipeline (traversal/algorithms/gpu_pipeline.h) with the [Toth 2008] §4.5 parallel-edge bounding triangle bound.
 #include "traversal/algorithms/gpu_pipeline.h"
 
 namespace rast5d {

@@ -1,23 +1,23 @@
-// The conventional-GPU pipeline as a traversal (000_de06ed5e73318ec6.txt §3, Fig. 4;
-// 003_53fb3558c3c934ea.txt): per triangle the geometry shader emits bounding geometry
+// The conventional-GPU pipeline as a traversal ([Toth 2008] §3, Fig. 4;
+// [McGuire 2010]): per triangle the geometry shader emits bounding geometry
 // (gpu/geometry_shader.h), the fixed-function 2D rasterizer turns it into fragments
 // (gpu/raster2d.h), and the pixel shader tests every sample of each fragment against the triangle
 // at the sample's (u, v, t) with the engine's exact sample test and tie rule (the sample pipeline,
-// traversal/sample_pipeline.h; 000 §5.1-5.2, 003's per-MSAA-sample loop), then hands covered
+// traversal/sample_pipeline.h; [Toth 2008] §5.1-5.2, [McGuire 2010]'s per-MSAA-sample loop), then hands covered
 // samples to the same backend. Every sample the exact test hits lies in a fragment (the bounds are
 // conservative), so the image is bruteforce's.
 //
-// Pixel shader (000 §5.1, §9.6): without triangle constants it re-derives the sample kernel's
+// Pixel shader ([Toth 2008] §5.1, §9.6): without triangle constants it re-derives the sample kernel's
 // per-triangle constants from the interpolated vertex data for every fragment (ops.ps_setup);
 // with triangle or strip constants the geometry shader derives them once. Interpolation moves
 // 4 + payload floats per fragment without constants, 4 with (gpu.interp_floats). Its (u, v, t)
-// come from the perturbation texture of 000 §5.3, a pre-computed, stratified block of per-pixel
+// come from the perturbation texture of [Toth 2008] §5.3, a pre-computed, stratified block of per-pixel
 // samples repeated over the screen and addressed by the pixel's position: the sample table is that
 // texture (docs/gpu.md), so each fragment pays the texture coordinate (ops.ps_setup) and one texel
 // per sample (gpu.perturb_fetches, timing unit texture).
 //
-// Early depth (000 §5.4, §9.7): the pixel shader writes the depth it computes, so a GPU tests depth
-// after it; with 000 §9.7's depth interval (the triangle's conservative depth range handed to the
+// Early depth ([Toth 2008] §5.4, §9.7): the pixel shader writes the depth it computes, so a GPU tests depth
+// after it; with [Toth 2008] §9.7's depth interval (the triangle's conservative depth range handed to the
 // tiled depth buffer, pipeline hiz.enabled) whole HiZ tiles of fragments are rejected before the
 // pixel shader with the engine's ẑ and HiZ (backend/zcull.h), exactly as `tile` culls its tiles.
 //
@@ -108,7 +108,7 @@ class GpuBounding final : public Traversal {
     const int y0 = std::max(r.y0, bin.y0), y1 = std::min(r.y1, bin.y1);
     if (x0 >= x1 || y0 >= y1) return;
     pipe_.begin(tri);
-    // Early depth (000 §9.7's depth interval, pipeline hiz.enabled): the rasterizer's fragments are
+    // Early depth ([Toth 2008] §9.7's depth interval, pipeline hiz.enabled): the rasterizer's fragments are
     // grouped by HiZ tile and the triangle's conservative depth interval over the tile, the whole
     // lens and the shutter (ẑ, intervals/depth_interval.h) is compared with the tile's stored depths
     // (backend/zcull.h) before the pixel shader runs: a tile behind HiZ's zmax loses its fragments,
@@ -149,9 +149,9 @@ class GpuBounding final : public Traversal {
     pipe_.flush();
   }
 
-  // One fragment: the pixel shader's perturbation-texture coordinate (000 §5.3) and fetches, its
-  // re-derived setup without triangle constants (000 §9.6), the interpolated floats, and every
-  // sample of the pixel through the exact sample test (000 §5.1).
+  // One fragment: the pixel shader's perturbation-texture coordinate ([Toth 2008] §5.3) and fetches, its
+  // re-derived setup without triangle constants ([Toth 2008] §9.6), the interpolated floats, and every
+  // sample of the pixel through the exact sample test ([Toth 2008] §5.1).
   void pixel_shader(const TriSetup& tri, int px, int py) {
     const int spp = f_.table.spp();
     ++c_[Counter::gpu_fragments];
@@ -211,7 +211,7 @@ class GpuBounding final : public Traversal {
     return f_.p.gpu_constants == GpuConstants::kNone ? 4 + static_cast<std::uint64_t>(payload_floats(f_.p, tri)) : 4;
   }
 
-  // The perturbation texture's coordinate (000 §5.3): the pixel's position scaled to one texel per
+  // The perturbation texture's coordinate ([Toth 2008] §5.3): the pixel's position scaled to one texel per
   // pixel of the sample table's repeating block. Cost kPerturbCoord.
   void perturb_coord(int px, int py, std::uint64_t& ops) const {
     const D inv(1.0 / f_.table.period());
@@ -224,7 +224,7 @@ class GpuBounding final : public Traversal {
       Counter::raster_samples_tested_2d, Counter::raster_samples_tested_3d,
       Counter::raster_samples_tested_4d, Counter::raster_samples_tested_5d};
 
-  // The sample kernel's per-triangle constants, derived from the vertex data (000 §9.6): the
+  // The sample kernel's per-triangle constants, derived from the vertex data ([Toth 2008] §9.6): the
   // static shear coefficients (4D) or the motion deltas (3D, 5D). Costs kRederiveShear / Motion.
   void rederive(const TriSetup& tri, std::uint64_t& ops) const {
     if (tri.cls == DimClass::k4D) {

@@ -1,4 +1,4 @@
-// GPU_VR_TRIANGLE: the conventional-GPU pipeline (traversal/algorithms/gpu_pipeline.h) with the 000 §4.6 variable-radius bounding triangle bound.
+// GPU_VR_TRIANGLE: the conventional-GPU pipeline (traversal/algorithms/gpu_pipeline.h) with the [Toth 2008] §4.6 variable-radius bounding triangle bound.
 #include "traversal/algorithms/gpu_pipeline.h"
 
 namespace rast5d {

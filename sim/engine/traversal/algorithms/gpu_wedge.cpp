@@ -1,4 +1,4 @@
-// GPU_WEDGE: the conventional-GPU pipeline (traversal/algorithms/gpu_pipeline.h) with the 000 §4.5 bounding wedge bound.
+// GPU_WEDGE: the conventional-GPU pipeline (traversal/algorithms/gpu_pipeline.h) with the [Toth 2008] §4.5 bounding wedge bound.
 #include "traversal/algorithms/gpu_pipeline.h"
 
 namespace rast5d {

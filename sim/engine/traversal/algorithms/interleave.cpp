@@ -1,11 +1,11 @@
-// INTERLEAVE and HINTERLEAVE (001_3248aaf17c219d5e.txt §5.3, after Fatahalian et al. 2009 and
+// INTERLEAVE and HINTERLEAVE ([Akenine-Möller 2012] §5.3, after Fatahalian et al. 2009 and
 // Keller & Heidrich 2001): one pass per discrete lens coordinate of an interleaved sample table.
 // Each pass shears the (static) triangle to that lens coordinate, bounds it, and inside-tests with
 // the 2D kernel only the samples that use that lens coordinate. HINTERLEAVE adds a standard tile
 // vs static-triangle test on 8x8 tiles in each pass. The per-pass shear, bounds and edge setup
 // are triangle setup. Moving triangles: bounds over both shutter ends, general sample test, no
 // tile test (conservative, counted).
-// ACCUMULATION buffering (000_de06ed5e73318ec6.txt §2.2, §8; Haeberli and Akeley 1990) is the same
+// ACCUMULATION buffering ([Toth 2008] §2.2, §8; Haeberli and Akeley 1990) is the same
 // pass structure on an accumulation table (SampleTable.accumulation: every pixel uses the same N
 // positions, sample s = pass s): one full pinhole pass per lens position, the triangle re-sent and
 // set up as an ordinary pinhole triangle every pass (a static triangle's 2D edge setup charged per

@@ -1,4 +1,4 @@
-// INTERVAL (001_3248aaf17c219d5e.txt §5.2, after Fatahalian et al. 2009): one pass per lens-grid
+// INTERVAL ([Akenine-Möller 2012] §5.2, after Fatahalian et al. 2009): one pass per lens-grid
 // cell; in each pass the triangle is bounded over the cell's (u, v) range and only that cell's
 // samples of the pixels inside the bounds are inside-tested. No tile test. The per-cell bounds are
 // triangle setup. Moving triangles are bounded over both shutter ends (conservative, counted).

@@ -1,4 +1,4 @@
-// LAINE (001_3248aaf17c219d5e.txt §6.3; Laine et al. 2011, depth of field only): per tile, the
+// LAINE ([Akenine-Möller 2012] §6.3; Laine et al. 2011, depth of field only): per tile, the
 // axis-aligned lens bounds (our h_i lines, the same "dual-space" bounds); every sample of the
 // tile's pixels is tested against them and, if inside, inside-tested. No lens grid and no early out
 // at tile level (an empty region still costs each sample its comparisons).

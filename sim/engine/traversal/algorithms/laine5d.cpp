@@ -1,5 +1,5 @@
 // LAINE5D: after Laine, Aila, Karras and Lehtinen 2011 ("Clipless dual-space bounds for faster
-// stochastic rasterization"), motion and defocus together, as the 5D comparator 001 lacked. Per
+// stochastic rasterization"), motion and defocus together, as the 5D comparator [Akenine-Möller 2012] lacked. Per
 // screen tile the triangle gets axis-aligned bounds of the sample coordinates that can hit it, and
 // every sample of the tile's pixels is checked against them before the inside test: no lens grid,
 // no time-strata index and no tile-level early out (an empty bound still costs each sample its

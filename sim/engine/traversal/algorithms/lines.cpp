@@ -1,12 +1,12 @@
-// LINES (004_da3c211285527fac.txt §3-4): line samples in the lens instead of point samples.
+// LINES ([Tzeng 2012] §3-4): line samples in the lens instead of point samples.
 // The table is a line table (SampleTable.lines): sample s of a pixel is a screen point (x, y) and
 // a line direction (u, v) = (cos θ, sin θ) through the lens centre; consecutive lines with the same
-// screen point form a wagon wheel and share the lens-space setup (004 §3.1.1). For every pixel of
+// screen point form a wagon wheel and share the lens-space setup ([Tzeng 2012] §3.1.1). For every pixel of
 // the triangle's bounds in the bin and every line, the analytic interval of the line inside the
 // triangle (lines/coverage.h) becomes a segment, shaded at its midpoint and offered to the line's
 // segment buffer (lines/segment_buffer.h). When the bin's triangles are done, end_bin() composites
-// each line (κ-weighted, 004 §3.1.2) into the bin's sample colours, which resolve() averages.
-// With pipeline.lines.tile_clip the triangle's h_i lens region of each screen tile (001 §4.2)
+// each line (κ-weighted, [Tzeng 2012] §3.1.2) into the bin's sample colours, which resolve() averages.
+// With pipeline.lines.tile_clip the triangle's h_i lens region of each screen tile ([Akenine-Möller 2012] §4.2)
 // first tells which lines can meet the triangle there; the others skip the test: the same image,
 // but for float32 slivers of the line test outside the exact coverage on sub-pixel triangles, which
 // the clip may drop (each of κ < 1e-4; docs/op_costs.md, test_tile_clip_drops_only_rounding_slivers).
@@ -210,7 +210,7 @@ class Lines final : public Traversal {
     }
   }
 
-  // A segment [a, b] of the line: the heuristics in 004 §4.1's order (occlusion, merge, length),
+  // A segment [a, b] of the line: the heuristics in [Tzeng 2012] §4.1's order (occlusion, merge, length),
   // shading at the midpoint, the buffer.
   void offer(const TriSetup& tri, const LineCoverage<F>& cov, float a, float b, int px, int py, int s, int k_seg) {
     const std::size_t slot = buf_.slot(px, py, s);

@@ -1,5 +1,5 @@
 // TILE's active lens-grid cells of one screen tile: the cells inside the tile's uv-boxes and on the
-// lens shape (001_3248aaf17c219d5e.txt §5.1, Fig. 10), then less the cells its H_j lines cull
+// lens shape ([Akenine-Möller 2012] §5.1, Fig. 10), then less the cells its H_j lines cull
 // (hj_cells.h). A 64-bit mask for grids up to 8 x 8, a bitset above.
 #pragma once
 

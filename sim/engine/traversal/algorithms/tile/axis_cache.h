@@ -1,5 +1,5 @@
 // TILE's h_i sets per tile column and per tile row (fast path). The u set of a tile depends only on
-// its x range and the v set only on its y range (001_3248aaf17c219d5e.txt Eq. 1-3,
+// its x range and the v set only on its y range ([Akenine-Möller 2012] Eq. 1-3,
 // tiletest/halfspace_lens.h), so the sets, their lens-grid columns/rows (axis_cells) and their
 // documented costs are computed once per column and per row of the triangle's tiles in a bin and
 // read by every tile. Each tile is still charged what tile_h_sets charges it (the hardware tests

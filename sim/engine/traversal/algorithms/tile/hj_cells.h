@@ -1,4 +1,4 @@
-// TILE's H_j test of one screen tile over the lens-grid cells (001_3248aaf17c219d5e.txt §4.3,
+// TILE's H_j test of one screen tile over the lens-grid cells ([Akenine-Möller 2012] §4.3,
 // §5.1): per active edge of the footprint, the two tangent lines (tiletest/halfspace_edges.h)
 // evaluated conservatively over the cells; a cell is culled when both lines cull it.
 #pragma once

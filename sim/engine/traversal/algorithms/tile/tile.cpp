@@ -1,4 +1,4 @@
-// TILE (001_3248aaf17c219d5e.txt §4-§5.1, "OUR"): visit the triangle's screen tiles once each; per
+// TILE ([Akenine-Möller 2012] §4-§5.1, "OUR"): visit the triangle's screen tiles once each; per
 // tile, the h_i lines give uv-boxes (the active u and v sets), the H_j lines give a conservative
 // bitmask over the lens-grid cells, and only samples in surviving cells whose (u, v) passes the
 // h_i lines are inside-tested. TILE_INTERLEAVED ("OUR (i)") is the same traversal on an
@@ -7,7 +7,7 @@
 //
 // Triangle classes: 2D (static, in focus) uses the standard tile vs triangle test (edge functions
 // at the tile corners and the bounding box, tiletest/edges_2d.h); 4D (static, defocused) the full
-// h_i + H_j test; moving triangles (3D/5D, 002_95ea0844b256f75b.txt §2): per time sub-interval a
+// h_i + H_j test; moving triangles (3D/5D, [Nilsson 2012] §2): per time sub-interval a
 // conservative t̂ and, for 5D, lens sets from the h_i lines over the sub-interval's end vertices
 // (intervals/time_interval.h); samples are selected through the (lens cell, time stratum) index of
 // the table. With motion_test 'bounds', moving triangles take the h_i lines over the 6 shutter-end
@@ -255,7 +255,7 @@ class Tile final : public Traversal {
           return;
         }
       }
-      // Lens cells inside the uv-boxes (clamped to the grid, 001 §5.1).
+      // Lens cells inside the uv-boxes (clamped to the grid, [Akenine-Möller 2012] §5.1).
       const bool cached_cells = col && !clip_uv;
       const std::uint32_t bx = cached_cells ? col->cells : tiletest::axis_cells<D>(sx, G);
       const std::uint32_t by = cached_cells ? row->cells : tiletest::axis_cells<D>(sy, G);
@@ -280,7 +280,7 @@ class Tile final : public Traversal {
         }
       }
 
-      // H_j lines: conservative overlap bitmask over the cells (001 §5.1).
+      // H_j lines: conservative overlap bitmask over the cells ([Akenine-Möller 2012] §5.1).
       if (use_H) {
         bool any_line;
         if (!A::counting && active.small) {  // the same bits as a 64-bit mask
