@@ -313,11 +313,14 @@ class PointSpec(_Strict):
     `occlusion_query` asks whether `query` is hidden behind the scene (sim.occlusion_query) and records
     the query's own work; `conservative` rasterizes the scene conservatively (sim.conservative_raster,
     1 x 1 tiles, per-pixel t-z boxes); `retime` re-times the stored work records of the render on the
-    hardware `hardware` (sim.timing.estimate, no re-render when the records are in the result store)."""
+    hardware `hardware` (sim.timing.estimate, no re-render when the records are in the result store);
+    `timing_reference` measures the timing model against its cycle-stepped reference (sim.timing.reference)
+    on the render's visit records, with the model on bin records beside it, and what each costs."""
 
-    kind: Literal["render", "occlusion_query", "conservative", "retime", "transparency", "sampler", "soft_shadows",
-                  "caustics", "glossy", "precision"] = Field(
-        "render", description=("render | occlusion_query | conservative | retime | a use of the rasterizer "
+    kind: Literal["render", "occlusion_query", "conservative", "retime", "timing_reference", "transparency", "sampler",
+                  "soft_shadows", "caustics", "glossy", "precision"] = Field(
+        "render", description=("render | occlusion_query | conservative | retime | timing_reference (the timing "
+                               "model against its cycle-stepped reference on the same records) | a use of the rasterizer "
                                "(sim.uses.USES): transparency | sampler | soft_shadows | caustics | glossy | precision "
                                "(a row of the numerical-precision study, point.options: study, viewport, arithmetic, "
                                "frac_bits, cls)"))
