@@ -183,7 +183,9 @@ def _segment_buffer_bytes(camera: Camera, n_lines: int, config: PipelineConfig, 
     """Line samples: every worker keeps one segment buffer per line of its bin (the bin clipped to
     the frame), each a vector that grows by doubling up to pipeline.lines.buffer_size segments and
     keeps its storage from bin to bin: the bound is every buffer full."""
-    if config.algorithm != "lines" and not config.algorithm.startswith("lines_"):
+    from .pipeline import algorithm_info
+
+    if algorithm_info(config.algorithm).samples != "lines":
         return 0
     b = config.bin_size
     cap = int(config.lines["buffer_size"]) or _SEGMENTS_UNLIMITED
@@ -303,12 +305,12 @@ def check_combination(config: PipelineConfig, table, lens: str = "disk", *, movi
     every point (experiments/config/build.py check) before its first render. ``table`` is a
     sim.SampleTable (its kind, generator and discrete lens positions are read); ``moving``: whether the
     scene moves during the shutter (unknown before the scene is built: False)."""
-    from .pipeline import interleaved_algorithms
+    from .pipeline import algorithm_info, interleaved_algorithms
 
     algorithm = config.algorithm
     is_lines = getattr(table, "kind", "points") == "lines"
     table_name = getattr(table, "generator", None) or type(table).__name__
-    if is_lines != (algorithm == "lines"):
+    if is_lines != (algorithm_info(algorithm).samples == "lines"):
         if is_lines:
             raise ConfigError(f"algorithm: a line-sample table (SampleTable.lines) needs "
                               f"algorithm 'lines', got {algorithm!r}")
