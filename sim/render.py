@@ -15,6 +15,7 @@ from . import params as _params
 from . import pixel_stats as _pixel_stats
 from .pipeline import PipelineConfig
 from .texturing import texture_inputs
+from .energy import MEMORY_FIGURES as ENERGY_MEMORY_FIGURES
 from .energy import estimate as energy_estimate
 from .timing import config as timing_config
 from .timing import derive as timing_derive
@@ -464,7 +465,10 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     records = out.get("timing_records")
     if "timing" in out:  # the timing and memory model's raw figures, and the derived ones
         flat = dict(sorted({**flat, **timing_derive(out["timing"]), **out["memory"]}.items()))
-    flat = dict(sorted({**flat, **energy_estimate(flat, cost_model=config.cost_model)}.items()))  # sim.energy
+    energy = energy_estimate(flat, cost_model=config.cost_model)  # sim.energy
+    if "timing" not in out:  # without the memory model's events these would be part of the figure
+        energy = {k: v for k, v in energy.items() if k not in ENERGY_MEMORY_FIGURES}
+    flat = dict(sorted({**flat, **energy}.items()))
     desc = {"camera": camera.describe(), "pipeline": config.describe(),
             "table": table.describe() if hasattr(table, "describe") else {}, "lens_grid": grid,
             "hardware": hardware_desc}

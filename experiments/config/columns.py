@@ -17,6 +17,10 @@ ROW_COLUMNS = {"config_hash", "status", "error", "traceback", "time.wall_s", "en
                "query.samples_passed", "conservative.pixels_covered"}
 # Columns of outputs.metrics (experiments/run/metrics.py).
 METRIC_COLUMNS = {"metric.rmse", "metric.psnr", "metric.ssim", "metric.ghosting", "metric.flip"}
+# Columns the timing_reference point kind adds besides reference.* and bin.* (the timing figures of the
+# cycle-stepped reference and of the model on bin records): CPU seconds of each side on the same records.
+TIMING_REFERENCE_COLUMNS = {"time.model_s": "CPU seconds of the timing model on the render's visit records",
+                            "time.reference_s": "CPU seconds of the cycle-stepped reference on the same records"}
 # Families of columns whose members depend on the point (a named scene's parameters, the camera the
 # scene's hint resolved, the point section, per-object level-of-detail figures).
 PREFIXES = ("scene.params.", "point.", "camera.", "lod.", "query.")
@@ -38,6 +42,10 @@ def known_columns(config: RenderConfig) -> set[str]:
     for k in config.sweep:
         if k != "zip":
             known.add(k)
+    if config.point.kind == "timing_reference":  # experiments/run/points.py _timing_reference
+        timing = [k[len("timing."):] for k in docs if k.startswith("timing.")]
+        known |= {f"{side}.{k}" for side in ("reference", "bin") for k in timing}
+        known |= set(TIMING_REFERENCE_COLUMNS)
     return known
 
 
