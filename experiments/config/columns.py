@@ -8,7 +8,7 @@ from __future__ import annotations
 import difflib
 import re
 
-from .schema import ConfigError, RenderConfig
+from .schema import ConfigError, RenderConfig, validate_model
 from .sweep import RESULT_EXCLUDE, flatten
 
 # Columns every row has besides the config and the counters (experiments/run/points.py, store.py).
@@ -57,6 +57,14 @@ def _swept_sections(config: RenderConfig) -> tuple[str, ...]:
 def _suggest(name: str, known) -> str:
     close = difflib.get_close_matches(name, sorted(known), n=2, cutoff=0.6)
     return f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
+
+
+def validate(data: dict, source: str = "config", lines: dict | None = None) -> RenderConfig:
+    """The RenderConfig of a merged config dict (schema.validate_model) with every column its outputs name
+    checked (check_output_columns); ConfigError naming file, line, key and value."""
+    config = validate_model(data, source, lines)
+    check_output_columns(config, source, lines)
+    return config
 
 
 def check_output_columns(config: RenderConfig, source: str = "config", lines: dict | None = None) -> None:

@@ -495,10 +495,10 @@ def _did_you_mean(word: str, known: list[str]) -> str:
     return f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
 
 
-def validate(data: dict, source: str = "config", lines: dict | None = None, outputs: bool = True) -> RenderConfig:
-    """The RenderConfig of a merged config dict; ConfigError naming file, line, key and value. With
-    ``outputs`` (not for the points of a sweep, checked once as a whole) every column the outputs name
-    is checked too (experiments/config/columns.py)."""
+def validate_model(data: dict, source: str = "config", lines: dict | None = None) -> RenderConfig:
+    """The RenderConfig of a merged config dict; ConfigError naming file, line, key and value. The
+    columns its outputs name are checked by experiments.config.validate (columns.py), once per config
+    (not per sweep point)."""
     try:
         config = RenderConfig.model_validate(data)
     except ValidationError as e:
@@ -514,8 +514,4 @@ def validate(data: dict, source: str = "config", lines: dict | None = None, outp
         except sim.ConfigError as e:
             where = lines.get(("point", "hardware"), source) if lines else source
             raise ConfigError(f"{where}: point.hardware: {e}") from None
-    if outputs:
-        from .columns import check_output_columns
-
-        check_output_columns(config, source, lines)
     return config

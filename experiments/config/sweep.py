@@ -10,7 +10,7 @@ import json
 import re
 
 from .inputs import config_inputs
-from .schema import ConfigError, RenderConfig, validate
+from .schema import ConfigError, RenderConfig, validate_model
 
 
 def set_dotted(d: dict, dotted: str, value, source: str):
@@ -80,7 +80,7 @@ def expand_sweep(config: RenderConfig, source: str = "config", lines: dict | Non
         where = f"{source} (sweep point {point})"
         try:
             point_lines = {**(lines or {}), **(_point_lines(lines, point) or {})}
-            point_config = validate(d, where, point_lines, outputs=False)
+            point_config = validate_model(d, where, point_lines)
             _check_point(check, point_config, where, point_lines)
         except ConfigError as e:
             bad.append((point, str(e)))
