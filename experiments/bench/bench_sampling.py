@@ -275,8 +275,6 @@ def run(threads: int = 2, seeds: int = 5, draws: int = 200, spp: int = 64, bin_s
                      + " | ".join(f"{r['cov ' + k]:.3f} | {r['err ' + k]:.2%}" for k in FIGURES) + " |")
     lines += summary_lines(srows, crows, draws)
     lines += granularity_lines(grows, spp)
-    end_load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
-    lines[2] = lines[2].replace(" at the start.", f" at the start, {end_load:.1f} at the end.")
     page = write_page(out, "bench_sampling.md", lines)
     return {"page": page, "sampling": srows, "coverage": crows, "granularity": grows}
 
