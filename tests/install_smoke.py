@@ -3,7 +3,7 @@ the package imports from the environment, not the checkout; the version matches 
 named scene renders with honest counters; a Mitsuba XML and a mesh load; the command line renders a
 config; and, as a new user would in an empty directory: `rast5d report --only quickstart` from the
 shipped configs, `rast5d init`, `rast5d run` of the starter sweep, one point of it with --point, the
-continuous-collision example, the precision study's refusal (it needs a checkout), the notebooks init
+continuous-collision example, the precision page (its reference ray caster ships in the package), the notebooks init
 copied (when nbclient is installed), with every file written under that directory and none inside
 the installed package. Plain asserts, no pytest (the fresh environment has only the package's own
 dependencies). `--quick` runs the report's quick variant (make test-install does so for all but the
@@ -114,10 +114,8 @@ def new_user(bin_dir: Path, quick: bool) -> None:
         assert (study / "tile.png").exists() and "samples tested" in out, out
         out = _run([bin_dir / "python", "-m", "experiments.examples.ccd"], work)
         assert (work / "reports" / "ccd" / "README.md").exists(), out
-        refused = subprocess.run([bin_dir / "python", "-m", "experiments.examples.precision"], capture_output=True,
-                                 text=True, cwd=work)  # needs the checkout's reference ray caster: said so
-        assert refused.returncode == 2 and "run it from a checkout" in refused.stderr, refused.stderr[-2000:]
-        print(f"$ python -m experiments.examples.precision\n{refused.stderr.strip()}")
+        out = _run([rast5d, "report", "--only", "precision_2d", "--quick"], work)  # the reference ray caster ships
+        assert (work / "reports" / "quick" / "paper" / "precision.md").exists() and "wrote reports/" in out, out
         run_notebooks(notebooks, study)
         bad = subprocess.run([rast5d, "run", "my_sweep.yaml", "--results", "/proc/rast5d"], capture_output=True,
                              text=True, cwd=study)
