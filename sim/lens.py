@@ -20,6 +20,8 @@ import math
 
 import numpy as np
 
+from .errors import ConfigError
+
 from . import params
 
 # The engine's lens_shapes registry (core/params.h ChoiceTraits<LensShape>), in engine order.
@@ -38,7 +40,7 @@ _HEX_EDGES[np.abs(_HEX_EDGES) < 1e-15] = 0.0
 def check_shape(shape: str) -> str:
     """Return `shape` if it is a known lens shape; otherwise raise ValueError naming it."""
     if not isinstance(shape, str) or shape not in LENS_SHAPES:
-        raise ValueError(f"lens: unknown shape {shape!r} (known: {', '.join(LENS_SHAPES)})")
+        raise ConfigError(f"lens: unknown shape {shape!r} (known: {', '.join(LENS_SHAPES)})")
     return shape
 
 

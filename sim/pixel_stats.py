@@ -19,6 +19,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .errors import ConfigError
+
 # The maps of pixel_stats=True.
 DEFAULT = (
     "raster.samples_tested", "raster.samples_hit",
@@ -53,7 +55,7 @@ def channels(request) -> tuple[list[str], list[str]]:
         try:
             names = [str(n) for n in request]
         except TypeError:
-            raise ValueError(f"pixel_stats: expected True or a list of counter names, got {request!r}") from None
+            raise ConfigError(f"pixel_stats: expected True or a list of counter names, got {request!r}") from None
     counters = set(_core.counter_docs())
     engine: list[str] = []
     derived: list[str] = []
@@ -63,13 +65,13 @@ def channels(request) -> tuple[list[str], list[str]]:
             engine.extend(c for c in DERIVED[n] if c not in engine)
         elif n in counters:
             if n.startswith(_NOT_PER_PIXEL):
-                raise ValueError(f"pixel_stats: '{n}' is counted after the traversal and has no per-pixel map")
+                raise ConfigError(f"pixel_stats: '{n}' is counted after the traversal and has no per-pixel map")
             if n not in engine:
                 engine.append(n)
         else:
             known = ", ".join(sorted(c for c in counters if not c.startswith(_NOT_PER_PIXEL)))
             hint = " (a derived figure; maps exist for " + ", ".join(DERIVED) + ")" if n in counter_docs() else ""
-            raise ValueError(f"pixel_stats: unknown counter '{n}'{hint}; known: {known}")
+            raise ConfigError(f"pixel_stats: unknown counter '{n}'{hint}; known: {known}")
     return engine, derived
 
 
@@ -95,7 +97,7 @@ def cull_reason(stats: dict[str, np.ndarray], tile: int) -> tuple[np.ndarray, li
     map, as indices into the returned names."""
     names = [n for n in TILE_VERDICTS if n in stats]
     if "tile.accepted" not in names or len(names) < 2:
-        raise ValueError("cull_reason: no tile verdict maps in pixel_stats (use pixel_stats=True)")
+        raise ConfigError("cull_reason: no tile verdict maps in pixel_stats (use pixel_stats=True)")
     blocks = np.stack([tile_blocks(stats[n], tile) for n in names])
     acc = names.index("tile.accepted")
     culls = blocks.copy()

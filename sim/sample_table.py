@@ -31,6 +31,8 @@ from typing import Callable
 
 import numpy as np
 
+from .errors import ConfigError
+
 from .lens import LENS_SHAPES, check_shape, inside_lens, map_to_lens
 
 MAX_SPP = 4096
@@ -117,7 +119,7 @@ class SampleTable:
         """Build a table with generator `name`. Common params: spp (required, 1..4096), seed=0,
         period=32 (1..256), lens=True, time=True; some generators take more (see their docs)."""
         if name not in _GENERATORS:
-            raise ValueError(
+            raise ConfigError(
                 f"generator: unknown sample-table generator {name!r} "
                 f"(known: {', '.join(_GENERATORS)}; line samples are SampleTable.lines (samples.kind lines), "
                 "user arrays go through SampleTable.from_array)"
@@ -130,9 +132,9 @@ class SampleTable:
 
                 close = difflib.get_close_matches(key, known, n=1, cutoff=0.6)
                 hint = f"; did you mean {close[0]!r}?" if close else ""
-                raise ValueError(f"{name}: unknown parameter {key!r}{hint} (known: {', '.join(known)})")
+                raise ConfigError(f"{name}: unknown parameter {key!r}{hint} (known: {', '.join(known)})")
         if "spp" not in params:
-            raise ValueError(f"spp: required by the {name} generator")
+            raise ConfigError(f"spp: required by the {name} generator")
         full = {**_COMMON_DEFAULTS, **extra_defaults, **params}
         spp = _check_int("spp", full["spp"], 1, MAX_SPP)
         period = _check_int("period", full["period"], 1, MAX_PERIOD)
@@ -184,10 +186,10 @@ class SampleTable:
         has_lens is False when every u = v = 0; has_time is False when every t is equal (the
         values are still returned as given). `unit`, `lens_unit` and `seed` are None."""
         if lens != "any" and lens not in LENS_SHAPES:
-            raise ValueError(f"lens: unknown shape {lens!r} (known: any, {', '.join(LENS_SHAPES)})")
+            raise ConfigError(f"lens: unknown shape {lens!r} (known: any, {', '.join(LENS_SHAPES)})")
         arr = np.asarray(samples)
         if arr.dtype.kind not in "fiu":
-            raise ValueError(f"samples: expected a real numeric array, got dtype {arr.dtype}")
+            raise ConfigError(f"samples: expected a real numeric array, got dtype {arr.dtype}")
         if arr.ndim == 2 and arr.shape[1] == 5:
             broadcast = True  # one pixel's samples, repeated with period 1
             arr4 = arr[None, None]
@@ -195,12 +197,12 @@ class SampleTable:
             broadcast = False
             arr4 = arr
         else:
-            raise ValueError(f"samples: expected shape (spp, 5) or (P, P, spp, 5), got {arr.shape}")
+            raise ConfigError(f"samples: expected shape (spp, 5) or (P, P, spp, 5), got {arr.shape}")
         period, spp = arr4.shape[0], arr4.shape[2]
         if not 1 <= spp <= MAX_SPP:
-            raise ValueError(f"samples: spp (axis -2) must be in 1..{MAX_SPP}, got {spp}")
+            raise ConfigError(f"samples: spp (axis -2) must be in 1..{MAX_SPP}, got {spp}")
         if not 1 <= period <= MAX_PERIOD:
-            raise ValueError(f"samples: period (axes 0, 1) must be in 1..{MAX_PERIOD}, got {period}")
+            raise ConfigError(f"samples: period (axes 0, 1) must be in 1..{MAX_PERIOD}, got {period}")
 
         def where(mask4: np.ndarray) -> tuple[int, ...]:
             """First True index of a (P, P, spp[, ...]) mask, in the user's array shape."""
@@ -214,7 +216,7 @@ class SampleTable:
         bad = ~np.isfinite(as64)
         if bad.any():
             i = where(bad)
-            raise ValueError(f"samples: non-finite value at index {i}: {arr[i]}")
+            raise ConfigError(f"samples: non-finite value at index {i}: {arr[i]}")
         final = np.ascontiguousarray(arr4, dtype=np.float32)
         names = ("x", "y", "u", "v", "t")
         bounds = ((0.0, 1.0, True), (0.0, 1.0, True), (-1.0, 1.0, False), (-1.0, 1.0, False), (0.0, 1.0, False))
@@ -224,7 +226,7 @@ class SampleTable:
             if bad.any():
                 i = where(bad)
                 rng_txt = f"[{lo:g}, {hi:g})" if open_hi else f"[{lo:g}, {hi:g}]"
-                raise ValueError(
+                raise ConfigError(
                     f"samples: {name} must be in {rng_txt}; first offending sample at index {i} has "
                     f"{name} = {float(col[full_index(i)])!r} (as float32)"
                 )
@@ -233,18 +235,18 @@ class SampleTable:
             if bad.any():
                 i = where(bad)
                 k = full_index(i)
-                raise ValueError(
+                raise ConfigError(
                     f"samples: (u, v) at index {i} = ({float(final[k][2])!r}, {float(final[k][3])!r}) "
                     f"is outside the declared {lens!r} lens"
                 )
 
         positions = index = None
         if (lens_index is None) != (lens_positions is None):
-            raise ValueError("lens_index: lens_index and lens_positions must be given together")
+            raise ConfigError("lens_index: lens_index and lens_positions must be given together")
         if lens_positions is not None:
             pos = np.asarray(lens_positions)
             if pos.dtype.kind not in "fiu" or pos.ndim != 2 or pos.shape[1] != 2 or pos.shape[0] < 1:
-                raise ValueError(
+                raise ConfigError(
                     f"lens_positions: expected a real (N, 2) array with N >= 1, got shape {pos.shape} "
                     f"dtype {pos.dtype}"
                 )
@@ -255,14 +257,14 @@ class SampleTable:
             if bad.any():
                 i = int(np.argmax(bad))
                 where_txt = "[-1, 1]^2" if lens == "any" else f"the declared {lens!r} lens"
-                raise ValueError(
+                raise ConfigError(
                     f"lens_positions: position {i} = {positions[i].tolist()} is not finite or not in "
                     f"{where_txt}"
                 )
             idx = np.asarray(lens_index)
             expected = arr.shape[:-1]
             if idx.dtype.kind not in "iu" or idx.shape != expected:
-                raise ValueError(
+                raise ConfigError(
                     f"lens_index: expected an integer array of shape {expected}, got shape {idx.shape} "
                     f"dtype {idx.dtype}"
                 )
@@ -270,7 +272,7 @@ class SampleTable:
             bad = (idx4 < 0) | (idx4 >= positions.shape[0])
             if bad.any():
                 i = where(bad)
-                raise ValueError(
+                raise ConfigError(
                     f"lens_index: value at index {i} = {int(idx[i])} is not in 0..{positions.shape[0] - 1}"
                 )
             index = idx4.astype(np.int32)
@@ -279,7 +281,7 @@ class SampleTable:
             if bad.any():
                 i = where(bad)
                 k = full_index(i)
-                raise ValueError(
+                raise ConfigError(
                     f"samples: (u, v) at index {i} = {final[k][2:4].tolist()} is not bitwise equal to "
                     f"lens_positions[{int(index[k])}] = {positions[index[k]].tolist()}"
                 )
@@ -320,7 +322,7 @@ class SampleTable:
         wheel = _check_int("wheel", wheel, 1, MAX_SPP)
         wheel = min(wheel, n_lines)
         if n_lines % wheel:
-            raise ValueError(f"n_lines: expected a multiple of wheel ({wheel}), got {n_lines}")
+            raise ConfigError(f"n_lines: expected a multiple of wheel ({wheel}), got {n_lines}")
         n_points = n_lines // wheel
         rng = np.random.default_rng(
             np.random.SeedSequence(entropy=seed, spawn_key=(zlib.crc32(b"lines"), period)))
@@ -381,7 +383,7 @@ class SampleTable:
         """(N, 2) float32 discrete lens positions of an interleaved table (read-only)."""
         check_shape(lens)
         if self.n_lens == 0:
-            raise ValueError(
+            raise ConfigError(
                 f"lens_positions: the {self.generator} table has no discrete lens positions "
                 f"(only interleaved tables do)"
             )
@@ -401,7 +403,7 @@ class SampleTable:
         """Lens-grid buckets ([Akenine-Möller 2012] §5.1, Fig. 10) from the engine:
         (order (P,P,spp), counts (P,P,G*G), offsets (P,P,G*G)), int32; cell = j*G + i."""
         if isinstance(grid, bool) or not isinstance(grid, (int, np.integer)) or int(grid) not in LENS_GRID_SIZES:
-            raise ValueError(
+            raise ConfigError(
                 f"lens_grid: grid must be one of {', '.join(map(str, LENS_GRID_SIZES))}, got {grid!r}"
             )
         grid = int(grid)
@@ -466,7 +468,7 @@ class SampleTable:
         bad = ~inside_lens(u, v, lens)
         if bad.any():
             i = tuple(int(k) for k in np.argwhere(bad)[0])
-            raise ValueError(
+            raise ConfigError(
                 f"{field}: (u, v) at index {i} = ({float(u[i])!r}, {float(v[i])!r}) is outside the "
                 f"requested {lens!r} lens (the table was declared for {self._declared_lens!r})"
             )
@@ -548,7 +550,7 @@ def _stratified_permuted(spec: _Spec, rng: np.random.Generator) -> _Draw:
     (pixel, x/y-stratum) slots. Needs an even period."""
     P, S = spec.period, spec.spp
     if P % 2:
-        raise ValueError(f"period: the stratified_permuted generator uses 2x2-pixel blocks; expected an even period, got {P}")
+        raise ConfigError(f"period: the stratified_permuted generator uses 2x2-pixel blocks; expected an even period, got {P}")
     nx, ny = _grid_shape(S)
     mx, my = _grid_shape(4 * S)
     unit = np.empty((P, P, S, 5))
@@ -599,17 +601,17 @@ def _interleaved(spec: _Spec, rng: np.random.Generator, n_lens) -> _Draw:
     strata per pixel; t is stratified per pixel and permuted."""
     P, S = spec.period, spec.spp
     if isinstance(n_lens, bool) or not isinstance(n_lens, (int, np.integer)) or n_lens < 1 or math.isqrt(int(n_lens)) ** 2 != n_lens:
-        raise ValueError(f"n_lens: expected a perfect square >= 1 (1, 4, 9, ..., 256, ...), got {n_lens!r}")
+        raise ConfigError(f"n_lens: expected a perfect square >= 1 (1, 4, 9, ..., 256, ...), got {n_lens!r}")
     N = int(n_lens)
     if not spec.lens:
-        raise ValueError("lens: the interleaved generator needs the lens dimension (lens=True), got False")
+        raise ConfigError("lens: the interleaved generator needs the lens dimension (lens=True), got False")
     if S >= N and S % N:
-        raise ValueError(f"spp: with spp >= n_lens the interleaved generator needs n_lens | spp, got spp={S}, n_lens={N}")
+        raise ConfigError(f"spp: with spp >= n_lens the interleaved generator needs n_lens | spp, got spp={S}, n_lens={N}")
     B = 1
     while B * B * S < N:
         B *= 2
     if P % B:
-        raise ValueError(
+        raise ConfigError(
             f"period: the interleaved generator with n_lens={N}, spp={S} uses {B}x{B}-pixel blocks; "
             f"expected a multiple of {B}, got {P}"
         )
@@ -643,10 +645,10 @@ def _multiview(spec: _Spec, rng: np.random.Generator, views) -> _Draw:
     lies in [k/V, (k+1)/V) of the unit square). Use a square lens: the views are strips of one
     oblong lens region. views=1 is an ordinary stratified table."""
     if isinstance(views, bool) or not isinstance(views, (int, np.integer)) or not 1 <= views <= 64:
-        raise ValueError(f"views: expected an integer in 1..64, got {views!r}")
+        raise ConfigError(f"views: expected an integer in 1..64, got {views!r}")
     V, S = int(views), spec.spp
     if S % V:
-        raise ValueError(f"spp: the multiview generator needs spp divisible by views, got spp={S}, views={V}")
+        raise ConfigError(f"spp: the multiview generator needs spp divisible by views, got spp={S}, views={V}")
     m = S // V
     unit = np.empty((spec.period, spec.period, S, 5))
     for k in range(V):
@@ -662,13 +664,13 @@ def _multiview(spec: _Spec, rng: np.random.Generator, views) -> _Draw:
 
 def _check_int(field: str, value, lo: int, hi: int) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not lo <= value <= hi:
-        raise ValueError(f"{field}: expected an integer in {lo}..{hi}, got {value!r}")
+        raise ConfigError(f"{field}: expected an integer in {lo}..{hi}, got {value!r}")
     return int(value)
 
 
 def _check_bool(field: str, value) -> bool:
     if not isinstance(value, (bool, np.bool_)):
-        raise ValueError(f"{field}: expected true or false, got {value!r}")
+        raise ConfigError(f"{field}: expected true or false, got {value!r}")
     return bool(value)
 
 
@@ -784,9 +786,9 @@ def _accumulation(spec: _Spec, rng: np.random.Generator, passes) -> _Draw:
     passes defaults to spp and must equal it when both are given."""
     S = spec.spp
     if passes is not None and (isinstance(passes, bool) or not isinstance(passes, (int, np.integer)) or passes != S):
-        raise ValueError(f"passes: expected the number of samples per pixel ({S}), got {passes!r}")
+        raise ConfigError(f"passes: expected the number of samples per pixel ({S}), got {passes!r}")
     if not spec.lens:
-        raise ValueError("lens: the accumulation generator needs the lens dimension (lens=True), got False")
+        raise ConfigError("lens: the accumulation generator needs the lens dimension (lens=True), got False")
     P = spec.period
     nx, ny = _grid_shape(S)
     k = np.arange(S)
@@ -809,7 +811,7 @@ def _accumulation_factory(cls, passes: int | None = None, **params) -> "SampleTa
     ``accumulation`` generator with spp = N (see its documentation)."""
     if passes is not None and (isinstance(passes, bool) or not isinstance(passes, (int, np.integer))
                                or not 1 <= passes <= MAX_SPP):
-        raise ValueError(f"passes: expected an integer in 1..{MAX_SPP}, got {passes!r}")
+        raise ConfigError(f"passes: expected an integer in 1..{MAX_SPP}, got {passes!r}")
     if passes is not None and "spp" not in params:
         params["spp"] = passes
     return cls.create("accumulation", passes=passes, **params)
