@@ -32,8 +32,9 @@ TileWork work_from_counters(const Counters& c, const MemoryTotalsView& mem) {
   w.tile_tests = d(Counter::tile_visited);
   // Sample tests run in a conventional GPU's pixel shader are pixel_shader work (gpu.ps_ops), not
   // the fixed-function sample-test unit's.
+  // A line test and a wheel's lens-space set-up take the lane slots of their operations (timing.h).
   w.sample_tests = d(Counter::raster_samples_tested) - d(Counter::gpu_ps_samples_tested)
-                   + d(Counter::lines_tests);  // a line test is one item
+                   + kLineTestSlots * d(Counter::lines_tests) + kLinePointSetupSlots * d(Counter::lines_point_setups);
   w.gs_ops = d(Counter::gpu_gs_ops);
   w.gs_floats = d(Counter::gpu_gs_floats);
   w.raster_pixels = d(Counter::gpu_raster_pixels_tested);

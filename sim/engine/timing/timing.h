@@ -19,6 +19,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/costs.h"
 #include "core/counters.h"
 
 namespace rast5d {
@@ -119,6 +120,19 @@ struct MemoryTotalsView {
   std::uint64_t depth_dram = 0, depth_fills = 0, color_dram = 0;
 };
 TileWork work_from_counters(const Counters& c, const MemoryTotalsView& mem = {});
+
+// A line-triangle test on the sample-test unit ([Tzeng 2012] §3; docs/timing.md, "Line samples"). The
+// unit's lanes are sized for the 4D point test (cost::kInside4D operations a lane slot); a line sample's
+// work takes the lane slots its operations need, rounded up: the interval of one line inside a
+// defocused triangle in front of the near plane (cost::line_interval_cost(4, 0) = 32 operations: 2
+// slots), and the lens-space set-up of its wagon wheel's screen point (cost::kLinePointSetup = 45
+// operations: 2 slots, once per wheel and triangle, lines.point_setups). Declared here once; the
+// sample_test unit's work of a record is raster.samples_tested + kLineTestSlots x lines.tests +
+// kLinePointSetupSlots x lines.point_setups.
+inline constexpr std::uint64_t lane_slots(std::uint64_t ops) { return (ops + cost::kInside4D - 1) / cost::kInside4D; }
+inline constexpr std::uint64_t kLineTestSlots = lane_slots(cost::line_interval_cost(4, 0));
+inline constexpr std::uint64_t kLinePointSetupSlots = lane_slots(cost::kLinePointSetup);
+static_assert(kLineTestSlots == 2 && kLinePointSetupSlots == 2, "docs/timing.md states both");
 
 struct UnitTiming {
   double throughput = 1.0;  // items per clock, > 0
