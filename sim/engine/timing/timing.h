@@ -27,7 +27,7 @@ namespace rast5d {
 // The units in pipeline order: (identifier, exported name, currency, description). Declared once;
 // the timing figures' docs (sim.counter_docs, docs/counters.md) are generated from this list.
 #define RAST5D_TIMING_UNITS(X)                                                                            \
-  X(geometry_shader, "geometry_shader", "ops", "Conventional GPU: geometry-shader ALU (gpu.gs_ops)")      \
+  X(geometry_shader, "geometry_shader", "ops", "Conventional GPU: shader ALU ops of the geometry shader (gpu.gs_ops) and of accumulation buffering's repeated vertex shading (accum.vertex_ops)") \
   X(gs_output, "gs_output", "floats", "Conventional GPU: geometry shader to rasterizer bandwidth (gpu.gs_floats)") \
   X(raster2d, "raster2d", "pixels", "Conventional GPU: 2D rasterizer pixel tests (gpu.raster_pixels_tested)") \
   X(pixel_shader, "pixel_shader", "ops", "Conventional GPU: pixel-shader lanes (gpu.ps_ops: sample tests, re-derived setup)") \
@@ -95,7 +95,8 @@ struct TileWork {
     }
     return 0;
   }
-  // Field-wise this - before (bin and triangles are not counter-derived and stay 0).
+  // Field-wise this - before (bin is not counter-derived and stays 0; triangles holds the counter-derived
+  // re-sends, the recorder adds the triangle's own set-up).
   TileWork since(const TileWork& before) const {
     // Every field is 64 bits: the difference as one loop over them (vectorised).
     static_assert(sizeof(TileWork) == kFields * sizeof(std::uint64_t));
@@ -104,7 +105,7 @@ struct TileWork {
     const auto* b = reinterpret_cast<const std::uint64_t*>(&before);
     auto* o = reinterpret_cast<std::uint64_t*>(&w);
     for (int i = 0; i < kFields; ++i) o[i] = a[i] - b[i];
-    w.bin = 0, w.triangles = 0;
+    w.bin = 0;
     return w;
   }
   static constexpr int kFields = 18;
