@@ -270,6 +270,9 @@ class FullCosts:
     def family(self, scene, m) -> str:
         return family(self.by[scene, m][0])
 
+    def pipeline(self, m, scene) -> str:
+        return pipeline_of(self.by[scene, m][0])
+
     def at(self, scene, m, n) -> dict:
         rows = self.by[scene, m]
         ns = [n_of(r) for r in rows]
@@ -314,6 +317,9 @@ class InteriorCosts:
 
     def family(self, scene, m) -> str:
         return self.fam[m]
+
+    def pipeline(self, m, scene="") -> str:
+        return self.pipe.get(m, "")
 
     def _sampled_ops(self, m, n) -> tuple[float, float]:
         rows = self.sampled.get(m, [])
@@ -370,7 +376,7 @@ def equal_error_rows(err_rows, costs, scenes) -> list[dict]:
             for m in costs.methods(scene):
                 f = costs.family(scene, m)
                 n, lo, hi = nstar.get(f, (math.nan,) * 3)
-                at = costs.at(scene, m, n) if n == n else {k: math.nan for k in COST_FIGURES}
+                at = costs.at(scene, m, n) if n == n else {k: math.nan for k in COST_FIGURES} | {"pipeline": costs.pipeline(m, scene)}
                 row = {"scene": scene, "metric": metric, "target": target, "method": m, "family": f,
                        "pipeline": at.get("pipeline", ""), "n": n, "n_lo": lo, "n_hi": hi,
                        "bottleneck": at.get("bottleneck", ""), "ghosting": at.get("ghosting", math.nan),
@@ -678,12 +684,19 @@ def hardware_verdict_values(df, config):
     if not len(eq):
         return pd.DataFrame(out)
     for (s, metric), g in eq.groupby(["scene", "metric"], sort=False):
+        unreached = sorted(set(g[g["cycles"].astype(float) != g["cycles"].astype(float)]["pipeline"]))
         g = g[g["cycles"].astype(float) == g["cycles"].astype(float)]
         five = g[(g["pipeline"] == "5D") & (g["family"].str.startswith("points"))]
         if not len(five):
             continue
         best = five.loc[five["cycles"].astype(float).idxmin()]
-        row = {"scene": s, "metric": metric, "best_5d": best["method"], "best_5d_cycles": float(best["cycles"])}
+        row = {"case": s, "scene": s.split(" (")[0], "blur": _blur_key(s), "metric": metric, "best_5d": best["method"],
+               "best_5d_cycles": float(best["cycles"]), "best_5d_energy": float(best["energy"])}
+        cheapest = g.loc[g["cycles"].astype(float).idxmin()]
+        row["cheapest"], row["cheapest_pipeline"] = cheapest["method"], cheapest["pipeline"]
+        row["fewest_ops"] = g.loc[g["ops"].astype(float).idxmin()]["method"]
+        row["least_energy"] = g.loc[g["energy"].astype(float).idxmin()]["method"]
+        row["five_d_wins"] = bool(cheapest["pipeline"] == "5D")
         for name, sel in (("gpu", g["pipeline"] == "GPU"), ("accumulation", g["pipeline"] == "accumulation"),
                           ("lines", g["family"].str.startswith("lines"))):
             part = g[sel]
@@ -696,10 +709,17 @@ def hardware_verdict_values(df, config):
                 row[f"{name}_{fig}"] = float(b[fig]) / float(best[fig])
             row[f"{name}_ghosting"] = float(b["ghosting"])
         row["ghosting_5d"] = float(best["ghosting"])
+        row["unreached"] = ", ".join(p for p in unreached if p not in {row.get("gpu") and "GPU", row.get("accumulation") and "accumulation"})
         out.append(row)
     frame = pd.DataFrame(out)
-    frame.attrs["keys"] = ["scene", "metric"]
+    frame.attrs["keys"] = ["scene", "blur", "metric"]
     return frame
+
+
+def _blur_key(label: str) -> str:
+    """'defocus', 'motion' or 'both' of a scene label ('spot_wall (defocus + motion)' -> 'both')."""
+    blur = label.split(" (")[-1].rstrip(")")
+    return "both" if "+" in blur else blur.replace(" ", "_")
 
 
 def _times(x: float) -> str:
@@ -714,16 +734,22 @@ def hardware_verdict(df, config) -> list[str]:
     v = hardware_verdict_values(df, config)
     lines = []
     for r in v.to_dict("records"):
-        parts = [f"- **{r['scene']}, equal {r['metric'].upper()}:** the best 5D rasterizer is `{r['best_5d']}` "
+        parts = [f"- **{r['case']}, equal {r['metric'].upper()}:** the best 5D rasterizer is `{r['best_5d']}` "
                  f"({r['best_5d_cycles']:.3g} cycles)."]
         for name, what in (("gpu", "the best conventional-GPU method"), ("accumulation", "accumulation buffering"),
                            ("lines", "line samples")):
             if r.get(name):
                 parts.append(f"{what[0].upper() + what[1:]} (`{r[name]}`) needs {_times(r[f'{name}_cycles'])} cycles, "
                              f"{_times(r[f'{name}_energy'])} energy and {_times(r[f'{name}_ops'])} operations.")
+        parts.append(f"Fewest cycles overall: `{r['cheapest']}` ({r['cheapest_pipeline']}); least energy: "
+                     f"`{r['least_energy']}`; fewest operations: `{r['fewest_ops']}`.")
         if r.get("accumulation"):
-            parts.append(f"Accumulation's ghosting there is {r['accumulation_ghosting']:.2f} against "
-                         f"{r['ghosting_5d']:.2f} for stochastic points.")
+            worse = r["accumulation_ghosting"] > r["ghosting_5d"]
+            parts.append(f"Under the ghosting measure (the error's lag-one autocorrelation) "
+                         f"{'stochastic points win' if worse else 'accumulation does not lose'}: "
+                         f"{r['accumulation_ghosting']:.2f} for accumulation against {r['ghosting_5d']:.2f}.")
+        if r.get("unreached"):
+            parts.append(f"Not reached within its grid of samples, passes or lines: {r['unreached']}.")
         lines.append(" ".join(parts))
     return lines
 
