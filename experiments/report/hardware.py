@@ -670,6 +670,15 @@ def hardware_resolution_values(df, config):
     return frame
 
 
+@named_table("hardware_resolution", reads=("timing.",))
+def hardware_resolution(df, config) -> list[str]:
+    """Per family and frame width: RMSE, FLIP, ghosting and cycles per pixel."""
+    v = hardware_resolution_values(df, config)
+    body = [[r.family, f"{r.width:g}", f"{r.coc:g}", f"{r.rmse:.4g}", f"{r.flip:.4g}", f"{r.ghosting:.2f}",
+             f"{r.cycles_per_pixel:.3g}"] for r in v.itertuples()]
+    return md_table(["family", "width [px]", "CoC [px]", "RMSE", "FLIP", "ghosting", "cycles per pixel"], body)
+
+
 # ---- the verdict ---------------------------------------------------------------------------------------------
 
 @named_values("hardware_verdict")
