@@ -86,10 +86,13 @@ def _true(r, k) -> bool:
     return str(_get(r, k, "")) == "True"
 
 
+LINE_FAMILY = "lines"  # the sample family of an algorithm whose samples are lines (sim.algorithm_info)
+
+
 def kind(r) -> str:
     """The sample family of a row: 'lines', 'accumulation' or 'points'."""
     if _is_lines(r["pipeline.algorithm"]):
-        return "lines"
+        return LINE_FAMILY
     return "accumulation" if r["samples.kind"] == "accumulation" else "points"
 
 
@@ -707,7 +710,7 @@ def hardware_verdict_values(df, config):
         row["least_energy"] = g.loc[g["energy"].astype(float).idxmin()]["method"]
         row["five_d_wins"] = bool(cheapest["pipeline"] == "5D")
         for name, sel in (("gpu", g["pipeline"] == "GPU"), ("accumulation", g["pipeline"] == "accumulation"),
-                          ("lines", g["family"].str.startswith("lines"))):
+                          ("lines", g["family"].map(lambda f: f.split(" ")[0]) == LINE_FAMILY)):
             part = g[sel]
             if not len(part):
                 row[name] = ""
@@ -748,7 +751,7 @@ def hardware_verdict(df, config) -> list[str]:
         for name, what in (("gpu", "the best conventional-GPU method"), ("accumulation", "accumulation buffering"),
                            ("lines", "line samples")):
             if r.get(name):
-                parts.append(f"{what[0].upper() + what[1:]} (`{r[name]}`) needs {_times(r[f'{name}_cycles'])} cycles, "
+                parts.append(f"{what[0].upper() + what[1:]} (`{r[name]}`) {'need' if what.endswith('samples') else 'needs'} {_times(r[f'{name}_cycles'])} cycles, "
                              f"{_times(r[f'{name}_energy'])} energy and {_times(r[f'{name}_ops'])} operations.")
         parts.append(f"Fewest cycles overall: `{r['cheapest']}` ({r['cheapest_pipeline']}); least energy: "
                      f"`{r['least_energy']}`; fewest operations: `{r['fewest_ops']}`.")
