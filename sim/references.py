@@ -111,11 +111,16 @@ REFERENCES: tuple[Reference, ...] = (
               "Rasterization with Motion and Defocus Blur.* High Performance Graphics 2010, 1–9.",
               "A measured hardware point for the area proxy of the hardware page: a 45 nm micropolygon rasterizer "
               "with motion and defocus blur, 3 G micropolygons per second in 4.1 mm² and 2.9 W."),
+    Reference("Mistry 2007",
+              "Kaizad Mistry et al. *A 45nm Logic Technology with High-k+Metal Gate Transistors, Strained Silicon, "
+              "9 Cu Interconnect Layers, 193nm Dry Patterning, and 100% Pb-free Packaging.* IEEE International "
+              "Electron Devices Meeting (IEDM) 2007, 247–250.",
+              "The 45 nm six-transistor SRAM cell (0.346 µm²) behind the area proxy's cache weight (docs/hardware.md)."),
     Reference("Horowitz 2014",
               "Mark Horowitz. *Computing's Energy Problem (and what we can do about it).* IEEE International "
               "Solid-State Circuits Conference (ISSCC) 2014, 10–14.",
               "The energy table (sim/energy.py, docs/energy.md): pJ per arithmetic operation, per SRAM access and "
-              "per DRAM access at 45 nm, and the SRAM sizes behind the area proxy."),
+              "per DRAM access at 45 nm, and the 32-bit adder and multiplier areas behind the area proxy (docs/hardware.md)."),
 )
 
 BY_NUMBER = {r.number: r for r in REFERENCES if r.number}

@@ -11,7 +11,8 @@ documents every figure.
 ``sim.render(..., keep_timing_records=True)`` keeps the render's records (``Result.timing_records``),
 so a hardware sweep can re-run ``estimate`` on one render's records without rendering again (the
 unit throughputs, latencies, FIFOs, cores and DRAM bandwidth change; the caches' misses and the DRAM
-bytes are those of the render's own caches).
+bytes are those of the render's own caches; ``split_hardware`` tells the keys a re-timing can change
+from those that need a new render).
 """
 from __future__ import annotations
 
@@ -75,6 +76,39 @@ def config(hw: HardwareConfig):
                                   int(hw.cores), hw.timing.idle_units == "bypass")
     except ValueError as e:
         raise ConfigError(f"hardware: {e}") from None
+
+
+# The HardwareConfig keys that config() reads: re-timing kept records (estimate) can change them. Every
+# other key (the texture cache, the depth and colour buffers and their caches, the DRAM burst, the record
+# granularity, whether the model runs) shapes the records themselves: changing it needs a new render.
+RETIMED_KEYS: dict = {
+    **{u: None for u in UNITS if u != "dram"},  # every unit's throughput, latency and FIFO
+    "dram": ("bytes_per_clock", "latency_cycles", "fifo_entries"),
+    "tex_cache": ("hit_latency_cycles", "miss_latency_cycles"),
+    "timing": ("idle_units",),
+    "cores": None, "clock_ghz": None,
+}
+
+
+def split_hardware(over: dict) -> tuple[dict, dict]:
+    """(render-time part, re-timed part) of a (partial) HardwareConfig dict: the keys of RETIMED_KEYS go to
+    the second, every other key to the first (a variant that changes one needs a new render, not
+    re-timed records)."""
+    render, retimed = {}, {}
+    for k, v in (over or {}).items():
+        keys = RETIMED_KEYS.get(k, ())
+        if keys is None:
+            retimed[k] = v
+        elif isinstance(v, dict):
+            mine = {kk: vv for kk, vv in v.items() if kk in keys}
+            rest = {kk: vv for kk, vv in v.items() if kk not in keys}
+            if mine:
+                retimed[k] = mine
+            if rest:
+                render[k] = rest
+        else:
+            render[k] = v
+    return render, retimed
 
 
 def estimate(recs, hardware: HardwareConfig | None = None) -> dict:

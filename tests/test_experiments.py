@@ -391,6 +391,40 @@ def test_retime_point_is_timing_estimate_on_one_stored_render(tmp_path, store):
         xc.load_config(write(tmp_path, "bad.yaml", BASE + "point: {hardware: {cores: 2}}\n"))
 
 
+def test_retime_of_a_render_time_key_renders_that_hardware(tmp_path, store):
+    """A retime variant of a cache size (a render-time key: sim.timing.split_hardware) is its own render:
+    its row equals a render with that cache, not the re-timed records of the default cache (which kept
+    the default cache's misses and DRAM bytes). Variants of timing keys only share one render."""
+    import models
+    import sim
+
+    text = (BASE.replace("quad}", "quad, params: {translation_t1: [0.2, 0, 0]}}") + "point: {kind: retime}\n"
+            "sweep:\n  point.hardware: [{}, {dram: {bytes_per_clock: 8}}, {depth_buffer: {cache_bytes: 4096, "
+            "line_bytes: 1024}, dram: {bytes_per_clock: 8}}]\n")
+    df = runner.run_sweep(xc.load_config(write(tmp_path, "r.yaml", text)), workers=0, progress=False)
+    assert (df["status"] == "ok").all(), df["error"].tolist()
+    assert len(list((store / "records").glob("*.npz"))) == 2  # the default render and the small-cache one
+    scene = models.named("quad", translation_t1=[0.2, 0, 0])
+    hint = scene.camera_hint
+    cam = sim.Camera(width=24, height=24, fov_y_deg=hint["fov_y_deg"], focus_distance=hint["focus_distance"],
+                     coc_px=4)
+    table = sim.SampleTable.create("stratified", spp=4, seed=1)
+    small = sim.HardwareConfig.from_dict({"depth_buffer": {"cache_bytes": 4096}, "dram": {"bytes_per_clock": 8.0}})
+    own = sim.render(scene, cam, table, sim.PipelineConfig(algorithm="tile"), hardware=small).flat_stats
+    base = sim.render(scene, cam, table, sim.PipelineConfig(algorithm="tile"), keep_timing_records=True)
+    for k in ("timing.cycles", "dram.bytes", "depth.cache.misses"):
+        assert df[k].iloc[2] == pytest.approx(own[k]), k
+    assert df["depth.cache.misses"].iloc[2] > df["depth.cache.misses"].iloc[1] == base.flat_stats["depth.cache.misses"]
+    # re-timing the default render's records onto the small cache (what a retime of a render-time key must
+    # not do) keeps the default cache's traffic:
+    wrong = sim.timing.estimate(base.timing_records, small)
+    assert wrong["dram.bytes"] != pytest.approx(df["dram.bytes"].iloc[2])
+    assert sim.timing.split_hardware({"depth_buffer": {"cache_bytes": 4096}, "tex_cache": {"size_bytes": 8192,
+                                      "miss_latency_cycles": 9}, "sample_test": {"throughput": 8}, "cores": 2}) == (
+        {"depth_buffer": {"cache_bytes": 4096}, "tex_cache": {"size_bytes": 8192}},
+        {"tex_cache": {"miss_latency_cycles": 9}, "sample_test": {"throughput": 8}, "cores": 2})
+
+
 def test_retime_reads_the_records_its_render_point_kept(tmp_path, store, monkeypatch):
     """A render point named in keep_records (rast5d report: the renders its retime sections re-time)
     stores its timing records; the retime point then re-times them without rendering again, and its

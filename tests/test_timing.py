@@ -421,3 +421,29 @@ def test_every_estimated_figure_is_documented_and_vice_versa():
     assert set(raw) == set(sim._core.timing_docs()) - memory
     streamed = _render(1, keep_timing_records=False, pixel_stats=False).flat_stats
     assert set(sim._core.timing_docs()) <= set(streamed)
+
+
+def test_a_line_test_costs_its_lane_slots():
+    """docs/timing.md, "Line samples on the sample-test unit": a line test takes 2 sample-test lane slots
+    (32 operations of the interval over the 28 of the 4D point test the lanes are sized for, rounded up)
+    and a wheel's lens-space set-up 2 (45 over 28). The sample-test unit's work of a line-sample frame is
+    2 x lines.tests + 2 x lines.point_setups, from the counters; charging a line test as one item (the
+    broken mapping below) fails."""
+    import math
+
+    cam = sim.Camera(width=48, height=48, fov_y_deg=40, focus_distance=4.0, coc_px=8, eye=(0, 0.3, 0), target=(0, 0.3, -4))
+    import models
+
+    scene = models.named("spot_wall", cow_motion=(0.0, 0.0, 0.0))  # line samples: static scenes
+    res = sim.render(scene, cam, sim.SampleTable.lines(n_lines=8, seed=2), sim.PipelineConfig(algorithm="lines", threads=1),
+                     keep_timing_records=True)
+    s = res.flat_stats
+    test_slots, setup_slots = math.ceil(32 / 28), math.ceil(45 / 28)  # the documented operations over kInside4D
+    assert (test_slots, setup_slots) == (2, 2)
+    assert s["raster.samples_tested"] == 0 and s["lines.tests"] > 0 and s["lines.point_setups"] > 0
+    expected = test_slots * s["lines.tests"] + setup_slots * s["lines.point_setups"]
+    assert s["timing.sample_test.work"] == expected == res.timing_records["sample_tests"].sum()
+    assert s["timing.sample_test.work"] != s["lines.tests"]  # one item per line test would be caught
+    # Re-timed with 4x the lanes, the sample-test unit's busy clocks are its work over 256.
+    again = sim.timing.estimate(res.timing_records, HardwareConfig(sample_test={"throughput": 256}))
+    assert again["timing.sample_test.busy_cycles"] == pytest.approx(expected / 256)

@@ -26,6 +26,33 @@ TIMING_REFERENCE_COLUMNS = {"time.model_s": "CPU seconds of the timing model on 
 PREFIXES = ("scene.params.", "point.", "camera.", "lod.", "query.")
 
 _DOTTED = re.compile(r"(?<![\w`.'\"])([A-Za-z_]\w*(?:\.[A-Za-z_]\w*)+)(?![\w`(])")
+# Row functions a derived expression may be (`derived: {area: "area_proxy()"}`, docs/reports.md §Derived
+# columns): a column that report code computes from whole rows where a pandas expression cannot say it,
+# declared here by name as "module:function" (fn(df) -> a column), so that a config is checked on load.
+ROW_FUNCTIONS = {
+    "area_proxy": "experiments.report.hardware:area_column",
+    "frame_target": "experiments.report.hardware:target_column",
+    "hardware_method": "experiments.report.hardware:method_column",
+    "hardware_family": "experiments.report.hardware:family_column",
+    "hardware_scene": "experiments.report.hardware:scene_column",
+    "hardware_n": "experiments.report.hardware:n_column",
+}
+_CALL = re.compile(r"^\s*([A-Za-z_]\w*)\(\)\s*$")
+
+
+def row_function(expr: str):
+    """The row function a derived expression names (NAME()), imported, or None for a pandas expression;
+    ConfigError for an unknown NAME."""
+    m = _CALL.match(expr)
+    if m is None:
+        return None
+    name = m.group(1)
+    if name not in ROW_FUNCTIONS:
+        raise ConfigError(f"derived {expr!r}: unknown row function {name!r} (known: {', '.join(sorted(ROW_FUNCTIONS))})")
+    import importlib
+
+    module, fn = ROW_FUNCTIONS[name].split(":")
+    return getattr(importlib.import_module(module), fn)
 
 
 def known_columns(config: RenderConfig) -> set[str]:
@@ -82,6 +109,14 @@ def check_output_columns(config: RenderConfig, source: str = "config", lines: di
         return col in known or col.startswith(prefixes) or (col.endswith(".ci95") and ok(col[:-5]))
 
     for name, expr in o.derived.items():
+        m = _CALL.match(expr)
+        if m is not None:
+            if m.group(1) not in ROW_FUNCTIONS:
+                where = lines.get(("outputs", "derived", name), source)
+                errors.append(f"{where}: outputs.derived.{name}: unknown row function {m.group(1)!r} in {expr!r} "
+                              f"(known: {', '.join(sorted(ROW_FUNCTIONS))})")
+            known.add(name)
+            continue
         for ref in _DOTTED.findall(expr):
             if not ok(ref) and ref not in o.derived:
                 where = lines.get(("outputs", "derived", name), source)

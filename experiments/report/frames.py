@@ -19,9 +19,16 @@ class PlotError(ConfigError):
 
 def apply_derived(df, derived: dict[str, str]):
     """df with the `derived:` columns added, in order (a derived column may use earlier ones).
-    Expressions are pandas expressions; dotted column names (raster.samples_tested) may be written bare."""
+    Expressions are pandas expressions; dotted column names (raster.samples_tested) may be written bare; or
+    NAME(), a row function of experiments/config/columns.py ROW_FUNCTIONS."""
+    from ..config.columns import row_function
+
     df = df.copy()
     for name, expr in derived.items():
+        fn = row_function(expr)
+        if fn is not None:  # a declared row function (experiments/config/columns.py ROW_FUNCTIONS)
+            df[name] = list(fn(df)) if len(df) else []
+            continue
         quoted = _DOTTED.sub(lambda m: f"`{m.group(1)}`" if m.group(1) in df.columns else m.group(1), expr)
         try:
             df[name] = df.eval(quoted, engine="python")

@@ -23,6 +23,7 @@ from ..config import ConfigError, RenderConfig, load_dict, validate
 from ..run import images_dir, results_dir, run_sweep
 from .figures import render_plot
 from .frames import PlotError, apply_derived
+from . import hardware as _hardware  # noqa: F401  (registers the hardware page's named tables)
 from .tables import TABLES, VALUES, md_table
 
 # --quick: every point at most QUICK_SIZE pixels on a side (aspect kept when the config gives both),

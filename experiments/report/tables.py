@@ -150,6 +150,23 @@ def _ok(df):
     return df[df["status"] == "ok"] if "status" in df.columns else df
 
 
+def page_rows(name: str):
+    """The rows (derived columns included) of the section of config ``name`` on the page being written, for
+    a named table or value table that joins several sections of its page (the hardware page joins error
+    curves, costs and re-timed variants); outside `rast5d report` (a config's own page) the stored result
+    table of ``name`` (experiments.load). KeyError naming the config when neither has it."""
+    from .pages import PROSE_DATA
+
+    if name in PROSE_DATA:
+        return _ok(PROSE_DATA[name][2])
+    from ..run.store import load
+
+    try:
+        return _ok(load(name))
+    except (FileNotFoundError, OSError, KeyError, ValueError):
+        raise KeyError(f"page_rows: no rows of config {name!r} on this page or in the result store") from None
+
+
 def _fact(algorithm, name: str):
     """A traversal-registry fact (sim.algorithm_info) of an algorithm name, or None for an unknown one."""
     import sim

@@ -15,7 +15,8 @@ and the row it leaves in the result store.
   pipeline.precision against the default precision; its figures are numerics.* (sim/figures.py).
 - retime: sim.timing.estimate on the stored work records of the point's render (store.records_path;
   rendered once on first use) with `point.hardware` merged over the hardware section; the render's
-  counters and the re-timed `timing.*` figures.
+  counters and the re-timed `timing.*` figures. Render-time keys of `point.hardware` (cache sizes, ...;
+  sim.timing.split_hardware) are the render's: a variant of them is its own render (render_config).
 """
 from __future__ import annotations
 
@@ -129,8 +130,20 @@ def _conservative(config, row, image_path, threads):
 
 
 def render_config(config: RenderConfig) -> RenderConfig:
-    """The render whose work records a retime point re-times (the same config without the point section)."""
-    return config.model_copy(update={"point": type(config.point)()})
+    """The render whose work records a retime point re-times: the same config without the point section,
+    with the render-time keys of point.hardware (cache sizes, the depth and colour buffers, the DRAM burst,
+    the record granularity: sim.timing.split_hardware) merged into its hardware section, since records
+    cannot be re-timed onto another cache. A point.hardware of timing keys only re-times the config's render."""
+    import sim
+
+    from ..config.schema import deep_merge
+
+    update = {"point": type(config.point)()}
+    render_time, _ = sim.timing.split_hardware(config.point.hardware)
+    if render_time:
+        base = config.hardware.model_dump(exclude_none=True)
+        update["hardware"] = type(config.hardware).model_validate(deep_merge(base, render_time))
+    return config.model_copy(update=update)
 
 
 def stored_render(config: RenderConfig, threads: int | None = None):

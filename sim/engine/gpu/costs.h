@@ -66,4 +66,15 @@ inline constexpr std::uint64_t kRederiveMotion = 9;
 inline constexpr std::uint64_t kPerturbCoord = 2;
 inline constexpr std::uint64_t kPerturbTexelBytes = 16;
 
+// ---- accumulation buffering's passes ([Toth 2008] §2.2; traversal/algorithms/interleave.cpp, docs/gpu.md) ----
+// The vertex shader's clip-space transform that a GPU repeats in every pass after the first: a 4 x 4
+// matrix times the position, 4 MUL + 12 MADD, per vertex and shutter end (a moving vertex has a
+// position at each end). Charged at this documented cost, not executed: the engine's vertices arrive in
+// clip space (the first pass's transform is the one every algorithm needs, not counted).
+inline constexpr std::uint64_t kVertexTransform = 16;
+// The accumulation buffer, RGBA at 16 bits a channel: the first pass writes it, every later pass reads
+// and writes it, the last one's sum is resolved into the displayed pixel (the resolve every algorithm
+// pays): 2 x kAccumPixelBytes x (passes - 1) DRAM bytes per pixel.
+inline constexpr std::uint64_t kAccumPixelBytes = 8;
+
 }  // namespace rast5d::cost::gpu

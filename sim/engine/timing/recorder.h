@@ -61,7 +61,7 @@ class TimingRecorder final : public VisitObserver {
     // triangle's setup goes with its first record.
     const TileWork rest = now().since(mark_);
     if (!rest.empty() || out_->records.size() == first_) emit(rest);
-    if (home_) out_->records[first_].triangles = 1;
+    if (home_) out_->records[first_].triangles += 1;  // its own set-up (+ accumulation's re-sends, counted)
     if (hand_over_ && out_->records.size() >= chunk_) hand_over_(*out_);  // between triangles only
   }
   void begin_tail() override { mark_ = now(); }

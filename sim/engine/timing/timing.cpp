@@ -22,7 +22,7 @@
 namespace rast5d {
 
 bool TileWork::empty() const {
-  return !(gs_ops || gs_floats || raster_pixels || ps_ops || tile_tests || sample_tests || depth_tests ||
+  return !(triangles || gs_ops || gs_floats || raster_pixels || ps_ops || tile_tests || sample_tests || depth_tests ||
            depth_fills || quads || texel_fetches || tex_misses || dram_bytes);
 }
 
@@ -32,9 +32,14 @@ TileWork work_from_counters(const Counters& c, const MemoryTotalsView& mem) {
   w.tile_tests = d(Counter::tile_visited);
   // Sample tests run in a conventional GPU's pixel shader are pixel_shader work (gpu.ps_ops), not
   // the fixed-function sample-test unit's.
+  // A line test and a wheel's lens-space set-up take the lane slots of their operations (timing.h).
   w.sample_tests = d(Counter::raster_samples_tested) - d(Counter::gpu_ps_samples_tested)
-                   + d(Counter::lines_tests);  // a line test is one item
-  w.gs_ops = d(Counter::gpu_gs_ops);
+                   + kLineTestSlots * d(Counter::lines_tests) + kLinePointSetupSlots * d(Counter::lines_point_setups);
+  // The shader ALUs: a GPU geometry shader's bounds, and the vertex shading accumulation buffering
+  // repeats every pass; the setup unit: the triangles accumulation re-sends every pass (the recorder
+  // adds each triangle's own set-up in its home bin).
+  w.gs_ops = d(Counter::gpu_gs_ops) + d(Counter::accum_vertex_ops);
+  w.triangles = d(Counter::accum_resends);
   w.gs_floats = d(Counter::gpu_gs_floats);
   w.raster_pixels = d(Counter::gpu_raster_pixels_tested);
   w.ps_ops = d(Counter::gpu_ps_ops);
@@ -49,7 +54,8 @@ TileWork work_from_counters(const Counters& c, const MemoryTotalsView& mem) {
   // to DRAM as counted (hiz.bytes_*).
   w.dram_depth = mem.depth ? mem.depth_dram : d(Counter::depth_bytes_read) + d(Counter::depth_bytes_written);
   w.depth_fills = mem.depth ? mem.depth_fills : 0;
-  w.dram_color = mem.color ? mem.color_dram : 0;
+  // Colour: the colour cache's lines and the resolve, and accumulation buffering's full-screen passes.
+  w.dram_color = mem.color ? mem.color_dram + d(Counter::accum_buffer_bytes) : 0;
   w.dram_hiz = d(Counter::hiz_bytes_read) + d(Counter::hiz_bytes_written);
   w.dram_bytes = w.dram_depth + w.dram_color + w.dram_hiz;
   return w;

@@ -19,6 +19,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/costs.h"
 #include "core/counters.h"
 
 namespace rast5d {
@@ -26,7 +27,7 @@ namespace rast5d {
 // The units in pipeline order: (identifier, exported name, currency, description). Declared once;
 // the timing figures' docs (sim.counter_docs, docs/counters.md) are generated from this list.
 #define RAST5D_TIMING_UNITS(X)                                                                            \
-  X(geometry_shader, "geometry_shader", "ops", "Conventional GPU: geometry-shader ALU (gpu.gs_ops)")      \
+  X(geometry_shader, "geometry_shader", "ops", "Conventional GPU: shader ALU ops of the geometry shader (gpu.gs_ops) and of accumulation buffering's repeated vertex shading (accum.vertex_ops)") \
   X(gs_output, "gs_output", "floats", "Conventional GPU: geometry shader to rasterizer bandwidth (gpu.gs_floats)") \
   X(raster2d, "raster2d", "pixels", "Conventional GPU: 2D rasterizer pixel tests (gpu.raster_pixels_tested)") \
   X(pixel_shader, "pixel_shader", "ops", "Conventional GPU: pixel-shader lanes (gpu.ps_ops: sample tests, re-derived setup)") \
@@ -94,7 +95,8 @@ struct TileWork {
     }
     return 0;
   }
-  // Field-wise this - before (bin and triangles are not counter-derived and stay 0).
+  // Field-wise this - before (bin is not counter-derived and stays 0; triangles holds the counter-derived
+  // re-sends, the recorder adds the triangle's own set-up).
   TileWork since(const TileWork& before) const {
     // Every field is 64 bits: the difference as one loop over them (vectorised).
     static_assert(sizeof(TileWork) == kFields * sizeof(std::uint64_t));
@@ -103,7 +105,7 @@ struct TileWork {
     const auto* b = reinterpret_cast<const std::uint64_t*>(&before);
     auto* o = reinterpret_cast<std::uint64_t*>(&w);
     for (int i = 0; i < kFields; ++i) o[i] = a[i] - b[i];
-    w.bin = 0, w.triangles = 0;
+    w.bin = 0;
     return w;
   }
   static constexpr int kFields = 18;
@@ -119,6 +121,19 @@ struct MemoryTotalsView {
   std::uint64_t depth_dram = 0, depth_fills = 0, color_dram = 0;
 };
 TileWork work_from_counters(const Counters& c, const MemoryTotalsView& mem = {});
+
+// A line-triangle test on the sample-test unit ([Tzeng 2012] §3; docs/timing.md, "Line samples"). The
+// unit's lanes are sized for the 4D point test (cost::kInside4D operations a lane slot); a line sample's
+// work takes the lane slots its operations need, rounded up: the interval of one line inside a
+// defocused triangle in front of the near plane (cost::line_interval_cost(4, 0) = 32 operations: 2
+// slots), and the lens-space set-up of its wagon wheel's screen point (cost::kLinePointSetup = 45
+// operations: 2 slots, once per wheel and triangle, lines.point_setups). Declared here once; the
+// sample_test unit's work of a record is raster.samples_tested + kLineTestSlots x lines.tests +
+// kLinePointSetupSlots x lines.point_setups.
+inline constexpr std::uint64_t lane_slots(std::uint64_t ops) { return (ops + cost::kInside4D - 1) / cost::kInside4D; }
+inline constexpr std::uint64_t kLineTestSlots = lane_slots(cost::line_interval_cost(4, 0));
+inline constexpr std::uint64_t kLinePointSetupSlots = lane_slots(cost::kLinePointSetup);
+static_assert(kLineTestSlots == 2 && kLinePointSetupSlots == 2, "docs/timing.md states both");
 
 struct UnitTiming {
   double throughput = 1.0;  // items per clock, > 0

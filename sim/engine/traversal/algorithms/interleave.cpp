@@ -16,11 +16,18 @@
 // (so the 2D test of the placed vertices is bit-identical to the 5D test), sets up its 2D edges and
 // bounds its pixels by the projected vertices (the setup box when a vertex is behind the eye).
 // On other interleaved tables moving triangles take INTERLEAVE's conservative path.
+// What a GPU repeats in every pass after the first is charged too (docs/gpu.md): the triangle is
+// re-sent and set up again (accum.resends: the setup unit's triangles), its vertices transformed again
+// by the vertex shader (accum.vertex_ops, in ops.setup: cost::gpu::kVertexTransform per vertex and
+// shutter end), and each pass's image is added into the accumulation buffer by a full-screen pass
+// (accum.buffer_bytes, charged per screen bin at its end: every pixel, whether or not a triangle
+// reached it).
 #include <algorithm>
 #include <cstdint>
 #include <utility>
 #include <vector>
 
+#include "gpu/costs.h"
 #include "setup/footprint.h"
 #include "tiletest/box_bounds.h"
 #include "tiletest/precision_4d.h"
@@ -125,6 +132,24 @@ class Interleave final : public Traversal {
       c_[Counter::ops_setup] += setup_ops;
       c_[Counter::trav_passes] += static_cast<std::uint64_t>(N);
       if (tri.moving && !per_pass_motion) ++c_[Counter::trav_motion_fallback];
+      if constexpr (kPassSetup) {  // the passes after the first re-send, set up and transform the triangle
+        const std::uint64_t resends = N > 1 ? static_cast<std::uint64_t>(N - 1) : 0;
+        const std::uint64_t vertex_ops = resends * 3 * (tri.moving ? 2 : 1) * cost::gpu::kVertexTransform;
+        c_[Counter::accum_resends] += resends;
+        c_[Counter::accum_vertex_ops] += vertex_ops;
+        c_[Counter::ops_setup] += vertex_ops;
+      }
+    }
+  }
+
+  // Accumulation: every pass after the first reads and writes the accumulation buffer over the whole
+  // screen (a full-screen pass), so every pixel of the bin costs 2 x kAccumPixelBytes per such pass.
+  void end_bin(const BinRect& bin) override {
+    if constexpr (kPassSetup) {
+      const int N = f_.table.n_lens();
+      const std::uint64_t pixels = static_cast<std::uint64_t>(std::max(bin.x1 - bin.x0, 0)) *
+                                   static_cast<std::uint64_t>(std::max(bin.y1 - bin.y0, 0));
+      if (N > 1) c_[Counter::accum_buffer_bytes] += pixels * 2 * cost::gpu::kAccumPixelBytes * static_cast<std::uint64_t>(N - 1);
     }
   }
 
