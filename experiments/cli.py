@@ -378,7 +378,8 @@ class _Version(argparse.Action):
     def __call__(self, parser, namespace, values, option_string=None):
         from . import __version__
 
-        parser.exit(message=f"rast5d {__version__} (Python {sys.version.split()[0]})\n")
+        print(f"rast5d {__version__} (Python {sys.version.split()[0]})")
+        parser.exit()
 
 
 def main(argv: list[str] | None = None) -> int:
