@@ -25,8 +25,7 @@ class EnergyEntry:
     source: str
 
 
-HOROWITZ = ("M. Horowitz, 'Computing's energy problem (and what we can do about it)', ISSCC 2014, "
-            "Fig. 1.1.9 (45 nm, 0.9 V)")
+HOROWITZ = "[Horowitz 2014] Fig. 1.1.9 (45 nm, 0.9 V)"  # docs/references.md
 
 # The entries every table must have.
 KEYS = ("op.robust", "op.hardware", "sram.depth_byte", "sram.hiz_byte", "sram.color_byte", "cache.tex_access",
@@ -119,11 +118,19 @@ FIGURES = (
 )
 
 
+#: Figures that read the memory model's events (tile-cache accesses, DRAM bytes): a render without the
+#: timing and memory model (sim.render(timing=False)) leaves them out rather than report part of them.
+MEMORY_FIGURES = ("energy.depth", "energy.color", "energy.dram", "energy.frame")
+
+
 def docs() -> dict[str, tuple[str, str]]:
     """{figure: (unit, description)} of the energy figures."""
     out = {name: ("pJ", f"Energy of {what} (sim.energy; default table {DEFAULT.name})") for name, what, _ in FIGURES}
     out["energy.raster"] = ("pJ", "energy.setup + energy.tile + energy.sample: the rasterizer's arithmetic")
     out["energy.frame"] = ("pJ", "Sum of every energy.* stage figure (shader programs are not modelled)")
+    for name in MEMORY_FIGURES:
+        unit, text = out[name]
+        out[name] = (unit, text + "; needs the timing and memory model (absent from a render without timing)")
     return out
 
 

@@ -15,6 +15,7 @@ from . import params as _params
 from . import pixel_stats as _pixel_stats
 from .pipeline import PipelineConfig
 from .texturing import texture_inputs
+from .energy import MEMORY_FIGURES as ENERGY_MEMORY_FIGURES
 from .energy import estimate as energy_estimate
 from .timing import config as timing_config
 from .timing import derive as timing_derive
@@ -183,7 +184,9 @@ def _segment_buffer_bytes(camera: Camera, n_lines: int, config: PipelineConfig, 
     """Line samples: every worker keeps one segment buffer per line of its bin (the bin clipped to
     the frame), each a vector that grows by doubling up to pipeline.lines.buffer_size segments and
     keeps its storage from bin to bin: the bound is every buffer full."""
-    if config.algorithm != "lines" and not config.algorithm.startswith("lines_"):
+    from .pipeline import algorithm_info
+
+    if algorithm_info(config.algorithm).samples != "lines":
         return 0
     b = config.bin_size
     cap = int(config.lines["buffer_size"]) or _SEGMENTS_UNLIMITED
@@ -303,12 +306,12 @@ def check_combination(config: PipelineConfig, table, lens: str = "disk", *, movi
     every point (experiments/config/build.py check) before its first render. ``table`` is a
     sim.SampleTable (its kind, generator and discrete lens positions are read); ``moving``: whether the
     scene moves during the shutter (unknown before the scene is built: False)."""
-    from .pipeline import interleaved_algorithms
+    from .pipeline import algorithm_info, interleaved_algorithms
 
     algorithm = config.algorithm
     is_lines = getattr(table, "kind", "points") == "lines"
     table_name = getattr(table, "generator", None) or type(table).__name__
-    if is_lines != (algorithm == "lines"):
+    if is_lines != (algorithm_info(algorithm).samples == "lines"):
         if is_lines:
             raise ConfigError(f"algorithm: a line-sample table (SampleTable.lines) needs "
                               f"algorithm 'lines', got {algorithm!r}")
@@ -471,7 +474,10 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     records = out.get("timing_records")
     if "timing" in out:  # the timing and memory model's raw figures, and the derived ones
         flat = dict(sorted({**flat, **timing_derive(out["timing"]), **out["memory"]}.items()))
-    flat = dict(sorted({**flat, **energy_estimate(flat, cost_model=config.cost_model)}.items()))  # sim.energy
+    energy = energy_estimate(flat, cost_model=config.cost_model)  # sim.energy
+    if "timing" not in out:  # without the memory model's events these would be part of the figure
+        energy = {k: v for k, v in energy.items() if k not in ENERGY_MEMORY_FIGURES}
+    flat = dict(sorted({**flat, **energy}.items()))
     desc = {"camera": camera.describe(), "pipeline": config.describe(),
             "table": table.describe() if hasattr(table, "describe") else {}, "lens_grid": grid,
             "hardware": hardware_desc}

@@ -145,3 +145,11 @@ def docs() -> dict[str, tuple[str, str]]:
     d = dict(_core.timing_docs())
     d.update(derived_docs(DERIVED))
     return d
+
+
+def model_figures() -> frozenset[str]:
+    """Every result column a render has only when the timing and memory model runs: the model's figures
+    (docs) and the energy figures that read its events (sim.energy.MEMORY_FIGURES)."""
+    from .energy import MEMORY_FIGURES
+
+    return frozenset(docs()) | frozenset(MEMORY_FIGURES)

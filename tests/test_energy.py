@@ -83,3 +83,22 @@ def test_tables_are_pluggable_and_validated(tmp_path):
 def test_hardware_cost_model_uses_the_fixed_point_op_entry():
     st = {"ops.sample_inside": 100}
     assert estimate(st, cost_model="hardware")["energy.sample"] == 100 * DEFAULT.entries["op.hardware"].pj
+
+
+def test_a_render_without_the_memory_model_leaves_out_the_energy_that_reads_it():
+    """energy.depth, .color, .dram and .frame read the tile caches' and DRAM's events: a render without the
+    timing and memory model leaves them out (fails if they are reported from part of their events), and
+    a page that names one runs the model (experiments.config.sweep.reads_timing)."""
+    from experiments.config.schema import OutputsSpec as Outputs
+    from experiments.config.sweep import reads_timing
+
+    cam = sim.Camera(width=W, height=H, fov_y_deg=45, focus_distance=F, coc_px=10.0)
+    args = (single_class_scene("4d"), cam, tables()["stratified"], sim.PipelineConfig(algorithm="tile", threads=1))
+    off, on = sim.render(*args, timing=False).flat_stats, sim.render(*args, timing=True).flat_stats
+    for name in sim.energy.MEMORY_FIGURES:
+        assert name not in off and on[name] > 0, name
+    assert off["energy.tile"] == on["energy.tile"] > 0
+    assert sim.energy.MEMORY_FIGURES and set(sim.energy.MEMORY_FIGURES) <= sim.timing.model_figures()
+    assert reads_timing(Outputs(derived={"x": "dram.bytes / frame.pixels"}))
+    assert reads_timing(Outputs(derived={"x": "energy.frame / 1e6"}))
+    assert not reads_timing(Outputs(derived={"x": "energy.tile / 1e6"}))

@@ -58,7 +58,7 @@ def test_engine_refuses_bad_precision_naming_the_field():
 
 
 def test_yaml_precision_is_checked_at_load():
-    from experiments.config.schema import validate
+    from experiments.config import validate
 
     ok = validate({"scene": {"name": "spot"}, "pipeline": {"precision": {"sample": FIX4}}}, "t.yaml")
     assert ok.pipeline.precision["sample"] == FIX4

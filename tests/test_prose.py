@@ -108,8 +108,7 @@ def _report_configs():
 CONFIGS = _report_configs()
 # Sections of the timing model's page (configs/paper/cycles_*.yaml) that still type a ratio ('7x', '4x');
 # strict: when they become placeholders, the xfail fails and the entry goes.
-PENDING = {"cycles_fast_memory": "the timing model's section types '3-7x'",
-           "cycles_fifo": "the timing model's section types '4x memory bandwidth'"}
+PENDING: dict[str, str] = {}
 
 
 @pytest.mark.parametrize("path", [p for p, _, _ in CONFIGS], ids=[c.name for _, _, c in CONFIGS])

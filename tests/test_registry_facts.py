@@ -147,8 +147,7 @@ def test_a_swept_parameter_that_some_points_do_not_read_is_warned_about_once(tmp
 
 _NAME_TEST = re.compile(r"""(algorithm|\balg\w*|\ba\b)\s*(==|!=)\s*["'](lines|gpu_\w*)["']|"""
                         r"""\.startswith\(\s*["'](gpu_|lines)""")
-# The render's memory estimate and combination check still decide by the name 'lines'; strict xfail.
-_PENDING = {"sim/render.py": "the render's memory estimate and combination check (sim.algorithm_info facts)"}
+_PENDING: dict[str, str] = {}
 
 
 def _sources():

@@ -1,6 +1,7 @@
 """Benchmarks of the engine (`make bench`)."""
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 
@@ -14,7 +15,11 @@ def scene_camera(scene, w: int, h: int, coc: float):
 
 
 def write_page(out, name: str, lines: list[str]) -> Path:
-    """Write a benchmark page (markdown lines) as out/name, creating out, and say where."""
+    """Write a benchmark page (markdown lines) as out/name, creating out, and say where. A header line that
+    gives the load average " at the start." gets the load at the end beside it."""
+    end_load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    lines = [line.replace(" at the start.", f" at the start, {end_load:.1f} at the end.") if i < 4 else line
+             for i, line in enumerate(lines)]
     page = Path(out) / name
     page.parent.mkdir(parents=True, exist_ok=True)
     page.write_text("\n".join(lines) + "\n")

@@ -30,7 +30,7 @@ REPO = Path(__file__).resolve().parents[2]
 from experiments.paths import bundled_configs, reports_dir, results_dir  # noqa: E402,F401
 FRACTIONS = (1.0, 0.5, 0.2, 0.1, 0.05, 0.04, 0.03, 0.025, 0.02, 0.01)
 FIGURES = ("ops.total", "raster.samples_tested", "raster.samples_hit")
-UNITS = ("setup", "tile_test", "sample_test", "depth", "shader", "texture", "memory")
+UNITS = ("setup", "tile_test", "sample_test", "depth", "shader", "texture", "dram")
 
 
 def _cases(quick: bool):
@@ -165,7 +165,7 @@ def granularity_table(spp: int, quick: bool, threads: int = 1, repeats: int = 2)
         out = {}
         for gran in ("bin", "visit") * repeats:  # interleaved; minimum time kept
             hw = sim.HardwareConfig(timing={"granularity": gran})
-            r, wall, cpu = _timed(lambda: sim.render(scene, cam, table, cfg, hardware=hw))
+            r, wall, cpu = _timed(lambda: sim.render(scene, cam, table, cfg, hardware=hw, keep_timing_records=True))
             prev = out.get(gran)
             out[gran] = (min(cpu, prev[0]) if prev else cpu, r.flat_stats, len(r.timing_records))
         (tb, fb, nb), (tv, fv, nv) = out["bin"], out["visit"]
@@ -275,8 +275,6 @@ def run(threads: int = 2, seeds: int = 5, draws: int = 200, spp: int = 64, bin_s
                      + " | ".join(f"{r['cov ' + k]:.3f} | {r['err ' + k]:.2%}" for k in FIGURES) + " |")
     lines += summary_lines(srows, crows, draws)
     lines += granularity_lines(grows, spp)
-    end_load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
-    lines[2] = lines[2].replace(" at the start.", f" at the start, {end_load:.1f} at the end.")
     page = write_page(out, "bench_sampling.md", lines)
     return {"page": page, "sampling": srows, "coverage": crows, "granularity": grows}
 

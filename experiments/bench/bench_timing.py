@@ -178,8 +178,6 @@ def run(quick: bool = False, out=None) -> dict:
     for r in rrows:
         lines.append(f"| {r['what']} | {r['estimate'] / 2**30:.2f} | {r['limit'] / 2**30:.0f} | "
                      f"{'yes' if r['estimate'] > r['limit'] else 'no'} | {r['rendered']} |")
-    end_load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
-    lines[2] = lines[2].replace(" at the start.", f" at the start, {end_load:.1f} at the end.")
     page = write_page(out, "bench_timing.md", lines)
     return {"page": page, "cpu": crows, "peak": prows, "refusals": rrows}
 

@@ -3,9 +3,10 @@ overrides (load.py), sweep expansion and the identity of a point (sweep.py), the
 point (build.py), and the generated reference docs (docs.py, ``python -m experiments.config.docs``).
 """
 from .build import build, build_scene
+from .columns import validate
 from .load import load_config, load_dict, parse_override
 from .schema import (REPO, CameraSpec, ConfigError, ExecutorSpec, HardwareSpec, MetricsSpec, OutputsSpec,
-                     PipelineSpec, PlotSpec, PointSpec, RenderConfig, SamplesSpec, SceneSpec, deep_merge, validate)
+                     PipelineSpec, PlotSpec, PointSpec, RenderConfig, SamplesSpec, SceneSpec, deep_merge)
 from .sweep import (RESULT_EXCLUDE, config_hash, expand_sweep, flatten, point_columns, set_dotted, sweep_points,
                     timing_needed)
 

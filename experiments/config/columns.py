@@ -8,7 +8,7 @@ from __future__ import annotations
 import difflib
 import re
 
-from .schema import ConfigError, RenderConfig
+from .schema import ConfigError, RenderConfig, validate_model
 from .sweep import RESULT_EXCLUDE, flatten
 
 # Columns every row has besides the config and the counters (experiments/run/points.py, store.py).
@@ -17,6 +17,10 @@ ROW_COLUMNS = {"config_hash", "status", "error", "traceback", "time.wall_s", "en
                "query.samples_passed", "conservative.pixels_covered"}
 # Columns of outputs.metrics (experiments/run/metrics.py).
 METRIC_COLUMNS = {"metric.rmse", "metric.psnr", "metric.ssim", "metric.ghosting", "metric.flip"}
+# Columns the timing_reference point kind adds besides reference.* and bin.* (the timing figures of the
+# cycle-stepped reference and of the model on bin records): CPU seconds of each side on the same records.
+TIMING_REFERENCE_COLUMNS = {"time.model_s": "CPU seconds of the timing model on the render's visit records",
+                            "time.reference_s": "CPU seconds of the cycle-stepped reference on the same records"}
 # Families of columns whose members depend on the point (a named scene's parameters, the camera the
 # scene's hint resolved, the point section, per-object level-of-detail figures).
 PREFIXES = ("scene.params.", "point.", "camera.", "lod.", "query.")
@@ -38,6 +42,10 @@ def known_columns(config: RenderConfig) -> set[str]:
     for k in config.sweep:
         if k != "zip":
             known.add(k)
+    if config.point.kind == "timing_reference":  # experiments/run/points.py _timing_reference
+        timing = [k[len("timing."):] for k in docs if k.startswith("timing.")]
+        known |= {f"{side}.{k}" for side in ("reference", "bin") for k in timing}
+        known |= set(TIMING_REFERENCE_COLUMNS)
     return known
 
 
@@ -49,6 +57,14 @@ def _swept_sections(config: RenderConfig) -> tuple[str, ...]:
 def _suggest(name: str, known) -> str:
     close = difflib.get_close_matches(name, sorted(known), n=2, cutoff=0.6)
     return f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
+
+
+def validate(data: dict, source: str = "config", lines: dict | None = None) -> RenderConfig:
+    """The RenderConfig of a merged config dict (schema.validate_model) with every column its outputs name
+    checked (check_output_columns); ConfigError naming file, line, key and value."""
+    config = validate_model(data, source, lines)
+    check_output_columns(config, source, lines)
+    return config
 
 
 def check_output_columns(config: RenderConfig, source: str = "config", lines: dict | None = None) -> None:

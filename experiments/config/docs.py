@@ -183,6 +183,36 @@ def scenes_markdown() -> str:
     return "\n".join(out) + "\n"
 
 
+def energy_markdown(current: str) -> str:
+    """docs/energy.md with its two tables (the figures and their events, the default table) written from
+    sim/energy.py between their markers; the prose around them is the file's own."""
+    from sim import energy
+
+    def entry(key):
+        return "`op.*`" if key is None else f"`{key}`"
+
+    figures = ["| figure | what | events × entry |", "|---|---|---|"]
+    for name, what, terms in energy.FIGURES:
+        sums = "; ".join(f"`{c}` × {entry(k)}" for c, k in terms)
+        need = " (with the timing and memory model only)" if name in energy.MEMORY_FIGURES else ""
+        figures.append(f"| `{name}` | {what}{need} | {sums} |")
+    figures.append("| `energy.raster` | the rasterizer's arithmetic | `energy.setup` + `energy.tile` + `energy.sample` |")
+    figures.append("| `energy.frame` | every stage (with the timing and memory model only) | the sum of the figures above "
+                   "but `energy.raster` |")
+    figures.append("")
+    figures.append("`op.*`: the operation entry of the cost model the counts were made under (`op.robust` or "
+                   "`op.hardware`).")
+    table = ["| entry | pJ | per | source |", "|---|---|---|---|"]
+    for key, e in energy.DEFAULT.entries.items():
+        table.append(f"| `{key}` | {e.pj:g} | {e.per} | {e.source} |")
+    out = current
+    for marker, rows in (("energy:figures", figures), ("energy:table", table)):
+        start, end = f"<!-- {marker} -->\n", f"<!-- /{marker} -->"
+        i, j = out.index(start) + len(start), out.index(end)
+        out = out[:i] + "\n".join(rows) + "\n" + out[j:]
+    return out
+
+
 def targets() -> dict[Path, str]:
     """The generated docs; a paper is cited by its key everywhere (sim.references.cite)."""
     from sim import references
@@ -190,6 +220,7 @@ def targets() -> dict[Path, str]:
     return {REPO / "docs" / "config.md": references.cite(markdown_reference() + "\n"),
             REPO / "docs" / "counters.md": references.cite(counters_markdown()),
             REPO / "docs" / "scenes.md": references.cite(scenes_markdown()),
+            REPO / "docs" / "energy.md": references.cite(energy_markdown((REPO / "docs" / "energy.md").read_text())),
             REPO / "docs" / "references.md": references.markdown() + "\n"}
 
 

@@ -9,7 +9,8 @@ import yaml
 
 from models.loader import UniqueKeyLoader
 
-from .schema import ConfigError, RenderConfig, deep_merge, validate
+from .columns import validate
+from .schema import ConfigError, RenderConfig, deep_merge
 from .sweep import expand_sweep, set_dotted
 
 

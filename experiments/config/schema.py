@@ -313,11 +313,14 @@ class PointSpec(_Strict):
     `occlusion_query` asks whether `query` is hidden behind the scene (sim.occlusion_query) and records
     the query's own work; `conservative` rasterizes the scene conservatively (sim.conservative_raster,
     1 x 1 tiles, per-pixel t-z boxes); `retime` re-times the stored work records of the render on the
-    hardware `hardware` (sim.timing.estimate, no re-render when the records are in the result store)."""
+    hardware `hardware` (sim.timing.estimate, no re-render when the records are in the result store);
+    `timing_reference` measures the timing model against its cycle-stepped reference (sim.timing.reference)
+    on the render's visit records, with the model on bin records beside it, and what each costs."""
 
-    kind: Literal["render", "occlusion_query", "conservative", "retime", "transparency", "sampler", "soft_shadows",
-                  "caustics", "glossy", "precision"] = Field(
-        "render", description=("render | occlusion_query | conservative | retime | a use of the rasterizer "
+    kind: Literal["render", "occlusion_query", "conservative", "retime", "timing_reference", "transparency", "sampler",
+                  "soft_shadows", "caustics", "glossy", "precision"] = Field(
+        "render", description=("render | occlusion_query | conservative | retime | timing_reference (the timing "
+                               "model against its cycle-stepped reference on the same records) | a use of the rasterizer "
                                "(sim.uses.USES): transparency | sampler | soft_shadows | caustics | glossy | precision "
                                "(a row of the numerical-precision study, point.options: study, viewport, arithmetic, "
                                "frac_bits, cls)"))
@@ -492,10 +495,10 @@ def _did_you_mean(word: str, known: list[str]) -> str:
     return f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
 
 
-def validate(data: dict, source: str = "config", lines: dict | None = None, outputs: bool = True) -> RenderConfig:
-    """The RenderConfig of a merged config dict; ConfigError naming file, line, key and value. With
-    ``outputs`` (not for the points of a sweep, checked once as a whole) every column the outputs name
-    is checked too (experiments/config/columns.py)."""
+def validate_model(data: dict, source: str = "config", lines: dict | None = None) -> RenderConfig:
+    """The RenderConfig of a merged config dict; ConfigError naming file, line, key and value. The
+    columns its outputs name are checked by experiments.config.validate (columns.py), once per config
+    (not per sweep point)."""
     try:
         config = RenderConfig.model_validate(data)
     except ValidationError as e:
@@ -511,8 +514,4 @@ def validate(data: dict, source: str = "config", lines: dict | None = None, outp
         except sim.ConfigError as e:
             where = lines.get(("point", "hardware"), source) if lines else source
             raise ConfigError(f"{where}: point.hardware: {e}") from None
-    if outputs:
-        from .columns import check_output_columns
-
-        check_output_columns(config, source, lines)
     return config

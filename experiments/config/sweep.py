@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import copy
 import hashlib
+import functools
 import itertools
 import json
 import re
 
 from .inputs import config_inputs
-from .schema import ConfigError, RenderConfig, validate
+from .schema import ConfigError, RenderConfig, validate_model
 
 
 def set_dotted(d: dict, dotted: str, value, source: str):
@@ -79,7 +80,7 @@ def expand_sweep(config: RenderConfig, source: str = "config", lines: dict | Non
         where = f"{source} (sweep point {point})"
         try:
             point_lines = {**(lines or {}), **(_point_lines(lines, point) or {})}
-            point_config = validate(d, where, point_lines, outputs=False)
+            point_config = validate_model(d, where, point_lines)
             _check_point(check, point_config, where, point_lines)
         except ConfigError as e:
             bad.append((point, str(e)))
@@ -236,11 +237,12 @@ _PLACEHOLDER = re.compile(r"(?<!\{)\{(?!\{)([^{}]+)\}(?!\})")
 
 
 def reads_timing(outputs) -> bool:
-    """Whether a page's outputs read the timing model: a `timing.` column named by a derived expression,
-    a plot (its columns, `where:` and `labels:` keys; titles and labels aside) or a placeholder of the
-    page prose (`text:`, `summary:`). A named table that reads timing figures says so where it is
-    registered (experiments/report/tables.py), and tests/test_prose.py checks that every page placing
-    one reads timing by one of these."""
+    """Whether a page's outputs read the timing and memory model: one of its figures
+    (sim.timing.model_figures: timing.*, dram.*, the tile caches', depth compression, the energy that
+    reads them) named by a derived expression, a plot (its columns, `where:` and `labels:` keys; titles
+    and labels aside) or a placeholder of the page prose (`text:`, `summary:`). A named table that reads
+    timing figures says so where it is registered (experiments/report/tables.py), and
+    tests/test_prose.py checks that every page placing one reads timing by one of these."""
     named = list(outputs.derived.values())
     for spec in outputs.plots:
         d = spec.model_dump(exclude=set(_PRESENTATION))
@@ -248,10 +250,18 @@ def reads_timing(outputs) -> bool:
         named += [json.dumps(v) for v in d.values() if v is not None]
     for text in (outputs.text, getattr(outputs, "summary", None)):
         named += _PLACEHOLDER.findall(text or "")
-    return any(_TIMING_COLUMN.search(str(n)) for n in named)
+    figures = _model_figures()
+    return any(m in figures for n in named for m in _DOTTED_NAME.findall(str(n)))
 
 
-_TIMING_COLUMN = re.compile(r"(?<![A-Za-z0-9_.])timing\.")
+_DOTTED_NAME = re.compile(r"(?<![A-Za-z0-9_.])([A-Za-z_]\w*(?:\.[A-Za-z_]\w*)+)")
+
+
+@functools.lru_cache(maxsize=1)
+def _model_figures() -> frozenset[str]:
+    import sim
+
+    return sim.timing.model_figures()
 
 
 def timing_needed(config: RenderConfig) -> bool:

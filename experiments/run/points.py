@@ -24,6 +24,7 @@ import time
 import traceback
 from pathlib import Path
 
+from ..config.schema import deep_merge
 from ..config import RESULT_EXCLUDE, RenderConfig, build, build_scene, config_hash, flatten, point_columns, timing_needed
 from ..config.inputs import input_digests, tracking_reads
 from .store import cached_records, disk_fault, engine_id, git_rev, store_pictures, store_records
@@ -163,8 +164,40 @@ def _retime(config, row, image_path, threads):
     return timing
 
 
+def _timing_reference(config, row, image_path, threads):
+    """The timing model against its reference (docs/timing.md, "The model's own error"): the render with
+    visit records kept; the model's figures on them (the render's own), the cycle-stepped reference on the
+    same records (reference.*), and the model on (triangle, bin) records of the same render (bin.*);
+    CPU time of the model alone and of the reference on the visit records (time.model_s,
+    time.reference_s)."""
+    import sim
+
+    if config.pipeline.sample_fraction < 1:
+        raise ValueError(f"pipeline.sample_fraction: {config.pipeline.sample_fraction!r}: the reference needs the "
+                         "whole frame's work records")
+    hw = config.hardware_config()
+    visit_hw = sim.HardwareConfig.from_dict(deep_merge(hw.describe(), {"timing": {"granularity": "visit"}}))
+    bin_hw = sim.HardwareConfig.from_dict(deep_merge(hw.describe(), {"timing": {"granularity": "bin"}}))
+    scene, camera, table, pipeline = _build(config, row, threads)
+    result = sim.render(scene, camera, table, pipeline, hardware=visit_hw, timing=True, keep_timing_records=True)
+    row["resolved.lens_grid"] = result.config.get("lens_grid")
+    row.update(result.flat_stats)
+    records = result.timing_records
+    c0 = time.process_time()
+    model = sim.timing.estimate(records, visit_hw)
+    row["time.model_s"] = time.process_time() - c0
+    c0 = time.process_time()
+    ref = sim.timing.reference(records, visit_hw)
+    row["time.reference_s"] = time.process_time() - c0
+    row.update({f"reference.{k[len('timing.'):]}": v for k, v in ref.items()})
+    assert model["timing.cycles"] == row["timing.cycles"]  # the streamed figures are the model's
+    coarse = sim.render(scene, camera, table, pipeline, hardware=bin_hw, timing=True).flat_stats
+    row.update({f"bin.{k[len('timing.'):]}": v for k, v in coarse.items() if k.startswith("timing.")})
+    return result
+
+
 POINT_KINDS = {"render": _render, "occlusion_query": _occlusion_query, "conservative": _conservative,
-               "retime": _retime}
+               "retime": _retime, "timing_reference": _timing_reference}
 POINT_KINDS.update(USE_KINDS)  # the uses of the rasterizer (experiments/run/uses.py)
 POINT_KINDS["precision"] = precision_point  # the numerical-precision study (experiments/run/precision.py)
 

@@ -76,14 +76,21 @@ Core run_core(const std::vector<Item>& items, const TimingConfig& cfg, double dr
     return static_cast<std::uint64_t>(std::ceil(l));
   };
   for (std::uint64_t c = 0; finished < n; ++c) {
-    for (int k = kNumUnits - 1; k >= 0; --k) {
-      ++out.steps;
+    for (int k = 0; k < kNumUnits; ++k) {  // latency over: into the next FIFO, in order
       auto& pl = pipe[k];
-      while (!pl.empty() && pl.front().ready <= c) {  // latency over: into the next FIFO, in order
+      while (!pl.empty() && pl.front().ready <= c) {
         if (k + 1 < kNumUnits) queue[k + 1].push_back(pl.front().id);
         else ++finished;
         pl.pop_front();
       }
+    }
+    if (finished == n) {
+      out.end = static_cast<double>(c);
+      break;
+    }
+    for (int k = kNumUnits - 1; k >= 0; --k) {
+      ++out.steps;
+      auto& pl = pipe[k];
       double budget = tp[k];
       bool blocked = false;
       for (;;) {
@@ -123,7 +130,6 @@ Core run_core(const std::vector<Item>& items, const TimingConfig& cfg, double dr
       if (blocked) st.blocked += 1.0 - used;
       else st.starved += 1.0 - used;
     }
-    out.end = static_cast<double>(c + 1);
   }
   return out;
 }
