@@ -97,3 +97,31 @@ def test_bench_mitsuba(tmp_path):
     assert "## Wall time and error" in page and "## Ratios" in page
     for r in got["rows"]:
         assert r["rmse"] < 0.15, r
+
+
+def test_bench_rate(tmp_path):
+    """experiments/bench/bench_rate.py: the whole render's brute-force sample-test rate on medium
+    triangles against the kernels alone (reports/bench/bench_rate.md). Checks no time: the page, and
+    that the workload is the 4D class it names."""
+    from experiments.bench import bench_rate
+
+    quick = os.environ.get("RAST5D_BENCH_QUICK", "") not in ("", "0")
+    out = tmp_path if quick else bench_core.REPO / "reports" / "bench"
+    got = bench_rate.run(out=out, repeats=2 if quick else 5)
+    assert "# bench_rate" in got["page"].read_text()
+    assert got["classes"]["4d"] == got["tested"]
+
+
+def test_bench_overhead(tmp_path):
+    """experiments/bench/bench_overhead.py: a render's cost outside the engine on a fresh and a reused
+    table, and the start-up of a cached run (reports/bench/bench_overhead.md). Checks no time: the
+    sections, and that the cached run imported no heavy library."""
+    from experiments.bench import bench_overhead
+
+    quick = os.environ.get("RAST5D_BENCH_QUICK", "") not in ("", "0")
+    out = tmp_path if quick else bench_core.REPO / "reports" / "bench"
+    got = bench_overhead.run(out=out, repeats=3 if quick else 15)
+    page = got["page"].read_text()
+    for section in ("## Fixed cost of a render", "## Start-up of a cached run"):
+        assert section in page
+    assert got["startup"]["loaded"] == []
