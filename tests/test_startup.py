@@ -87,6 +87,7 @@ def test_scene_inputs_remembered_only_for_package_files(tmp_path, monkeypatch):
     from experiments.config.schema import SceneSpec
 
     monkeypatch.setenv("RAST5D_RESULTS", str(tmp_path / "results"))
+    inputs._scene_memo.clear()  # earlier tests of this process may have built spot_wall's entry
     spec = SceneSpec(name="spot_wall")
     assert inputs.scene_inputs(spec) == {}
     memo = list((tmp_path / "results" / "inputs").glob("*.json"))
