@@ -118,7 +118,10 @@ def run(out=None, repeats: int = 15) -> dict:
     lines = ["# bench_overhead: what a render and a run cost outside the engine", "",
              f"`python -m experiments.bench.bench_overhead` (part of `make bench`), {platform.machine()}, "
              f"{os.cpu_count()} hardware threads, load average {load:.1f} at the start.", "",
-             " ".join(__doc__.split("\n\n")[1].split("\n1. ")[0].split()), "",
+             "Fixed cost: `sim.render`'s wall time minus the engine call's (flat stat time.wall_s: setup, traversal, "
+             "resolve), once on a fresh table (its lens mapping and engine index are built in the render) and as the "
+             "median of repeated renders on the same table (a sweep that reuses one table: they are cached on it, "
+             "per lens shape).", "",
              f"## Fixed cost of a render ({SIZE[0]}x{SIZE[1]}, {SPP} spp, {SCENE}, `tile`, one thread)", "",
              "| timing | fresh table: render [ms] | fresh table: outside the engine [ms] | reused table: render [ms] "
              "| reused table: outside the engine [ms] (median) | (minimum) |",
