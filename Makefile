@@ -102,7 +102,14 @@ test-lowest:
 	  $(LOWEST)/env/bin/python -m sphinx -b html -W --keep-going -q -c docs . $(LOWEST)/docs; \
 	  echo "test-lowest: Python $$v passed in $$(( $$(date +%s) - start )) s"
 
-bench: install
+# The benchmarks, with the optional `bench` extra (Mitsuba 3, pyproject.toml) installed first; Mitsuba's
+# vectorised variant also needs LLVM >= 16 on the machine (Debian: libllvm19), else its rows are skipped
+# with a message on the page.
+$(STAMPS)/bench: $(STAMPS)/install pyproject.toml $(CONSTRAINTS)
+	$(PY) -m pip install --quiet -c $(CONSTRAINTS) $$($(PY) -c "import tomllib; print(' '.join(tomllib.load(open('pyproject.toml', 'rb'))['project']['optional-dependencies']['bench']))")
+	@mkdir -p $(STAMPS) && touch $@
+
+bench: install $(STAMPS)/bench
 	$(PY) -m pytest -q -s -m bench
 
 golden: install

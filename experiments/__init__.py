@@ -18,7 +18,11 @@ def version() -> str:
         return re.search(r'^version = "([^"]+)"', text, re.M).group(1)
 
 
-__version__ = version()
+def __getattr__(name: str):
+    if name == "__version__":  # read on first use: the package metadata costs 50 ms of start-up
+        globals()["__version__"] = v = version()
+        return v
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def load(name: str):

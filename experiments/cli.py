@@ -195,24 +195,29 @@ def _trace(config, pixel: tuple[int, int]) -> int:
 
 def cmd_run(args) -> int:
     from .config import load_dict, validate
-    from .report.pages import write_config_page
     from .run import run_sweep
 
     overrides = (args.set or []) + _sampling_overrides(args)
     data, lines = load_dict(args.config, overrides)
     config = validate(data, str(args.config), lines)
-    df = run_sweep(config, source=str(args.config), workers=args.workers, scheduler=args.scheduler,
-                   force=args.force, lines=lines, retry_failed=args.retry_failed, progress=not args.quiet,
-                   locks=not args.no_lock)
-    if not args.quiet and len(df):
-        print("\n".join(main_table(config, df)))
+    # The rows, not a DataFrame: a cached run imports no pandas unless the config draws plots.
+    rows = run_sweep(config, source=str(args.config), workers=args.workers, scheduler=args.scheduler,
+                     force=args.force, lines=lines, retry_failed=args.retry_failed, progress=not args.quiet,
+                     locks=not args.no_lock, frame=False)
+    if not args.quiet and len(rows):
+        print("\n".join(main_table(config, rows)))
     if config.outputs.plots and not args.no_report:
+        from .report.pages import write_config_page
+        from .run.store import to_frame
+
+        df = to_frame(rows)
+        df.attrs["summary"] = rows.summary
         page = write_config_page(config, args.config, df, overrides=overrides, echo=not args.quiet)
         if not args.quiet:
             from .paths import display
 
             print(f"report -> {display(page)}")
-    return 0 if len(df) and (df["status"] == "ok").all() else 1
+    return 0 if len(rows) and all(r.get("status") == "ok" for r in rows) else 1
 
 
 # The figures of `rast5d run`'s table, when the rows have them: (column, heading, decimals or None).
@@ -221,20 +226,29 @@ MAIN_FIGURES = (("raster.samples_tested", "samples tested", None), ("raster.ste"
                 ("metric.rmse", "RMSE", 4), ("timing.cycles", "cycles", None))
 
 
-def main_table(config, df) -> list[str]:
-    """`rast5d run`'s table on the terminal: one line per point, its swept values and main figures."""
+def main_table(config, table) -> list[str]:
+    """`rast5d run`'s table on the terminal: one line per point, its swept values and main figures.
+    ``table``: the sweep's rows (a list of dicts, as the store serves them) or its DataFrame."""
+    from .run.store import table_columns
+
+    records = table.to_dict("records") if hasattr(table, "to_dict") else table
+    columns = table_columns(records)  # each column's values as the table file holds them
+
+    def has(c):
+        return any(not _missing(v) for v in columns.get(c, ()))
+
     keys = []
     for k in (k for k in config.sweep if k != "zip"):
-        if k in df.columns:
+        if k in columns:
             keys.append(k)
         else:  # a whole section swept (scene: [...]): its name or path
-            keys += [c for c in (f"{k}.name", f"{k}.path") if c in df.columns and df[c].notna().any()][:1]
+            keys += [c for c in (f"{k}.name", f"{k}.path") if has(c)][:1]
     figures = [(c, h, d) for c, h, d in MAIN_FIGURES  # the figures these points have (line tests: line samples)
-               if c in df.columns and df[c].notna().any() and (df[c].fillna(0) != 0).any()]
+               if has(c) and any(not _missing(v) and v != 0 for v in columns[c])]
     head = [k for k in keys] + [h for _, h, _ in figures] + ["status"]
     rows = []
-    for _, r in df.iterrows():
-        row = r.to_dict()
+    for n in range(len(records)):
+        row = {c: vals[n] for c, vals in columns.items()}
         cells = [str(row.get(k)) if not isinstance(row.get(k), float) else f"{row[k]:g}" for k in keys]
         cells += [figure(row, c, d) if row.get("status") == "ok" else "" for c, _, d in figures]
         cells.append(row.get("status") if row.get("status") == "ok" else f"{row.get('status')}: {row.get('error')}")
@@ -358,13 +372,20 @@ def _results_option(p) -> None:
                    help="the result store (default: $RAST5D_RESULTS, else ./results under the working directory)")
 
 
+class _Version(argparse.Action):
+    """--version: the package version, read only when asked for (the metadata lookup costs start-up)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        from . import __version__
+
+        print(f"rast5d {__version__} (Python {sys.version.split()[0]})")
+        parser.exit()
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="rast5d", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    from . import __version__
-
-    parser.add_argument("--version", action="version",
-                        version=f"rast5d {__version__} (Python {sys.version.split()[0]})")
+    parser.add_argument("--version", action=_Version, nargs=0, help="show the version and exit")
     sub = parser.add_subparsers(dest="command", required=True)
 
     p = sub.add_parser("render", help="render one configuration to an image and statistics")

@@ -3,14 +3,16 @@ from __future__ import annotations
 
 import warnings
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import trimesh
-from PIL import Image
 
 from .scene import Scene, SceneError, as_linear_texture, srgb_to_linear
 from .textures import image_to_linear, load_texture, sample_bilinear
+
+if TYPE_CHECKING:  # trimesh and PIL are imported where a mesh file is read
+    import trimesh
+    from PIL import Image
 
 __all__ = ["load_mesh", "ASSETS_DIR", "asset_path"]
 
@@ -27,6 +29,8 @@ def asset_path(relative: str) -> Path:
 def _material_image(material: Any) -> Image.Image | None:
     """The colour texture of a trimesh material, or None. trimesh gives a mesh that has UVs but no
     material a 2x2 single-colour placeholder image; that one is treated as no texture."""
+    from PIL import Image
+
     image = getattr(material, "image", None)  # SimpleMaterial (OBJ/MTL)
     if image is None:
         image = getattr(material, "baseColorTexture", None)  # PBRMaterial (glTF)
@@ -65,6 +69,8 @@ def _sibling_texture(path: Path) -> Path | None:
 
 
 def _read_geometries(path: Path) -> list[trimesh.Trimesh]:
+    import trimesh  # only a mesh file needs it (a built-in scene reads none)
+
     try:
         # Warnings during parsing mean trimesh read only part of the file: treat them as errors.
         with warnings.catch_warnings():

@@ -2,11 +2,14 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-from PIL import Image, UnidentifiedImageError
 
 from .scene import SceneError, srgb_to_linear
+
+if TYPE_CHECKING:  # PIL is imported where an image is read
+    from PIL import Image
 
 __all__ = ["load_texture", "image_to_linear", "sample_bilinear", "srgb_to_linear"]
 
@@ -29,6 +32,8 @@ def image_to_linear(image: Image.Image) -> np.ndarray:
 
 def load_texture(path: str | Path) -> np.ndarray:
     """Read an image file (PNG, JPEG, ...) as (H, W, 3|4) float32 linear in [0, 1]."""
+    from PIL import Image, UnidentifiedImageError
+
     path = Path(path)
     if not path.is_file():
         raise SceneError(f"texture: file not found: {path}")

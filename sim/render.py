@@ -386,12 +386,20 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
     per_visit = hardware.timing.granularity == "visit" and timing and config.sample_fraction == 1
     sampled = config.sample_fraction < 1
     timed = timing and not sampled  # the timing model needs the whole frame (sim.sampling)
-    parts = memory_parts(camera, spp, p0.shape[0], config, threads, export_samples, timed,
-                         period=samples.shape[0], timing_per_visit=per_visit,
-                         pixel_maps=len(map_names) + len(derived_maps),
-                         visit_records=visit_record_estimate(camera, v0, v1, config) if per_visit else None,
-                         keep_timing_records=keep_timing_records, hardware=hardware)
+    def parts_with(visit_records):
+        return memory_parts(camera, spp, p0.shape[0], config, threads, export_samples, timed,
+                            period=samples.shape[0], timing_per_visit=per_visit,
+                            pixel_maps=len(map_names) + len(derived_maps), visit_records=visit_records,
+                            keep_timing_records=keep_timing_records, hardware=hardware)
+
+    # Unless the records are kept, the stream holds at most (threads + 1) budgets of them whatever the
+    # frame's count: that bound decides first, and the frame's estimate (a pass over every triangle)
+    # is made only when the bound is over the limit, for the decision and its message.
+    parts = parts_with((threads + 1) * _STREAM_BUDGET if per_visit and not keep_timing_records else None)
     need = int(sum(parts.values()))
+    if per_visit and (keep_timing_records or need > config.memory_limit_bytes):
+        parts = parts_with(visit_record_estimate(camera, v0, v1, config))
+        need = int(sum(parts.values()))
     if need > config.memory_limit_bytes:
         raise MemoryLimitError(_memory_message(need, parts, camera, spp, p0.shape[0], config, threads))
     if not (np.all(np.isfinite(v0)) and np.all(np.isfinite(v1))):
@@ -406,8 +414,9 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
         params.query_first, params.query_mode = int(query[0]), query[1]
     # The engine skips a dimension only where skipping is exact: every sample has u = v = 0 (no
     # lens) or t = 0 (no time). A constant non-zero t still places moving triangles at that t.
-    params.table_has_lens = bool(np.any(samples[..., 2:4] != 0))
-    params.table_has_time = bool(np.any(samples[..., 4] != 0))
+    dims = getattr(table, "dimensions", None)  # cached on a sim.SampleTable
+    params.table_has_lens, params.table_has_time = dims(camera.lens) if dims is not None else (
+        bool(np.any(samples[..., 2:4] != 0)), bool(np.any(samples[..., 4] != 0)))
     params.record_timing = timed
     params.table_lines = is_lines
     params.timing_per_visit = hardware.timing.granularity == "visit"

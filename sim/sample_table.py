@@ -95,6 +95,7 @@ class SampleTable:
         self._positions_cache: dict[str, np.ndarray] = {}
         self._grid_cache: dict[tuple[int, str], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self._index_cache: dict[tuple[str, int, int], object] = {}
+        self._dims_cache: dict[str, tuple[bool, bool]] = {}
 
     # ---------------------------------------------------------------- registry
 
@@ -378,6 +379,15 @@ class SampleTable:
             out = _readonly(out)
         self._samples_cache[lens] = out
         return out
+
+    def dimensions(self, lens: str = "disk") -> tuple[bool, bool]:
+        """(any sample has a lens position other than (0, 0), any has a time other than 0) for lens
+        shape ``lens``: where the engine may skip a dimension exactly (cached per shape)."""
+        dims = self._dims_cache.get(lens)
+        if dims is None:
+            s = self.samples(lens)
+            dims = self._dims_cache[lens] = (bool(np.any(s[..., 2:4] != 0)), bool(np.any(s[..., 4] != 0)))
+        return dims
 
     def lens_positions(self, lens: str = "disk") -> np.ndarray:
         """(N, 2) float32 discrete lens positions of an interleaved table (read-only)."""

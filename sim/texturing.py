@@ -3,6 +3,8 @@ shader reads, their uvs, procedural textures for scenes without any, and the sam
 texture of [Toth 2008] §5.3. numpy only (the engine never imports models)."""
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from .errors import SceneInputError
@@ -10,9 +12,20 @@ from .errors import SceneInputError
 MAX_SLOTS = 4
 
 
+@functools.lru_cache(maxsize=16)
 def procedural_texture(size: int, seed: int) -> np.ndarray:
     """A (size, size, 3) float32 texture in [0.5, 1]: 8x8-texel tiles of random tints with a
-    texel-level random detail, so that every mip level has content. Deterministic in seed."""
+    texel-level random detail, so that every mip level has content. Deterministic in seed; made
+    once per (size, seed) and shared, read-only."""
+    return _readonly(_procedural_texture(size, seed))
+
+
+def _readonly(a: np.ndarray) -> np.ndarray:
+    a.flags.writeable = False
+    return a
+
+
+def _procedural_texture(size: int, seed: int) -> np.ndarray:
     rng = np.random.default_rng(1000 + seed)
     tiles = -(-size // 8)
     tint = rng.uniform(0.6, 1.0, size=(tiles, tiles, 3))

@@ -76,3 +76,52 @@ def test_bench_timing(tmp_path):
     for section in ("## CPU time, timed over untimed", "## Peak memory of a frame", "## Renders the memory guard"):
         assert section in page
     assert all(r["estimate"] <= r["limit"] for r in got["refusals"])
+
+
+def test_bench_mitsuba(tmp_path):
+    """experiments/bench/bench_mitsuba.py: rast5d against Mitsuba 3 on the same scenes, frames, spp and
+    sampler class, wall time and error against a converged reference, and the 1080p frame with timing
+    on (reports/bench/bench_mitsuba.md). Without Mitsuba (the bench extra) or LLVM the page says why.
+    Checks no time: the sections, and that both renderers' images are near the reference (a wrong
+    camera, mirror or colour convention would put one far from it)."""
+    from experiments.bench import bench_mitsuba
+
+    quick = os.environ.get("RAST5D_BENCH_QUICK", "") not in ("", "0")
+    out = tmp_path if quick else bench_core.REPO / "reports" / "bench"
+    got = bench_mitsuba.run(quick=quick, out=out)
+    page = got["page"].read_text()
+    assert "# bench_mitsuba" in page
+    if not got["variants"]:
+        assert "Mitsuba was not run" in page
+        return
+    assert "## Wall time and error" in page and "## Ratios" in page
+    for r in got["rows"]:
+        assert r["rmse"] < 0.15, r
+
+
+def test_bench_rate(tmp_path):
+    """experiments/bench/bench_rate.py: the whole render's brute-force sample-test rate on medium
+    triangles against the kernels alone (reports/bench/bench_rate.md). Checks no time: the page, and
+    that the workload is the 4D class it names."""
+    from experiments.bench import bench_rate
+
+    quick = os.environ.get("RAST5D_BENCH_QUICK", "") not in ("", "0")
+    out = tmp_path if quick else bench_core.REPO / "reports" / "bench"
+    got = bench_rate.run(out=out, repeats=2 if quick else 5)
+    assert "# bench_rate" in got["page"].read_text()
+    assert got["classes"]["4d"] == got["tested"]
+
+
+def test_bench_overhead(tmp_path):
+    """experiments/bench/bench_overhead.py: a render's cost outside the engine on a fresh and a reused
+    table, and the start-up of a cached run (reports/bench/bench_overhead.md). Checks no time: the
+    sections, and that the cached run imported no heavy library."""
+    from experiments.bench import bench_overhead
+
+    quick = os.environ.get("RAST5D_BENCH_QUICK", "") not in ("", "0")
+    out = tmp_path if quick else bench_core.REPO / "reports" / "bench"
+    got = bench_overhead.run(out=out, repeats=3 if quick else 15)
+    page = got["page"].read_text()
+    for section in ("## Fixed cost of a render", "## Start-up of a cached run"):
+        assert section in page
+    assert got["startup"]["loaded"] == []

@@ -127,6 +127,9 @@ def scene_inputs(spec) -> dict[str, str]:
     files = _scene_memo.get(key)
     if files is not None and unchanged(files) is None:
         return files
+    if spec.path is None and _package_only(key):  # a named scene that reads only the package's files
+        _scene_memo[key] = {}
+        return {}
     with tracking_reads() as reads:
         try:
             build_scene(spec)
@@ -135,7 +138,41 @@ def scene_inputs(spec) -> dict[str, str]:
             return {"<error>": f"{type(e).__name__}: {e}", **input_digests(reads)}
     files = input_digests(reads)
     _scene_memo[key] = files
+    if spec.path is None and not files:
+        _remember_package_only(key)
     return files
+
+
+# Named scenes whose build read no file outside the installed package (the built-in scenes: their
+# meshes are the package's assets), remembered on disk for this package (the engine version covers
+# every package file) and working directory: a later process finds such a scene's inputs (none)
+# without building it, so a cached run imports no mesh library. A scene that read any other file is
+# built again in every process (its files' contents are checked anyway, and building it may read
+# files that did not exist before).
+def _package_only_path(key: str) -> Path:
+    from ..paths import results_dir
+    from ..run.store import engine_id
+
+    digest = hashlib.sha256(f"{engine_id()}\0{os.getcwd()}\0{key}".encode()).hexdigest()[:24]
+    return results_dir() / "inputs" / f"{digest}.json"
+
+
+def _package_only(key: str) -> bool:
+    try:
+        return json.loads(_package_only_path(key).read_text()) == {"scene": json.loads(key), "files": {}}
+    except (OSError, ValueError):
+        return False
+
+
+def _remember_package_only(key: str) -> None:
+    from ..run.store import atomic_write, StoreError
+
+    path = _package_only_path(key)
+    text = json.dumps({"scene": json.loads(key), "files": {}}, sort_keys=True)
+    try:
+        atomic_write(path, lambda tmp: Path(tmp).write_text(text))
+    except StoreError:
+        pass  # a store that cannot be written: the scene is built again next time
 
 
 def config_inputs(config) -> dict[str, str]:

@@ -13,7 +13,7 @@ from ..config import RenderConfig, config_hash, expand_sweep
 from .executors import close as close_client, connect, dask, local
 from .points import render_config
 from .store import (RunStopped, StoreError, cached_row, check_locks, claim, images_dir as store_images_dir, lock_is_stale,
-                    lock_path, release, store_point, table_path, to_frame, write_parquet)
+                    lock_path, release, store_point, table_path, to_frame, write_table, SweepRows)
 
 
 _SWEEPS: dict | None = None  # inside sweeps_once(): id(config) -> (config, [(point, config, hash)])
@@ -73,7 +73,7 @@ def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "c
               scheduler=None, force: bool = False, images_dir: str | Path | None = None, progress: bool = True,
               lines: dict | None = None, retry_failed: bool = False, wait_poll_s: float = 0.5,
               keep_records: set[str] | frozenset[str] = frozenset(), pictures: dict | None = None,
-              pooled: frozenset[str] = frozenset(), locks: bool = True):
+              pooled: frozenset[str] = frozenset(), locks: bool = True, frame: bool = True):
     """Run every point of config's sweep; returns the sweep's table (pandas DataFrame, one row per point,
     in sweep order) and writes it to results/<name>.parquet. ``workers`` (default: executor.workers or the
     core count; 0 = in-process) is the local pool; ``scheduler`` (an address or a distributed.Client, or
@@ -88,7 +88,8 @@ def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "c
     ({hash: names}, experiments/report/heatmaps.py pictured_points): what a page pictures of a point,
     kept in the store by its render. ``pooled``: hashes this process's report pool computes (their rows
     count as rendered by this run, not by another one). The result store must be writable
-    (experiments.paths.check_results_dir), checked before the first render."""
+    (experiments.paths.check_results_dir), checked before the first render. ``frame=False`` returns
+    the rows (store.SweepRows: a list of dicts with ``.summary``) instead of a DataFrame."""
     from ..paths import check_results_dir
 
     name = name or config.name or "experiment"
@@ -188,7 +189,8 @@ def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "c
 
             bar = tqdm(total=len(todo), desc=name, unit="point", dynamic_ncols=True)
         for phase in phases:
-            execute(phase)
+            if phase:  # nothing to compute: no pool is started
+                execute(phase)
         # Points another run was computing: take its rows, or compute them if it gave up on them.
         while waiting:
             still = []
@@ -223,11 +225,11 @@ def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "c
             bar.close()
         if client is not None:
             close_client(client)
-    df = to_frame([rows[i] for i in sorted(rows)])
+    ordered = [rows[i] for i in sorted(rows)]
     table = table_path(name)
-    if len(df):
+    if ordered:
         try:
-            write_parquet(df, table)
+            write_table(ordered, table)
         except StoreError:
             if stopped is None:
                 raise  # the disk filled or turned read-only at the table: the points are stored
@@ -238,7 +240,12 @@ def run_sweep(config: RenderConfig, *, name: str | None = None, source: str = "c
     summary = {"points": len(points), "rendered": n_rendered, "cached": n_cached, "failed": n_failed,
                "failed_cached": n_failed_stored, "from_other_run": n_waited, "pooled": n_pooled,
                "stored_by_other_run": n_kept, "seconds": time.perf_counter() - t0}
-    df.attrs["summary"] = summary
+    if frame:
+        df = to_frame(ordered)
+        df.attrs["summary"] = summary
+    else:
+        df = SweepRows(ordered)
+        df.summary = summary
     if progress:
         extra = f", {n_waited} computed by another run" if n_waited else ""
         if n_kept:

@@ -196,6 +196,33 @@ def to_frame(rows: list[dict]):
     return df
 
 
+def table_columns(rows: list[dict]) -> dict[str, list]:
+    """{column: values} of a sweep's rows with the types to_frame gives them, without pandas: every
+    column of any row (a row without it: missing), NaN as missing, a column of mixed types as text, of
+    ints and floats (or ints with a missing value) as floats with NaN for missing, else None."""
+    names: dict[str, None] = {}
+    for r in rows:
+        names.update(dict.fromkeys(r))
+    out = {}
+    for c in names:
+        vals = [r.get(c) for r in rows]
+        vals = [None if isinstance(v, float) and math.isnan(v) else v for v in vals]
+        types = {type(v) for v in vals if v is not None}
+        if len(types) > 1 and not types <= {int, float}:
+            vals = [None if v is None else str(v) for v in vals]
+        elif types and types <= {int, float} and (float in types or None in vals):
+            vals = [math.nan if v is None else float(v) for v in vals]
+        out[c] = vals
+    return out
+
+
+class SweepRows(list):
+    """A sweep's rows (dicts, in sweep order) and the run's ``summary``: what run_sweep(frame=False)
+    returns instead of a DataFrame."""
+
+    summary: dict = {}
+
+
 # Errors of os.link on a file system without hard links (some FUSE and SMB mounts): the point is then
 # put in place by a rename after a check that no other run stored it (a narrow race, see store_point).
 _NO_LINKS = {errno.EPERM, errno.ENOTSUP, errno.EOPNOTSUPP, errno.ENOSYS, errno.EMLINK, errno.EXDEV}
@@ -251,8 +278,38 @@ def atomic_write(path: Path, write, suffix: str = "", keep=None) -> bool:
             pass
 
 
-def write_parquet(df, path: Path):
-    atomic_write(path, lambda tmp: df.to_parquet(tmp, index=False, engine="pyarrow"))
+_ROWS_KEY = b"rast5d.rows"
+
+
+def rows_digest(rows: list[dict]) -> str:
+    import hashlib
+    import json
+
+    def plain(v):  # numpy scalars (a row just computed) as the Python values a stored row reads back as
+        return v.item() if hasattr(v, "item") else repr(v)
+
+    rows = [{k: None if isinstance(v, float) and math.isnan(v) else v for k, v in r.items()} for r in rows]
+    return hashlib.sha256(json.dumps(rows, default=plain).encode()).hexdigest()
+
+
+def write_table(rows: list[dict], path: Path) -> bool:
+    """A sweep's table (results/<name>.parquet, to_frame(rows) as pandas writes it) with a digest of
+    its rows in the file's metadata; a file that already holds these rows is left as it is (a rerun
+    served from the store writes nothing, and imports no pandas). Returns whether it was written."""
+    import pyarrow.parquet as pq
+
+    digest = rows_digest(rows).encode()
+    try:
+        if (pq.read_schema(path).metadata or {}).get(_ROWS_KEY) == digest:
+            return False
+    except Exception:  # noqa: BLE001 - no file, or one that cannot be read: written anew
+        pass
+    import pyarrow as pa
+
+    table = pa.Table.from_pandas(to_frame(rows), preserve_index=False)
+    table = table.replace_schema_metadata({**(table.schema.metadata or {}), _ROWS_KEY: digest})
+    atomic_write(path, lambda tmp: pq.write_table(table, tmp))
+    return True
 
 
 _CHECKSUM_KEY = b"rast5d.sha256"
@@ -360,8 +417,8 @@ def read_point_file(path: Path) -> dict:
     """The row of a point file; raises ValueError if the file is truncated, corrupted or has no checksum."""
     import pyarrow.parquet as pq
 
-    try:
-        table = pq.read_table(path, page_checksum_verification=True)
+    try:  # ParquetFile reads the one file directly (read_table would import pyarrow.dataset: 0.2 s)
+        table = pq.ParquetFile(path, page_checksum_verification=True).read()
     except Exception as e:  # noqa: BLE001 - any read failure means the file cannot be trusted
         raise ValueError(f"unreadable ({type(e).__name__}: {e})") from None
     stored = (table.schema.metadata or {}).get(_CHECKSUM_KEY)
