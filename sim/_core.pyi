@@ -164,6 +164,7 @@ def algorithm_facts() -> dict[str, dict[str, object]]:
     depth_cull, pipeline ('sample' | 'gpu')}}: the traversal registry's facts about every algorithm."""
 
 # ---- timing.cpp: the timing model (docs/timing.md) ----
+STREAM_BUDGET: int  # work records the bin stream lets finished bins, and each worker's bin, hold [records]
 def timing_record_dtype() -> np.dtype:
     """numpy structured dtype of one work record: bin (int32), triangles (uint32), tile_tests,
     sample_tests, depth_tests, quads, texel_fetches, tex_misses, memory_bytes (uint64)."""

@@ -125,7 +125,7 @@ def _scene_alpha(scene, n: int) -> np.ndarray | None:
 
 # One work record (sim.timing.RECORD_DTYPE), and the records the bin stream lets wait per worker.
 _RECORD_BYTES = 144
-_STREAM_BUDGET = 1 << 15
+_STREAM_BUDGET = _core.STREAM_BUDGET  # frame/bin_stream.h BinStream::kBudget
 
 
 def memory_parts(camera: Camera, spp: int, n_triangles: int, config: PipelineConfig, threads: int,
@@ -148,7 +148,7 @@ def memory_parts(camera: Camera, spp: int, n_triangles: int, config: PipelineCon
     frame_records = (visit_records if visit_records is not None else n_triangles * 4 * 16) if timing_per_visit \
         else n_triangles * 4
     # The bin stream holds at most its budget of records in finished bins waiting for their turn, and
-    # as many in each worker's bin (frame/bin_stream.h, frame/render.cpp kStreamBudget = 2^15).
+    # as many in each worker's bin (frame/bin_stream.h BinStream::kBudget).
     in_flight = min(frame_records, (threads + 1) * _STREAM_BUDGET)
     lines_per_bin = -(-min(b, camera.width) * min(b, camera.height) * spp * 4 // hw.depth_buffer.line_bytes)
     return {

@@ -8,6 +8,7 @@
 
 #include <vector>
 
+#include "frame/bin_stream.h"
 #include "memory/sample_buffers.h"
 #include "timing/reference.h"
 #include "timing/timing.h"
@@ -56,6 +57,7 @@ py::dict memory_to_dict(const memory::MemoryTotals& m, bool depth, bool color, s
 }
 
 void register_timing(py::module_& m) {
+  m.attr("STREAM_BUDGET") = py::int_(rast5d::BinStream::kBudget);  // records (frame/bin_stream.h)
   PYBIND11_NUMPY_DTYPE(TileWork, bin, gs_ops, gs_floats, raster_pixels, ps_ops, triangles, tile_tests, sample_tests,
                        depth_tests, depth_fills, quads, texel_fetches, tex_misses, dram_depth, dram_color, dram_texture,
                        dram_hiz, dram_bytes);

@@ -43,6 +43,11 @@ class BinStream {
 
   // Records a worker gathers before it hands them over (feed_head()).
   static constexpr std::size_t kChunk = 4096;
+  // The stream's budget: the records the finished bins waiting for their turn may hold, and each
+  // worker's bin that is not next (sim/render.py's memory estimate counts (threads + 1) of them,
+  // sim._core.STREAM_BUDGET). 2^13 keeps the records in flight of a 2-thread 1080p frame near 3.5 MB
+  // without making a worker wait more than a bigger budget does on the benchmark frames.
+  static constexpr std::size_t kBudget = std::size_t(1) << 13;
 
   bool active() const { return replay_ || model_; }
 

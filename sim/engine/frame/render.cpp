@@ -13,10 +13,6 @@ namespace rast5d {
 
 namespace {
 
-// The bin stream's budget: the records the finished bins waiting for their turn may hold, and each
-// worker's bin that is not next (sim/render.py's memory estimate counts (threads + 1) of them).
-constexpr std::size_t kStreamBudget = std::size_t(1) << 15;
-
 // Counters that are whole-frame facts, and the texture caches' counters from the replay.
 void assemble_counters(const RenderParams& p, const SampleTable& table, const Binning& bn, const FrameSetup& fs,
                        const std::vector<std::unique_ptr<Worker>>& workers, const TextureCacheReplay* replay,
@@ -115,7 +111,7 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
     for (std::size_t i = 0; i < n_culled; ++i) model->feed(culled);
     if (opt.keep_timing_records) result.timing_records.assign(n_culled, culled);
   }
-  BinStream stream(bins ? static_cast<int>(bins->size()) : bn.count(), bins, kStreamBudget, replay.get(),
+  BinStream stream(bins ? static_cast<int>(bins->size()) : bn.count(), bins, BinStream::kBudget, replay.get(),
                    &shade.streams, model.get(), opt.keep_timing_records && model ? &result.timing_records : nullptr,
                    p.tex_cache_line_bytes);
 
