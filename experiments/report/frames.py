@@ -12,6 +12,10 @@ _DOTTED = re.compile(r"(?<![\w`.])([A-Za-z_]\w*(?:\.[A-Za-z_]\w*)+)(?![\w`(])")
 
 from ..config.schema import ConfigError  # noqa: E402
 
+# {config name: (config, rows, rows with derived columns)} of the sections written in this process
+# (experiments.report.pages fills it; named tables and prose read it)
+PROSE_DATA: dict = {}
+
 
 class PlotError(ConfigError):
     """A plot spec does not fit the result table (unknown column, bad derived expression)."""

@@ -22,7 +22,7 @@ from .. import paths
 from ..config import ConfigError, RenderConfig, load_dict, validate
 from ..run import images_dir, results_dir, run_sweep
 from .figures import render_plot
-from .frames import PlotError, apply_derived
+from .frames import PROSE_DATA, PlotError, apply_derived
 from . import hardware as _hardware  # noqa: F401  (registers the hardware page's named tables)
 from .tables import TABLES, VALUES, md_table
 
@@ -177,8 +177,6 @@ def section_markdown(config: RenderConfig, config_path: Path, df, out_dir: Path,
 
 SUMMARY_BEGIN, SUMMARY_END = "<!-- summary:{name} -->", "<!-- /summary -->"
 _TOKEN = "\x00prose:{name}:{part}\x00"
-# {config name: (config, rows, rows with derived columns)} of the sections written in this process
-PROSE_DATA: dict = {}
 
 
 def prose_token(name: str, part: str) -> str:

@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from .frames import cell, fmt, label, missing, pareto_front, paper_value, same, sorted_x, unique
+from .frames import PROSE_DATA, cell, fmt, label, missing, pareto_front, paper_value, same, sorted_x, unique
 
 
 def md_table(header: list, rows: list[list]) -> list[str]:
@@ -155,8 +155,6 @@ def page_rows(name: str):
     a named table or value table that joins several sections of its page (the hardware page joins error
     curves, costs and re-timed variants); outside `rast5d report` (a config's own page) the stored result
     table of ``name`` (experiments.load). KeyError naming the config when neither has it."""
-    from .pages import PROSE_DATA
-
     if name in PROSE_DATA:
         return _ok(PROSE_DATA[name][2])
     from ..run.store import load

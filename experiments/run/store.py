@@ -47,7 +47,7 @@ import os
 import subprocess
 from pathlib import Path
 
-from ..config import REPO
+from ..paths import PACKAGE_ROOT as REPO  # the checkout (or site-packages)
 
 _ENGINE_ID = None
 _GIT_REV = None
