@@ -13,6 +13,7 @@ from PIL import Image
 
 import models
 from models import Scene, SceneError
+from tests.test_sources import OUTSIDE
 
 pytestmark = pytest.mark.smoke
 
@@ -462,4 +463,4 @@ def test_assets_are_self_contained():
     assert "non-commercial" in readme and "CC BY 3.0" in readme
     for path in list((REPO / "models").glob("*.py")) + list((REPO / "configs" / "scenes").glob("*.yaml")):
         text = path.read_text()
-        assert "shared/data" not in text and "../shared" not in text, path
+        assert not OUTSIDE.search(text), path  # no path into the shared folder beside the project
