@@ -3,43 +3,16 @@ mesh file, a plot or a new table needs (the heavy ones cost seconds of start-up)
 make that possible (a scene's inputs remembered on disk, the sweep table left as it is when its rows
 did not change) give the same table as a run without them."""
 import importlib
-import json
 import os
-import subprocess
-import sys
-import textwrap
 
 import pytest
 
+# The sweep and the probe the start-up benchmark measures: `rast5d run` in a new process, its exit code
+# and which of the heavy libraries (bench_overhead.HEAVY) it imported.
+from experiments.bench.bench_overhead import SWEEP
+from experiments.bench.bench_overhead import probe_run as _run
+
 pytestmark = pytest.mark.smoke
-
-# Libraries a run served wholly from the store has no use for: mesh import (trimesh and the scipy it
-# pulls in), tables (pandas), plots, the cluster, images, the local pool, and pyarrow's dataset layer
-# (a point file is one Parquet file).
-HEAVY = ("trimesh", "scipy", "pandas", "matplotlib", "dask", "distributed", "PIL.Image", "skimage",
-         "flip_evaluator", "tqdm", "concurrent.futures.process", "pyarrow.dataset")
-
-SWEEP = """\
-name: lean
-scene: {name: spot_wall}
-camera: {width: 16, height: 16}
-samples: {kind: stratified, spp: 1, seed: 1}
-sweep:
-  camera.coc_px: [0, 6]
-"""
-
-PROBE = textwrap.dedent("""
-    import json, sys
-    from experiments.cli import main
-    rc = main(["run", sys.argv[1], "--quiet"])
-    print(json.dumps({"rc": rc, "loaded": sorted(m for m in json.loads(sys.argv[2]) if m in sys.modules)}))
-""")
-
-
-def _run(path, env) -> dict:
-    out = subprocess.run([sys.executable, "-c", PROBE, str(path), json.dumps(HEAVY)], env=env, check=True,
-                         capture_output=True, text=True).stdout
-    return json.loads(out.strip().splitlines()[-1])
 
 
 @pytest.fixture

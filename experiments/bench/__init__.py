@@ -1,6 +1,7 @@
 """Benchmarks of the engine (`make bench`)."""
 from __future__ import annotations
 
+import argparse
 import os
 from pathlib import Path
 
@@ -25,3 +26,13 @@ def write_page(out, name: str, lines: list[str]) -> Path:
     page.write_text("\n".join(lines) + "\n")
     print(f"\nwrote {page}")
     return page
+
+
+def bench_parser(doc: str) -> argparse.ArgumentParser:
+    """A benchmark's command line: its module docstring's first paragraph, and --out (the folder of its
+    page, reports/bench under the working directory by default)."""
+    from experiments.paths import reports_dir
+
+    ap = argparse.ArgumentParser(description=doc.split("\n\n")[0])
+    ap.add_argument("--out", type=Path, default=reports_dir() / "bench")
+    return ap

@@ -29,7 +29,6 @@ in the usual places when unset). Where either is missing the page says so and th
 Writes reports/bench/bench_mitsuba.md. `python -m experiments.bench.bench_mitsuba --help`."""
 from __future__ import annotations
 
-import argparse
 import glob
 import math
 import os
@@ -39,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from experiments.bench import write_page
+from experiments.bench import bench_parser, write_page
 from experiments.paths import reports_dir
 
 # (label, scene name, subdivide, motion): about 400 to 124k triangles.
@@ -358,9 +357,8 @@ def run(quick: bool = False, out=None) -> dict:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = bench_parser(__doc__)
     ap.add_argument("--quick", action="store_true", help="the smallest frame, two scenes, one repeat")
-    ap.add_argument("--out", type=Path, default=reports_dir() / "bench")
     a = ap.parse_args(argv)
     run(a.quick, a.out)
     return 0

@@ -13,7 +13,6 @@
 Writes reports/bench/bench_overhead.md. `python -m experiments.bench.bench_overhead --help`."""
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import platform
@@ -24,7 +23,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from experiments.bench import write_page
+from experiments.bench import bench_parser, write_page
 from experiments.paths import reports_dir
 
 SIZE = (160, 120)
@@ -38,8 +37,11 @@ samples: {kind: stratified, spp: 1, seed: 1}
 sweep:
   camera.coc_px: [0, 6]
 """
-HEAVY = ("trimesh", "scipy", "pandas", "matplotlib", "dask", "distributed", "PIL.Image", "skimage", "tqdm",
-         "concurrent.futures.process", "pyarrow.dataset")
+# Libraries a run served wholly from the store has no use for: mesh import (trimesh and the scipy it
+# pulls in), tables (pandas), plots, the cluster, images, the local pool, and pyarrow's dataset layer
+# (a point file is one Parquet file). tests/test_startup.py holds a cached run to this list.
+HEAVY = ("trimesh", "scipy", "pandas", "matplotlib", "dask", "distributed", "PIL.Image", "skimage",
+         "flip_evaluator", "tqdm", "concurrent.futures.process", "pyarrow.dataset")
 PROBE = """
 import json, sys
 from experiments.cli import main
@@ -77,6 +79,14 @@ def fixed_cost(repeats: int = 15) -> list[dict]:
     return rows
 
 
+def probe_run(path, env) -> dict:
+    """`rast5d run` of the sweep file `path` in a new process with environment `env`: its exit code and
+    which of HEAVY it imported ({"rc": ..., "loaded": [...]})."""
+    out = subprocess.run([sys.executable, "-c", PROBE, str(path), json.dumps(HEAVY)], env=env, check=True,
+                         capture_output=True, text=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
 def startup(repeats: int = 5) -> dict:
     with tempfile.TemporaryDirectory() as d:
         path = Path(d) / "lean.yaml"
@@ -85,9 +95,8 @@ def startup(repeats: int = 5) -> dict:
 
         def once():
             t0, c0 = time.perf_counter(), _child_cpu()
-            out = subprocess.run([sys.executable, "-c", PROBE, str(path), json.dumps(HEAVY)], env=env, check=True,
-                                 capture_output=True, text=True).stdout
-            return time.perf_counter() - t0, _child_cpu() - c0, json.loads(out.strip().splitlines()[-1])
+            loaded = probe_run(path, env)
+            return time.perf_counter() - t0, _child_cpu() - c0, loaded
 
         first, first_cpu, _ = once()
         runs = [once() for _ in range(repeats)]
@@ -145,9 +154,8 @@ def run(out=None, repeats: int = 15) -> dict:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = bench_parser(__doc__)
     ap.add_argument("--repeats", type=int, default=15)
-    ap.add_argument("--out", type=Path, default=reports_dir() / "bench")
     a = ap.parse_args(argv)
     run(a.out, a.repeats)
     return 0

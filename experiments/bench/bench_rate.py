@@ -10,7 +10,6 @@ left out); the kernels alone: sim._core.simd_batch_bench (1024-sample batches).
 Writes reports/bench/bench_rate.md. `python -m experiments.bench.bench_rate --help`."""
 from __future__ import annotations
 
-import argparse
 import os
 import platform
 import time
@@ -18,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from experiments.bench import write_page
+from experiments.bench import bench_parser, write_page
 from experiments.paths import reports_dir
 
 N_TRIANGLES = 2000
@@ -91,9 +90,8 @@ def run(out=None, repeats: int = 5) -> dict:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = bench_parser(__doc__)
     ap.add_argument("--repeats", type=int, default=5)
-    ap.add_argument("--out", type=Path, default=reports_dir() / "bench")
     a = ap.parse_args(argv)
     run(a.out, a.repeats)
     return 0

@@ -14,16 +14,14 @@ and the peak memory of a timed 1080p frame over the untimed one.
 Writes reports/bench/bench_timing.md. `python -m experiments.bench.bench_timing --help`."""
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import platform
 import subprocess
 import sys
 import time
-from pathlib import Path
 
-from experiments.bench import write_page
+from experiments.bench import bench_parser, write_page
 from experiments.paths import reports_dir
 
 FLAT = {"depth_buffer": {"enabled": False, "compression": "none"}, "color_buffer": {"enabled": False}}
@@ -183,9 +181,8 @@ def run(quick: bool = False, out=None) -> dict:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = bench_parser(__doc__)
     ap.add_argument("--quick", action="store_true", help="small frames, one repeat (a smoke run)")
-    ap.add_argument("--out", type=Path, default=reports_dir() / "bench")
     a = ap.parse_args(argv)
     run(a.quick, a.out)
     return 0
