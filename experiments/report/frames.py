@@ -12,6 +12,11 @@ _DOTTED = re.compile(r"(?<![\w`.])([A-Za-z_]\w*(?:\.[A-Za-z_]\w*)+)(?![\w`(])")
 
 from ..config.schema import ConfigError  # noqa: E402
 
+def ok_rows(df):
+    """The rows of a result table whose point finished (status 'ok'; every row when there is no status)."""
+    return df[df["status"] == "ok"] if "status" in df.columns else df
+
+
 # {config name: (config, rows, rows with derived columns)} of the sections written in this process
 # (experiments.report.pages fills it; named tables and prose read it)
 PROSE_DATA: dict = {}

@@ -32,7 +32,8 @@ import math
 
 import numpy as np
 
-from .tables import _fact, _is_gpu, _is_lines, _ok, md_table, named_table, named_values, page_rows
+from .frames import ok_rows
+from .tables import algorithm_fact, is_gpu, is_lines, md_table, named_table, named_values, page_rows
 
 TARGET_SPP = 16          # the target error: stratified point sampling at this spp
 FRAME_RATE_HZ = 30       # the frame-time target: 1080p at 30 Hz (33 Mcycles at 1 GHz)
@@ -91,7 +92,7 @@ LINE_FAMILY = "lines"  # the sample family of an algorithm whose samples are lin
 
 def kind(r) -> str:
     """The sample family of a row: 'lines', 'accumulation' or 'points'."""
-    if _is_lines(r["pipeline.algorithm"]):
+    if is_lines(r["pipeline.algorithm"]):
         return LINE_FAMILY
     return "accumulation" if r["samples.kind"] == "accumulation" else "points"
 
@@ -132,7 +133,7 @@ def pipeline_of(r) -> str:
     'accumulation' (a GPU's pinhole passes)."""
     if kind(r) == "accumulation":
         return "accumulation"
-    return "GPU" if _is_gpu(r["pipeline.algorithm"]) else "5D"
+    return "GPU" if is_gpu(r["pipeline.algorithm"]) else "5D"
 
 
 def ops_all(r) -> float:
@@ -155,7 +156,7 @@ def frame_target(r) -> float:
 
 
 def _rows(df):
-    return [r for _, r in _ok(df).iterrows()]
+    return [r for _, r in ok_rows(df).iterrows()]
 
 
 # ---- curves and interpolation ------------------------------------------------------------------------------
@@ -504,7 +505,7 @@ def hardware_hull_values(df, config):
     out = []
     by = {(scene_label(r), method(r), n_of(r)): r for r in rows}
     for (s, m, n), r in by.items():
-        if not _is_gpu(r["pipeline.algorithm"]) or kind(r) != "points":
+        if not is_gpu(r["pipeline.algorithm"]) or kind(r) != "points":
             continue
         for ref in ("tile", "tile +H5"):
             t = by.get((s, ref, n))

@@ -22,7 +22,7 @@ from .. import paths
 from ..config import ConfigError, RenderConfig, load_dict, validate
 from ..run import images_dir, results_dir, run_sweep
 from .figures import render_plot
-from .frames import PROSE_DATA, PlotError, apply_derived
+from .frames import PROSE_DATA, PlotError, apply_derived, ok_rows
 from . import hardware as _hardware  # noqa: F401  (registers the hardware page's named tables)
 from .tables import TABLES, VALUES, md_table
 
@@ -106,7 +106,7 @@ def section_markdown(config: RenderConfig, config_path: Path, df, out_dir: Path,
                 from .heatmaps import point_pictures
                 from .frames import apply_where, same
 
-                dd = dfd[dfd["status"] == "ok"] if "status" in dfd.columns else dfd
+                dd = ok_rows(dfd)
                 for col, names in spec.labels.items():  # display names first, as in render_plot
                     if col in dd.columns:
                         dd = dd.assign(**{col: [next((n for k, n in names.items() if same(v, k)), v) for v in dd[col]]})
@@ -140,7 +140,7 @@ def section_markdown(config: RenderConfig, config_path: Path, df, out_dir: Path,
             shown.append(res["markdown"])
         else:
             lines += res["markdown"] + [""]
-    ok = df[df["status"] == "ok"] if "status" in df.columns else df
+    ok = ok_rows(df)
     bad = df[df["status"] != "ok"] if "status" in df.columns else df.iloc[0:0]
     if len(bad):
         lines += ["**Failed points** (kept out of the figures and tables):", ""]
@@ -183,10 +183,6 @@ def prose_token(name: str, part: str) -> str:
     return _TOKEN.format(name=name, part=part)
 
 
-def _ok(df):
-    return df[df["status"] == "ok"] if "status" in df.columns else df
-
-
 def _with_keys(df, config):
     """df with attrs["keys"]: its columns that a sweep key of config sets (what tells its rows apart), by
     which the prose pairs the rows of two references."""
@@ -203,7 +199,7 @@ def fill_prose(lines: list[str], names: list[str]) -> tuple[list[str], int]:
     (lines, number of prose errors); an error is printed on the page in place of the paragraph."""
     from .prose import ProseError, Sources, fill
 
-    frames = {n: _with_keys(_ok(PROSE_DATA[n][2]), PROSE_DATA[n][0]) for n in names if n in PROSE_DATA}
+    frames = {n: _with_keys(ok_rows(PROSE_DATA[n][2]), PROSE_DATA[n][0]) for n in names if n in PROSE_DATA}
     out, errors = [], 0
     for line in lines:
         if not line.startswith("\x00prose:"):
@@ -212,8 +208,8 @@ def fill_prose(lines: list[str], names: list[str]) -> tuple[list[str], int]:
         name, part = line.strip("\x00").split(":")[1:3]
         config, df, dfd = PROSE_DATA[name]
         template = (config.outputs.summary if part == "summary" else config.outputs.text or "").strip()
-        values = {k: (lambda fn=fn: fn(_ok(dfd), config)) for k, fn in VALUES.items()}
-        sources = Sources(frames.get(name, _with_keys(_ok(dfd), config)), {n: f for n, f in frames.items() if n != name},
+        values = {k: (lambda fn=fn: fn(ok_rows(dfd), config)) for k, fn in VALUES.items()}
+        sources = Sources(frames.get(name, _with_keys(ok_rows(dfd), config)), {n: f for n, f in frames.items() if n != name},
                           values)
         try:
             text = fill(template, sources)

@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from .frames import PROSE_DATA, cell, fmt, label, missing, pareto_front, paper_value, same, sorted_x, unique
+from .frames import PROSE_DATA, cell, fmt, ok_rows, label, missing, pareto_front, paper_value, same, sorted_x, unique
 
 
 def md_table(header: list, rows: list[list]) -> list[str]:
@@ -146,26 +146,22 @@ PAPER_T2 = {10: (["0%", "30%", "62%", "65%", "27%"], ["23", "19", "10", "10", "1
             50: (["0%", "79%", "72%", "86%", "66%"], ["83", "24", "26", "18", "29"])}
 
 
-def _ok(df):
-    return df[df["status"] == "ok"] if "status" in df.columns else df
-
-
 def page_rows(name: str):
     """The rows (derived columns included) of the section of config ``name`` on the page being written, for
     a named table or value table that joins several sections of its page (the hardware page joins error
     curves, costs and re-timed variants); outside `rast5d report` (a config's own page) the stored result
     table of ``name`` (experiments.load). KeyError naming the config when neither has it."""
     if name in PROSE_DATA:
-        return _ok(PROSE_DATA[name][2])
+        return ok_rows(PROSE_DATA[name][2])
     from ..run.store import load
 
     try:
-        return _ok(load(name))
+        return ok_rows(load(name))
     except (FileNotFoundError, OSError, KeyError, ValueError):
         raise KeyError(f"page_rows: no rows of config {name!r} on this page or in the result store") from None
 
 
-def _fact(algorithm, name: str):
+def algorithm_fact(algorithm, name: str):
     """A traversal-registry fact (sim.algorithm_info) of an algorithm name, or None for an unknown one."""
     import sim
 
@@ -175,18 +171,18 @@ def _fact(algorithm, name: str):
         return None
 
 
-def _is_lines(algorithm) -> bool:
+def is_lines(algorithm) -> bool:
     """The algorithm tests line samples (sim.algorithm_info(name).samples)."""
-    return _fact(algorithm, "samples") == "lines"
+    return algorithm_fact(algorithm, "samples") == "lines"
 
 
-def _is_gpu(algorithm) -> bool:
+def is_gpu(algorithm) -> bool:
     """The algorithm runs the conventional-GPU pipeline (sim.algorithm_info(name).pipeline)."""
-    return _fact(algorithm, "pipeline") == "gpu"
+    return algorithm_fact(algorithm, "pipeline") == "gpu"
 
 
 def _lines_mask(df) -> np.ndarray:
-    return np.array([_is_lines(a) for a in df["pipeline.algorithm"]], dtype=bool)
+    return np.array([is_lines(a) for a in df["pipeline.algorithm"]], dtype=bool)
 
 
 def _first(df, keys: dict):
@@ -211,7 +207,7 @@ def table2_values(df, config):
     1 - tested / tested(no half-space test) and Gops."""
     import pandas as pd
 
-    df = _ok(df)
+    df = ok_rows(df)
     rows = []
     for s in _scenes(df):
         for coc in sorted(df["camera.coc_px"].unique()):
@@ -256,7 +252,7 @@ def table2_culling(df, config) -> list[str]:
 @named_table("fig15_trends")
 def fig15_trends(df, config) -> list[str]:
     """Is tile (2x2, and 1x1) the cheapest of the arbitrary-pattern algorithms at every CoC?"""
-    df = _ok(df)
+    df = ok_rows(df)
     lines = ["Trend checks ([Akenine-Möller 2012] §6.2: OUR is the cheapest at every CoC):", ""]
     models = list(dict.fromkeys(df["pipeline.cost_model"])) if "pipeline.cost_model" in df.columns else [None]
     losing = []
@@ -298,7 +294,7 @@ def fig15_trends(df, config) -> list[str]:
 @named_table("pareto_members", reads=("timing.",))
 def pareto_members(df, config) -> list[str]:
     """Which (sample-table kind, algorithm) pairs make up the RMSE Pareto front against each cost."""
-    df = _ok(df)
+    df = ok_rows(df)
     costs = [c for c in ("ops.total", "raster.samples_tested", "time.wall_s", "timing.cycles") if c in df.columns]
     rows = []
     for s in _scenes(df):
@@ -326,7 +322,7 @@ PAPER_MULTIVIEW = {2: "+10%", 7: "+15%"}
 @named_table("multiview_increase")
 def multiview_increase(df, config) -> list[str]:
     """Shader invocations (shading-cache misses) for V views relative to one view, per CoC."""
-    df = _ok(df)
+    df = ok_rows(df)
     rows = []
     for coc in sorted(df["camera.coc_px"].unique()):
         sub = df[df["camera.coc_px"] == coc]
@@ -353,7 +349,7 @@ def table3_supersampling(df, config) -> list[str]:
     """Per CoC: quad requests of tile+msaa (OUR) and interval+msaa relative to the samples supersampling
     shades (shade.lanes_live of the per_sample row) and to supersampling's own quad requests; OUR's
     helper-lane share of its quads."""
-    df = _ok(df)
+    df = ok_rows(df)
     rows = []
     for coc in sorted(df["camera.coc_px"].unique()):
         sub = df[df["camera.coc_px"] == coc]
@@ -377,7 +373,7 @@ def table3_supersampling(df, config) -> list[str]:
 def thrash_traffic(df, config) -> list[str]:
     """Per square edge and cache associativity: INTERLEAVE's hit rate, texture bytes per covered pixel of
     INTERLEAVE and of tile (per sample and MSAA), their ratio, and INTERLEAVE's cold/capacity/conflict misses."""
-    df = _ok(df)
+    df = ok_rows(df)
     rows = []
     for edge in sorted(df["scene.params.edge_px"].unique()):
         line = [f"{edge:g}"]
@@ -403,7 +399,7 @@ def thrash_traffic(df, config) -> list[str]:
 def zcull_savings(df, config) -> list[str]:
     """Per scene and CoC: HiZ off against on (pipeline.hiz.enabled), pairs culled by zmax and zmin, depth
     bytes saved, HiZ traffic, and the sample tests saved."""
-    df = _ok(df)
+    df = ok_rows(df)
     keys = [c for c in ("scene.params.order", "scene.params.layers", "camera.coc_px", "scene.params.motion_px")
             if c in df.columns]
     rows = []
@@ -438,7 +434,7 @@ def zcull_savings(df, config) -> list[str]:
 def multiview_wide(df, config) -> list[str]:
     """Per CoC and number of views: shading-cache misses and lanes (with helpers) of `shading: cache`, its
     hit rate, and the supersampled shades (`shading: per_sample`), each relative to one view."""
-    df = _ok(df)
+    df = ok_rows(df)
     rows = []
     for coc in sorted(df["camera.coc_px"].unique(), reverse=True):
         sub = df[df["camera.coc_px"] == coc]
@@ -480,7 +476,7 @@ def _on(df, name) -> np.ndarray:
 def method_label(row) -> str:
     """'stratified 64 / tile', 'lines 16', 'lines 16 clip', with ' +LoD' when level of detail is on."""
     get = row.get if hasattr(row, "get") else (lambda k, d=None: d)
-    if _is_lines(get("pipeline.algorithm")):
+    if is_lines(get("pipeline.algorithm")):
         n = get("samples.n_lines")
         s = f"lines {int(n) if n == n and n is not None else '?'}"
         if str(get("pipeline.lines.tile_clip")) == "True":
@@ -538,12 +534,12 @@ def _families(sub):
 @named_table("methods_table", reads=("timing.",))
 def methods_table(df, config) -> list[str]:
     """Scene x CoC x method: work, estimated cycles, wall time, RMSE and FLIP."""
-    df = _ok(df)
+    df = ok_rows(df)
     rows = []
     for s in _scenes(df):
         for coc in sorted(df[df["scene.name"] == s]["camera.coc_px"].unique()):
             sub = df[(df["scene.name"] == s) & (df["camera.coc_px"] == coc)]
-            recs = sorted((r for _, r in sub.iterrows()), key=lambda r: (_is_lines(r["pipeline.algorithm"]), _work(r)))
+            recs = sorted((r for _, r in sub.iterrows()), key=lambda r: (is_lines(r["pipeline.algorithm"]), _work(r)))
             for r in recs:
                 rows.append([s, f"{coc:g}", method_label(r), f"{_work(r):.3g}", f"{float(r['ops.total']):.3g}",
                              fmt(r.get("timing.cycles", math.nan), "{:.3g}"), f"{float(r['time.wall_s']):.2f}",
@@ -557,7 +553,7 @@ def methods_alpha_values(df, config):
     interleaved family also before its lens floor (`before_floor` true)."""
     import pandas as pd
 
-    df = _ok(df).dropna(subset=["metric.rmse"])
+    df = ok_rows(df).dropna(subset=["metric.rmse"])
     rows = []
     for s in _scenes(df):
         for coc in sorted(df[df["scene.name"] == s]["camera.coc_px"].unique()):
@@ -641,7 +637,7 @@ def methods_claim_values(df, config):
     lines' RMSE along its spp sweep) the work, cycles and wall time of tile and bruteforce over the lines'."""
     import pandas as pd
 
-    df = _ok(df)
+    df = ok_rows(df)
     rows = []
     for s in _scenes(df):
         for coc in sorted(df[df["scene.name"] == s]["camera.coc_px"].unique()):
@@ -714,14 +710,14 @@ def methods_pareto_values(df, config):
     its lowest RMSE and the method there."""
     import pandas as pd
 
-    df = _ok(df).dropna(subset=["metric.rmse"])
+    df = ok_rows(df).dropna(subset=["metric.rmse"])
     rows = []
     for s in _scenes(df):
         for coc in sorted(df[df["scene.name"] == s]["camera.coc_px"].unique()):
             sub = df[(df["scene.name"] == s) & (df["camera.coc_px"] == coc)]
             for axis, cost in (("ops (all)", _work), ("wall", _wall)):
                 front = _pareto([(cost(r), float(r["metric.rmse"]), method_label(r)) for _, r in sub.iterrows()])
-                line_labels = {method_label(r) for _, r in sub.iterrows() if _is_lines(r["pipeline.algorithm"])}
+                line_labels = {method_label(r) for _, r in sub.iterrows() if is_lines(r["pipeline.algorithm"])}
                 n_lines = sum(lab in line_labels for _c, _e, lab in front)
                 rows.append({"scene": s, "coc": float(coc), "axis": axis, "front": len(front), "lines": n_lines,
                              "members": "; ".join(f"{lab} ({e:.4f})" for _c, e, lab in front),
@@ -745,7 +741,7 @@ def methods_pareto(df, config) -> list[str]:
 @named_table("methods_lod")
 def methods_lod(df, config) -> list[str]:
     """Level of detail: work saved and the FLIP increase, per scene, CoC and method."""
-    df = _ok(df)
+    df = ok_rows(df)
     on = df[_on(df, "pipeline.lod.enabled")]
     rows = []
     for _, r in on.iterrows():
@@ -755,7 +751,7 @@ def methods_lod(df, config) -> list[str]:
         base = df[~_on(df, "pipeline.lod.enabled")]
         for k, v in keys.items():
             base = base[base[k] == v]
-        if _is_lines(r["pipeline.algorithm"]):
+        if is_lines(r["pipeline.algorithm"]):
             base = base[np.asarray(base["samples.n_lines"], float) == float(r["samples.n_lines"])]
         if "pipeline.lines.tile_clip" in df.columns:
             base = base[_on(base, "pipeline.lines.tile_clip") == (str(r["pipeline.lines.tile_clip"]) == "True")]
@@ -775,7 +771,7 @@ def methods_lod(df, config) -> list[str]:
 @named_table("methods_segments")
 def methods_segments(df, config) -> list[str]:
     """Segment-buffer statistics by CoC, and what the tile clip saved."""
-    df = _ok(df)
+    df = ok_rows(df)
     ln = df[_lines_mask(df) & ~_on(df, "pipeline.lod.enabled")]
     rows = []
     for s in _scenes(ln):
@@ -815,8 +811,8 @@ PAPER_GPU_T2 = {"gpu_hexagon3d": (858, 788, 123), "gpu_hexagon2d": (234, 164, 59
 
 
 def _gpu_rows(df):
-    df = _ok(df)
-    return df[[_is_gpu(a) for a in df["pipeline.algorithm"]]]
+    df = ok_rows(df)
+    return df[[is_gpu(a) for a in df["pipeline.algorithm"]]]
 
 
 @named_values("gpu_table1")
@@ -883,13 +879,13 @@ def gpu_vs_tile_values(df, config):
     fewest estimated cycles, their ratios to tile, the GPU's bottleneck."""
     import pandas as pd
 
-    df = _ok(df)
+    df = ok_rows(df)
     rows = []
     for s in _scenes(df):
         for coc in sorted(df["camera.coc_px"].unique()):
             sub = df[(df["scene.name"] == s) & (df["camera.coc_px"] == coc)]
             tile = sub[sub["pipeline.algorithm"] == "tile"]
-            gpu = sub[[_is_gpu(a) for a in sub["pipeline.algorithm"]]]
+            gpu = sub[[is_gpu(a) for a in sub["pipeline.algorithm"]]]
             if not len(tile) or not len(gpu):
                 continue
             t_ops, t_cyc = float(tile["ops.total"].iloc[0]), float(tile["timing.cycles"].iloc[0])
@@ -954,7 +950,7 @@ def accumulation_k_values(df, config):
     equal RMSE, k = N / that spp, the ghosting of both."""
     import pandas as pd
 
-    df = _ok(df)
+    df = ok_rows(df)
     rows = []
     for s in _scenes(df):
         for coc in sorted(df["camera.coc_px"].unique()):
@@ -995,7 +991,7 @@ def gpu_early_depth_values(df, config):
     ops and cycles with HiZ over without, GPU / tile cycles with HiZ in both."""
     import pandas as pd
 
-    df = _ok(df)
+    df = ok_rows(df)
     on_col = "pipeline.hiz.enabled"
     rows = []
     for s in _scenes(df):
@@ -1006,7 +1002,7 @@ def gpu_early_depth_values(df, config):
                 off, on = _first(sub, {"pipeline.algorithm": alg, on_col: False}), _first(sub, {"pipeline.algorithm": alg, on_col: True})
                 if off is None or on is None:
                     continue
-                gpu = _is_gpu(alg)
+                gpu = is_gpu(alg)
                 frags = float(off["gpu.fragments"]) if gpu else math.nan
                 saved = (float(off["gpu.ps_samples_tested"]) - float(on["gpu.ps_samples_tested"])) if gpu else \
                     float(on["zcull.samples_culled"])
@@ -1055,7 +1051,7 @@ def _num(r, k):
 
 
 def _precision_rows(df, keys=("point.options.viewport",)):
-    df = _ok(df)
+    df = ok_rows(df)
     order = {"float32": 0, "float64": 1, "fixed": 2}
     recs = [r for _, r in df.iterrows()]
     return sorted(recs, key=lambda r: (*[str(r.get(k)) if k == "point.options.cls" else float(r.get(k)) for k in keys],
@@ -1177,7 +1173,7 @@ def precision_render_values(df, config):
     import pandas as pd
 
     out = []
-    for _, r in _ok(df).iterrows():
+    for _, r in ok_rows(df).iterrows():
         tested, base = float(r["raster.samples_tested"]), float(r["numerics.tested_base"])
         c2, c2b = float(r.get("tile.culled_2d", 0)), float(r["numerics.culled_2d_base"])
         h5, h5b = float(r.get("tile.H5_cells_culled", 0)), float(r["numerics.culled_H5_base"])
@@ -1225,7 +1221,7 @@ def precision_motion(df, config) -> list[str]:
 def precision_depth(df, config) -> list[str]:
     """A fixed-point depth buffer (study render on depth_layers) beside the closed-form resolved gap at w = 2."""
     v = precision_render_values(df, config)
-    near = float(_ok(df)["camera.near"].iloc[0]) if "camera.near" in df.columns else 0.01
+    near = float(ok_rows(df)["camera.near"].iloc[0]) if "camera.near" in df.columns else 0.01
     rows = [[f"{r.spacing:g}", f"{int(r.frac_bits)}", f"{r.differ} of {r.samples}", f"{2.0 ** -r.frac_bits * 4 / near:.3g}"]
             for r in v.itertuples() if r.frac_bits == r.frac_bits]
     return md_table(["spacing", "frac_bits", "samples differing from float32", "smallest resolved gap at w = 2 (closed form)"],
@@ -1246,7 +1242,7 @@ def wheel_choice_values(df, config):
     excess, `best_wheel` each case's best."""
     import pandas as pd
 
-    df = _ok(df).dropna(subset=["metric.rmse"])
+    df = ok_rows(df).dropna(subset=["metric.rmse"])
     rows = []
     for case, g in df.groupby(df.apply(_case_label, axis=1), sort=False):
         work = np.array([_work(r) for _, r in g.iterrows()])
@@ -1305,7 +1301,7 @@ def bin_choice_values(df, config):
     import pandas as pd
     from sim.sampling import FEW_STRATA
 
-    df = _ok(df)
+    df = ok_rows(df)
     rows = []
     for b, g in df.groupby("pipeline.bin_size"):
         exact = g[g["pipeline.sample_fraction"] == 1.0]
