@@ -22,6 +22,9 @@ $(STAMPS)/venv:
 
 $(STAMPS)/install: $(STAMPS)/venv $(SOURCES)
 	$(PY) -m pip install --quiet --no-build-isolation -c $(CONSTRAINTS) -e ".[test,docs]"
+	@# Byte-compile the checkout's packages, as pip does for a wheel: a run then starts from bytecode even
+	@# where PYTHONDONTWRITEBYTECODE is set (a cached run's start-up, reports/bench/bench_overhead.md).
+	$(PY) -m compileall -q sim experiments models > /dev/null
 	@mkdir -p $(STAMPS) && touch $@
 
 run: install
