@@ -1,4 +1,4 @@
-"""Shared fixtures: seeded random generators.
+"""Shared fixtures: seeded random generators, and a fresh memo of built scenes and tables per test.
 
 ``rng`` is a numpy Generator seeded from the test's node id (file, name and parameters), so every
 test draws its own reproducible stream: a failure replays with the same inputs, alone or in the
@@ -21,3 +21,13 @@ def node_seed(nodeid: str) -> int:
 def rng(request) -> np.random.Generator:
     """numpy Generator seeded from the requesting test's node id."""
     return np.random.default_rng(node_seed(request.node.nodeid))
+
+
+@pytest.fixture(autouse=True)
+def fresh_build_memo():
+    """Each test builds its scenes and sample tables anew: a test that patches a builder (to read a
+    file, to fail) must not be served what an earlier test built."""
+    import importlib
+
+    importlib.import_module("experiments.config.build").forget()  # the module (the package exports build())
+    yield

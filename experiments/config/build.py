@@ -5,6 +5,7 @@ import warnings
 
 import sim
 
+from .inputs import input_digests, tracking_reads
 from .schema import ConfigError, RenderConfig, SceneSpec
 
 
@@ -24,15 +25,79 @@ class WideLensCamera(sim.Camera):
         return p
 
 
+# The points of a sweep share a few scenes and sample tables. A worker builds each once and keeps the
+# last few (least recently used first out): a named scene's build and a table's generation and engine
+# index cost more than many small renders. Only what was built from the package alone is kept: a
+# scene file, or any file a build opened outside the package, is read again for every point (it may
+# change, and the point's inputs record it: experiments/config/inputs.py).
+_MEMO_SIZE = 4
+_MEMO_TABLE_BYTES = 64 << 20  # a larger table is built for each point: a few of them would fill a worker
+_SCENES: dict = {}
+_TABLES: dict = {}
+
+
+def forget() -> None:
+    """Drop the kept scenes and sample tables (the next point builds its own)."""
+    _SCENES.clear()
+    _TABLES.clear()
+
+
+def _memo_get(memo: dict, key):
+    value = memo.pop(key, None)
+    if value is not None:
+        memo[key] = value  # most recently used last
+    return value
+
+
+def _memo_put(memo: dict, key, value) -> None:
+    memo[key] = value
+    while len(memo) > _MEMO_SIZE:
+        memo.pop(next(iter(memo)))
+
+
+def _frozen(scene):
+    """A scene kept for later points: its arrays read-only, so a consumer that wrote into one would
+    raise instead of changing the next point's scene."""
+    for name in ("positions", "positions_t1", "colors", "uvs", "texture_ids", "alpha"):
+        array = getattr(scene, name)
+        if array is not None:
+            array.flags.writeable = False
+    for texture in scene.textures:
+        texture.flags.writeable = False
+    return scene
+
+
+def _handed_out(scene):
+    """A point's own copy of a kept scene: its attributes and camera hint are its own, the read-only
+    arrays are shared."""
+    import copy
+
+    out = copy.copy(scene)
+    out.camera_hint = dict(scene.camera_hint)
+    out.textures = list(scene.textures)
+    return out
+
+
 def build_scene(spec: SceneSpec):
     """The models.Scene of a scene section: a named scene (models.scene_names()) or a file (a YAML
     scene, Mitsuba XML, glTF or mesh). A relative path was resolved when the config was loaded
     (against the config file, then the working directory: experiments/config/load.py)."""
+    import json
+
     import models
 
-    if spec.name is not None:
-        return models.named(spec.name, **spec.params)
-    return models.load(spec.path)
+    if spec.name is None:
+        return models.load(spec.path)
+    key = (spec.name, json.dumps(spec.params, sort_keys=True, default=repr))
+    scene = _memo_get(_SCENES, key)
+    if scene is not None:
+        return _handed_out(scene)
+    with tracking_reads() as reads:
+        scene = models.named(spec.name, **spec.params)
+    if input_digests(reads):
+        return scene
+    _memo_put(_SCENES, key, _frozen(scene))
+    return _handed_out(scene)
 
 
 def _camera(config: RenderConfig, hint: dict) -> sim.Camera:
@@ -73,6 +138,10 @@ def _make_table(kind: str, params: dict, samples) -> "sim.SampleTable":
 _CHECKED_TABLES: dict = {}
 
 
+def _table_key(config: RenderConfig, params: dict) -> tuple:
+    return config.samples.kind, tuple(sorted(params.items())), config.samples.n_lines, config.samples.wheel
+
+
 def check(config: RenderConfig) -> None:
     """Everything build() and sim.render would reject, without building the scene: the named scene and
     its parameters, the camera, the sample table (each distinct one built once per process), the
@@ -93,7 +162,7 @@ def check(config: RenderConfig) -> None:
                                     f"accepted: {', '.join(accepted) or '(none)'}")
     camera = _camera(config, {})
     params = _table_params(config)
-    key = (config.samples.kind, tuple(sorted(params.items())), config.samples.n_lines, config.samples.wheel)
+    key = _table_key(config, params)
     if key not in _CHECKED_TABLES:  # the points of a sweep share a few tables: build each once
         try:
             _CHECKED_TABLES[key] = _make_table(config.samples.kind, params, config.samples)
@@ -112,10 +181,18 @@ def build(config: RenderConfig):
     """(scene, camera, table, pipeline) for one (non-swept) config."""
     scene = build_scene(config.scene)
     camera = _camera(config, scene.camera_hint)
-    try:
-        table = _make_table(config.samples.kind, _table_params(config), config.samples)
-    except ValueError as e:  # "spp: expected ..." -> "samples.spp: expected ..."
-        raise ConfigError(f"samples.{e}") from None
+    params = _table_params(config)
+    key = _table_key(config, params)
+    table = _memo_get(_TABLES, key)  # immutable: its engine index, built by the first render, is reused
+    if table is None:
+        try:
+            with tracking_reads() as reads:
+                table = _make_table(config.samples.kind, params, config.samples)
+        except ValueError as e:  # "spp: expected ..." -> "samples.spp: expected ..."
+            raise ConfigError(f"samples.{e}") from None
+        unit = getattr(table, "unit", None)
+        if not input_digests(reads) and unit is not None and unit.nbytes <= _MEMO_TABLE_BYTES:
+            _memo_put(_TABLES, key, table)
     pipeline = sim.PipelineConfig(**config.pipeline.model_dump())
     if pipeline.lod["enabled"]:  # blur-based level of detail (models/lod.py)
         from models import lod
