@@ -190,8 +190,7 @@ def build(config: RenderConfig):
                 table = _make_table(config.samples.kind, params, config.samples)
         except ValueError as e:  # "spp: expected ..." -> "samples.spp: expected ..."
             raise ConfigError(f"samples.{e}") from None
-        unit = getattr(table, "unit", None)
-        if not input_digests(reads) and unit is not None and unit.nbytes <= _MEMO_TABLE_BYTES:
+        if not input_digests(reads) and table.period ** 2 * table.spp * 5 * 8 <= _MEMO_TABLE_BYTES:
             _memo_put(_TABLES, key, table)
     pipeline = sim.PipelineConfig(**config.pipeline.model_dump())
     if pipeline.lod["enabled"]:  # blur-based level of detail (models/lod.py)
