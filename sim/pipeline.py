@@ -5,6 +5,7 @@ sim.params): names, types, defaults, units, docs and domains are declared there 
 adds only what a single row cannot say: the checks across fields and the lens-grid resolution."""
 from __future__ import annotations
 
+import copy
 import dataclasses
 import functools
 import warnings
@@ -155,22 +156,30 @@ def without_unread(config: "PipelineConfig") -> "PipelineConfig":
     for f in unread:
         head, _, rest = f.partition(".")
         if rest:
-            changes.setdefault(head, dict(getattr(config, head)))[rest] = getattr(defaults, head)[rest]
+            changes.setdefault(head, dict(getattr(config, head)))[rest] = copy.deepcopy(getattr(defaults, head)[rest])
         else:
-            changes[head] = getattr(defaults, head)
+            changes[head] = copy.deepcopy(getattr(defaults, head))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UnreadParameterWarning)
         return dataclasses.replace(config, **changes)
 
 
 class _Defaults:
-    """The declared default of every PipelineConfig field, as attributes (no instance is built)."""
+    """The declared default of every PipelineConfig field, as attributes (no instance is built), made
+    once per process: read them, do not change them (copy one before handing it to a config)."""
+
+    def __init__(self):
+        self._values = {f.name: f.default_factory() if f.default is dataclasses.MISSING else f.default
+                        for f in dataclasses.fields(PipelineConfig)}
 
     def __getattr__(self, name):
-        f = {f.name: f for f in dataclasses.fields(PipelineConfig)}[name]
-        return f.default_factory() if f.default is dataclasses.MISSING else f.default
+        try:
+            return self.__dict__["_values"][name]
+        except KeyError:
+            raise AttributeError(name) from None
 
 
+@functools.lru_cache(maxsize=1)
 def _defaults() -> _Defaults:
     return _Defaults()
 
