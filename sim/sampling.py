@@ -82,8 +82,8 @@ NOT_ESTIMABLE = ("tex.cache.", "timing.")
 # Every other counter (depth passes and writes, ops.interp, whose colour interpolation follows the depth
 # test, HiZ and z-culling, shading, texture fetches, line segments, the GPU pipeline's and the
 # conservative records) is not estimated: NaN, with a NaN half-width. tests/test_sampling.py checks the
-# mean of each over many draws against the whole frame.
-VISIT_SUMS = ("setup.", "raster.", "precision.", "interval.", "tile.", "trav.", "alpha.", "ops.setup",
+# mean of each over many draws against the whole frame. The frame's facts (frame.*) are exact.
+VISIT_SUMS = ("frame.", "setup.", "raster.", "precision.", "interval.", "tile.", "trav.", "alpha.", "ops.setup",
               "ops.tile", "ops.sample_region", "ops.sample_inside", "ops.ps_setup", "depth.tests",
               "conservative.pixels_tested")
 MIN_STRATA = 2  # two strata of two bins: the fewest that give a variance estimate
@@ -91,9 +91,11 @@ FEW_STRATA = 20  # below this many sampled strata the intervals can cover well u
 
 DOCS = {
     "sample.fraction": ("ratio", "Sampled simulation: sample.bins / sample.candidates"),
-    "sample.bins": ("bins", "Sampled simulation: screen bins traversed (2 per stratum)"),
+    "sample.bins": ("bins", "Sampled simulation: screen bins traversed (2 per stratum; with sample_split, units of "
+                    "the dense bins' triangles count as bins)"),
     "sample.strata": ("strata", "Sampled simulation: strata the bins were drawn from (0: every bin with triangles, exact)"),
-    "sample.candidates": ("bins", "Sampled simulation: screen bins that hold triangles (the others do no traversal work)"),
+    "sample.candidates": ("bins", "Sampled simulation: screen bins that hold triangles (the others do no traversal "
+                          "work; with sample_split, a dense bin counts as its units)"),
 }
 
 

@@ -406,7 +406,7 @@ def test_split_marks_depth_order_counters_absent(setup, full):
     two = sim.render(scene, camera, table, cfg, timing=False)
     for k in ("depth.passes", "depth.bytes_written", "ops.interp"):
         assert math.isnan(two.flat_stats[k]) and math.isnan(two.ci95[k]), k
-    for k in SPLIT_FIGURES + ("depth.tests", "tile.visited"):
+    for k in SPLIT_FIGURES + ("depth.tests", "tile.visited", "ops.per_pixel", "frame.pixels"):
         assert math.isfinite(two.flat_stats[k]), k
     assert {k: v for k, v in one.flat_stats.items() if k != "time.wall_s"}.keys() == \
         {k: v for k, v in two.flat_stats.items() if k != "time.wall_s"}.keys()
