@@ -37,8 +37,11 @@ def _sampled(row: dict) -> str:
     if _missing(row.get("sample.bins")) or _missing(row.get("sample.candidates")):
         return ""
     share = row.get("pipeline.sample_fraction")
-    return (f" (sampled: {round(row['sample.bins']):,} of {round(row['sample.candidates']):,} screen bins with "
-            f"triangles" + (f", fraction {share:g}" if not _missing(share) else "") + "; ± is the 95% interval)")
+    split = row.get("pipeline.sample_split")
+    what = "screen bins with triangles" if _missing(split) or not split else \
+        "units (screen bins with triangles, dense ones cut into units of their triangles)"
+    return (f" (sampled: {round(row['sample.bins']):,} of {round(row['sample.candidates']):,} {what}"
+            + (f", fraction {share:g}" if not _missing(share) else "") + "; ± is the 95% interval)")
 
 
 def _summary(row: dict) -> str:

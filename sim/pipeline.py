@@ -115,7 +115,7 @@ _UNREAD_RULES = (
      lambda c, a: f"algorithm {c.algorithm!r} tests point samples; pipeline.lines configures line samples"),
     (("gpu_constants", "gpu_payload_floats"), lambda c, a: a.pipeline == "gpu",
      lambda c, a: f"algorithm {c.algorithm!r} does not run the conventional-GPU pipeline (docs/gpu.md)"),
-    (("sample_seed",), lambda c, a: c.sample_fraction < 1,
+    (("sample_seed", "sample_split"), lambda c, a: c.sample_fraction < 1,
      lambda c, a: "sample_fraction is 1 (the whole frame: no bins are drawn)"),
     (("shading_cache_entries", "shading_grid"), lambda c, a: c.shading == "cache",
      lambda c, a: f"shading is {c.shading!r}; the shading cache is shading 'cache'"),

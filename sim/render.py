@@ -424,6 +424,8 @@ def render(scene, camera: Camera, table, config: PipelineConfig | None = None, *
         raise ConfigError(f"PipelineConfig.sample_fraction: {config.sample_fraction!r}: an occlusion query "
                           "stops at the frame's first visible sample and is not estimable from sampled bins; "
                           "use sample_fraction=1")
+    if sampled and config.sample_split > 0:
+        _sampling.check_split(config)
     if sampled and keep_timing_records:
         raise ConfigError(f"keep_timing_records: PipelineConfig.sample_fraction={config.sample_fraction!r} renders "
                           "sampled bins only; the timing model needs the whole frame")

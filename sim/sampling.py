@@ -50,6 +50,18 @@ Not estimable under sampling (reported as NaN with a NaN half-width, never scale
 - the timing model (``timing.*``): its FIFOs and unit overlap couple the work of consecutive bins, so
   a frame's cycles are not a sum of per-bin terms.
 
+Units smaller than a bin (``PipelineConfig(sample_split=s)``, s in (0, 1]; sampled/dense_units.h): a bin
+whose work exceeds s times a stratum's share (W / H) is cut into ceil(work / (s W / H)) units of its
+triangles, dealt in serpentine order of their work in the bin, and the units replace the bin in the
+population the strata are drawn from (``sample.candidates`` counts units). A drawn unit is traversed as
+its bin holding only its triangles, so the dense bins are no longer a take-all floor. The estimator is
+the same; it is unbiased for the counters that are sums over (triangle, bin) visits that read no depth
+buffer (VISIT_SUMS: setup, raster, tile and interval tests, ops.total's parts). Counters that depend on
+the triangles drawn before in the bin (depth passes, ops.interp, HiZ and z-culling, shading, texture fetches) would
+be biased (a unit's triangles see fewer occluders) and are NaN under units; the draw refuses
+configurations where the traversal itself reads depth (HiZ), line samples and the GPU pipeline. At
+sample_fraction 1, or when no bin exceeds the cap, nothing is cut and the render is as with s = 0.
+
 HiZ and z-culling, the shading cache and shading visits restart in every bin (backend/hiz.h,
 backend/shading.h), so their counters are per-bin sums and are estimated like the others. Occlusion
 queries stop at the first visible sample of the frame and cannot be sampled (an error).
@@ -65,14 +77,25 @@ from .errors import ConfigError
 
 # Figures that need the whole frame (prefixes of counter and figure names).
 NOT_ESTIMABLE = ("tex.cache.", "timing.")
+# Under units of the dense bins' triangles (pipeline.sample_split > 0): the counters that are sums over
+# (triangle, bin) visits independent of the triangles drawn before in the bin (no depth buffer read).
+# Every other counter (depth passes and writes, ops.interp, whose colour interpolation follows the depth
+# test, HiZ and z-culling, shading, texture fetches, line segments, the GPU pipeline's and the
+# conservative records) is not estimated: NaN, with a NaN half-width. tests/test_sampling.py checks the
+# mean of each over many draws against the whole frame. The frame's facts (frame.*) are exact.
+VISIT_SUMS = ("frame.", "setup.", "raster.", "precision.", "interval.", "tile.", "trav.", "alpha.", "ops.setup",
+              "ops.tile", "ops.sample_region", "ops.sample_inside", "ops.ps_setup", "depth.tests",
+              "conservative.pixels_tested")
 MIN_STRATA = 2  # two strata of two bins: the fewest that give a variance estimate
 FEW_STRATA = 20  # below this many sampled strata the intervals can cover well under 95% (a warning)
 
 DOCS = {
     "sample.fraction": ("ratio", "Sampled simulation: sample.bins / sample.candidates"),
-    "sample.bins": ("bins", "Sampled simulation: screen bins traversed (2 per stratum)"),
+    "sample.bins": ("bins", "Sampled simulation: screen bins traversed (2 per stratum; with sample_split, units of "
+                    "the dense bins' triangles count as bins)"),
     "sample.strata": ("strata", "Sampled simulation: strata the bins were drawn from (0: every bin with triangles, exact)"),
-    "sample.candidates": ("bins", "Sampled simulation: screen bins that hold triangles (the others do no traversal work)"),
+    "sample.candidates": ("bins", "Sampled simulation: screen bins that hold triangles (the others do no traversal "
+                          "work; with sample_split, a dense bin counts as its units)"),
 }
 
 
@@ -111,6 +134,7 @@ class BinSample:
     aux: np.ndarray | None = None   # (bins of the frame, k) further auxiliaries (the engine's bin_aux;
                                     # only the drawn bins' rows are read)
     aux_total: np.ndarray | None = None  # (k,) their frame totals (None: the sums of ``aux``)
+    units: bool = False  # some dense bins were cut into units of their triangles (pipeline.sample_split)
 
     @property
     def fraction(self) -> float:
@@ -125,6 +149,28 @@ class BinSample:
 def check_fraction(fraction, owner: str = "PipelineConfig") -> None:
     if isinstance(fraction, bool) or not isinstance(fraction, (int, float)) or not 0 < fraction <= 1:
         raise ConfigError(f"{owner}.sample_fraction: expected a number in (0, 1], got {fraction!r}")
+
+
+def check_split(config) -> None:
+    """ConfigError when units of the dense bins' triangles (config.sample_split > 0) would change what the
+    estimated counters count: the traversal reads the depth buffer (HiZ z-culling), a unit's line samples
+    merge and occlude within the bin, the GPU pipeline's early depth test, or shading (its texture-line
+    stream is per bin and its visits depend on depth)."""
+    from .pipeline import algorithm_info
+
+    info = algorithm_info(config.algorithm)
+    why = None
+    if info.samples == "lines":
+        why = f"algorithm {config.algorithm!r} tests line samples, whose segment buffers merge and occlude across a bin's triangles"
+    elif info.pipeline == "gpu":
+        why = f"algorithm {config.algorithm!r} runs the GPU pipeline, whose fragments pass a depth test in bin order"
+    elif info.depth_cull and config.hiz["enabled"]:
+        why = "hiz.enabled: z-culling skips tile and sample tests by the depths the bin's earlier triangles left"
+    elif config.shading != "none":
+        why = f"shading {config.shading!r}: shading visits depend on depth order and share the bin's texture-line stream"
+    if why:
+        raise ConfigError(f"PipelineConfig.sample_split: {config.sample_split!r} cuts dense bins into units of their "
+                          f"triangles, but {why}; use sample_split=0")
 
 
 def choose_bins(work, fraction: float, seed: int, aux=None) -> BinSample:
@@ -147,10 +193,12 @@ def from_engine(out: dict) -> BinSample:
     """The BinSample of a sampled engine render (sim._core.render's output)."""
     work = np.asarray(out["bin_work"])
     aux, total = out.get("bin_aux"), out.get("bin_aux_total")
+    # With units of the dense bins the per-unit vectors extend past the screen bins (sampled/dense_units.h).
+    units = len(work) > int(out["counters"]["frame.bins"])
     return BinSample(np.asarray(out["bins"], np.int64), np.asarray(out["bin_stratum"], np.int64),
                      np.asarray(out["strata_sizes"], np.int64), int((work > 0).sum()), work,
                      None if aux is None else np.asarray(aux, np.float64),
-                     None if total is None else np.asarray(total, np.float64))
+                     None if total is None else np.asarray(total, np.float64), units)
 
 
 def _design(sample: BinSample) -> tuple[np.ndarray, np.ndarray]:
@@ -279,7 +327,7 @@ def estimate(sample: BinSample, counters: dict, bin_counters: np.ndarray, derive
     half = tq * np.sqrt(var)
     flat, ci = {}, {}
     for i, n in enumerate(names):
-        if n.startswith(NOT_ESTIMABLE):
+        if n.startswith(NOT_ESTIMABLE) or (sample.units and not n.startswith(VISIT_SUMS)):
             flat[n], ci[n] = math.nan, math.nan
         else:
             flat[n], ci[n] = float(raw[i]), float(half[i])

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <memory>
+#include <stdexcept>
 #include <thread>
 
 #include "frame/bin_stream.h"
@@ -69,7 +70,8 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
 
   // ---- set-up ----
   FrameSetup fs = setup_stage(p, fc, scene, table.spp(), n_threads, opt.bins, opt.pixel_stats, result.sampled);
-  const std::vector<int>* bins = fs.restricted ? &fs.drawn : opt.bins;
+  // The work items' screen bins: with units of the dense bins (pipeline.sample_split), a bin may recur.
+  const std::vector<int>* bins = fs.restricted ? (fs.split.empty() ? &fs.drawn : &fs.split.bins) : opt.bins;
 
   // ---- binning ----
   const Binning bn = bin_triangles(p, fs.S, fs.live);
@@ -88,9 +90,12 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
       bins = &drawn;
     }
   }
+  if (!fs.split.empty() && !shade.streams.empty())
+    throw std::invalid_argument("sample_split: units of a bin's triangles share its texture-line stream; "
+                                "use shading 'none' or sample_split 0");
   if (bins) {
-    result.sampled.bins = *bins;
-    require_bin_list(*bins, bn.count());
+    result.sampled.bins = fs.split.empty() ? *bins : fs.drawn;
+    if (fs.split.empty()) require_bin_list(*bins, bn.count());
     result.sampled.bin_counters.assign(bins->size() * static_cast<std::size_t>(kNumCounters), 0);
   }
 
@@ -118,7 +123,7 @@ RenderResult render(const RenderParams& p, const SceneArrays& scene, const Sampl
   // ---- traversal, resolve per bin ----
   bool moving = false;
   for (const std::uint32_t i : fs.live) moving = moving || fs.S[i].moving;
-  const TraversalJob job{p, frame, fs.S, bn, shade, bins, moving, opt, interrupted};
+  const TraversalJob job{p, frame, fs.S, bn, shade, bins, fs.split.empty() ? nullptr : &fs.split, moving, opt, interrupted};
   auto workers = make_workers(job, n_threads);
   traverse_bins(job, workers, stream, result);
   stream.finish();

@@ -34,7 +34,7 @@ FrameSetup setup_stage(const RenderParams& p, const FrameConst& fc, const SceneA
   fs.alive.assign(n, 0);
   fs.counters.assign(static_cast<std::size_t>(n_threads), Counters{});
   if (fs.restricted) {
-    sampled_setup(p, fc, scene, spp, bins, fs.S, fs.alive, fs.counters[0], fs.homed, fs.drawn, sampled);
+    sampled_setup(p, fc, scene, spp, bins, fs.S, fs.alive, fs.counters[0], fs.homed, fs.drawn, sampled, &fs.split);
   } else if (pstats) {  // per-pixel statistics: one thread, each triangle's setup charged to its bounds
     PixelCursor cur;
     cur.attach(pstats);

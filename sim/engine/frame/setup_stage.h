@@ -25,7 +25,8 @@ struct FrameSetup {
   std::vector<std::uint32_t> live;  // the alive triangles, in submission order
   std::vector<Counters> counters;   // per thread
   bool restricted = false;          // only the drawn bins' triangles were set up
-  std::vector<int> drawn;           // restricted: the bins to traverse
+  std::vector<int> drawn;           // restricted: the bins to traverse (with split: the drawn units)
+  SplitDraw split;                  // pipeline.sample_split: each drawn unit's screen bin and triangles
   std::vector<Counters> homed;      // restricted: setup counters of the triangles homed in drawn bin k
   std::vector<std::uint64_t> frame_pool;  // per-pixel statistics: set-up work with no pixel bounds
   std::vector<TraceEvent> trace_events;   // pixel trace: the set-up events of the traced pixel

@@ -95,7 +95,12 @@ void traverse_bins(const TraversalJob& job, std::vector<std::unique_ptr<Worker>>
         ts.buffers.begin(r, table.spp());
         ts.shade.begin_bin(b);
         obs.begin_bin(b, r);
-        const std::vector<std::uint32_t>& list = bn.lists[static_cast<std::size_t>(b)];
+        // A unit of a dense bin (pipeline.sample_split) traverses only its triangles; the bin's image
+        // and exported samples are those of its first drawn unit (a sampled frame's image is partial).
+        const bool unit = job.split && !job.split->lists[static_cast<std::size_t>(k)].empty();
+        const bool resolve = !job.split || k == 0 || std::find(bins->begin(), bins->begin() + k, b) == bins->begin() + k;
+        const std::vector<std::uint32_t>& list =
+            unit ? job.split->lists[static_cast<std::size_t>(k)] : bn.lists[static_cast<std::size_t>(b)];
         for (std::size_t li = 0; li < list.size(); ++li) {
           if (cancel.load(std::memory_order_relaxed)) break;  // Ctrl-C: stop within one triangle
           if (li + 4 < list.size()) prefetch_setup(job.setups[list[li + 4]]);  // a later triangle's set-up
@@ -112,8 +117,8 @@ void traverse_bins(const TraversalJob& job, std::vector<std::unique_ptr<Worker>>
         ts.shade.close_visit();  // algorithms end their visits; this only guards the contract
         obs.end_bin();
         bins_done.fetch_add(1, std::memory_order_relaxed);
-        ts.buffers.resolve(result.image.data(), p.width);
-        if (job.options.export_samples)
+        if (resolve) ts.buffers.resolve(result.image.data(), p.width);
+        if (resolve && job.options.export_samples)
           ts.buffers.export_samples(result.sample_depth.data(), result.sample_triangle.data(), p.width);
         if (bins) {  // this bin's counters: each row is written by the one worker that owns the bin
           std::uint64_t* row = &result.sampled.bin_counters[static_cast<std::size_t>(k) * kNumCounters];

@@ -33,6 +33,7 @@ struct TraversalJob {
   const Binning& binning;
   ShadeFrame& shade;
   const std::vector<int>* work;  // the bins to traverse (nullptr: every bin, in order)
+  const SplitDraw* split;        // units of dense bins: item k's triangles (nullptr: whole bins)
   bool moving;                   // some live triangle moves
   const RenderOptions& options;
   const std::function<bool()>& interrupted;

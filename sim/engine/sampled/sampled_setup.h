@@ -5,7 +5,8 @@
 //    kernel constants, nothing charged). From it, for every bin: the brute-force work (the
 //    stratification's sort key, sampled/bin_sample.h) and the frame totals of the regression
 //    estimator's auxiliaries (sampled/bin_covariates.h), summed per triangle.
-// 2. The draw (or the given list).
+// 2. The draw (or the given list). With pipeline.sample_split > 0 the dense bins are first cut into
+//    units of their triangles (sampled/dense_units.h), which are drawn like bins.
 // 3. setup_triangle() for the live triangles whose bounds overlap a drawn bin, and for the culled ones
 //    (their counts are exact). The drawn bins' auxiliaries come from the same setup fields.
 //
@@ -14,7 +15,8 @@
 // its bounds, the bin where traversals charge their per-triangle setup too): they are added to that
 // bin's row of SampledBins::bin_counters when it is drawn, and estimated with the rest of the bin's
 // counters; a triangle set up only because it reaches a drawn bin it is not homed in adds nothing to
-// the counters. With every bin listed, the counters equal the whole frame's.
+// the counters. With every bin listed, the counters equal the whole frame's. Under units, a triangle
+// homed in a cut bin belongs to its unit there, and its setup counts when that unit is drawn.
 #pragma once
 
 #include <algorithm>
@@ -31,6 +33,7 @@
 #include "setup/setup.h"
 #include "sampled/bin_covariates.h"
 #include "sampled/bin_sample.h"
+#include "sampled/dense_units.h"
 #include "core/scene.h"
 
 namespace rast5d {
@@ -42,6 +45,8 @@ namespace rast5d {
 // in the bin, times spp), the stratum of each drawn bin and the strata sizes (empty: every bin with
 // triangles was drawn), and the regression estimator's auxiliaries (sampled/bin_covariates.h): kBinAux
 // per bin (NaN in bins not drawn when only the drawn bins' were computed) and their frame totals.
+// Under units of the dense bins (sampled/dense_units.h) bins, bin_work and bin_aux index units: the
+// screen bins (a cut bin's entry with work 0) followed by the units.
 struct SampledBins {
   std::vector<int> bins, stratum, strata_sizes;
   std::vector<std::uint64_t> bin_counters;
@@ -84,7 +89,7 @@ struct UnconstructedSetups {
 inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const SceneArrays& scene, int spp,
                           const std::vector<int>* list, TriSetup* setups, std::vector<char>& alive,
                           Counters& frame_setup, std::vector<Counters>& homed, std::vector<int>& drawn,
-                          SampledBins& out) {
+                          SampledBins& out, SplitDraw* split = nullptr) {
   const int B = p.bin_size;
   const int bins_x = (p.width + B - 1) / B, bins_y = (p.height + B - 1) / B;
   const int n_bins = bins_x * bins_y;
@@ -120,7 +125,16 @@ inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const Sce
   out.bin_aux_total.assign(kBinAux, 0.0);
   total.store(out.bin_aux_total, 0, spp);
 
-  // ---- 2. the drawn bins ----
+  // ---- 2. the drawn bins (or units of the dense bins' triangles) ----
+  DenseUnits dense;
+  if (!list && split && p.sample_split > 0)
+    dense = split_dense_bins(out.bin_work, p.sample_fraction, p.sample_split, spp, B, bins_x, bins_y,
+                             n, [&](std::size_t i, int& x0, int& y0, int& x1, int& y1) {
+                               const Pre& q = pre[i];
+                               if (q.culled) return false;
+                               x0 = q.bx0, y0 = q.by0, x1 = q.bx1, y1 = q.by1;
+                               return true;
+                             });
   if (list) {
     drawn = *list;
   } else {
@@ -129,8 +143,28 @@ inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const Sce
     out.stratum = std::move(s.stratum);
     out.strata_sizes = std::move(s.sizes);
   }
+  // Units of the dense bins: drawn entry k traverses screen bin split->bins[k], with the unit's
+  // triangles (split->lists[k]) or the whole bin (an empty list).
+  std::vector<int> unit_k(dense.units(), -1);  // drawn entry of each unit of the dense bins
+  if (!dense.empty()) {
+    split->bins.resize(drawn.size());
+    split->lists.assign(drawn.size(), {});
+    for (std::size_t k = 0; k < drawn.size(); ++k) {
+      const int u = drawn[k] - n_bins;
+      split->bins[k] = u < 0 ? drawn[k] : dense.bin[dense.unit_dense[u]];
+      if (u >= 0) unit_k[u] = static_cast<int>(k);
+    }
+  }
   std::vector<int> k_of(static_cast<std::size_t>(n_bins), -1);
-  for (std::size_t k = 0; k < drawn.size(); ++k) k_of[drawn[k]] = static_cast<int>(k);  // distinct: checked
+  for (std::size_t k = 0; k < drawn.size(); ++k)
+    if (drawn[k] < n_bins) k_of[drawn[k]] = static_cast<int>(k);  // distinct: checked
+  std::vector<char> in_unit;  // triangles of a drawn unit of a dense bin
+  if (!dense.empty()) {
+    in_unit.assign(n, 0);
+    for (std::size_t d = 0; d < dense.bin.size(); ++d)
+      for (std::size_t j = dense.first[d]; j < dense.first[d + 1]; ++j)
+        if (unit_k[dense.unit[j]] >= 0) in_unit[dense.tri[j]] = 1;
+  }
   // Summed-area table of the drawn bins: does a triangle's bin rectangle hold one?
   const int sx = bins_x + 1;
   std::vector<int> sat(static_cast<std::size_t>(sx) * (bins_y + 1), 0);
@@ -160,7 +194,9 @@ inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const Sce
     }
     ++frame_setup[Counter::setup_triangles];
     const int cx0 = q.bx0 / B, cy0 = q.by0 / B, cx1 = (q.bx1 - 1) / B + 1, cy1 = (q.by1 - 1) / B + 1;
-    if (sat[cy1 * sx + cx1] - sat[cy0 * sx + cx1] - sat[cy1 * sx + cx0] + sat[cy0 * sx + cx0] == 0) continue;
+    if (sat[cy1 * sx + cx1] - sat[cy0 * sx + cx1] - sat[cy1 * sx + cx0] + sat[cy0 * sx + cx0] == 0 &&
+        (in_unit.empty() || !in_unit[i]))
+      continue;
     c = Counters{};
     if (!(alive[i] = run(c))) throw std::logic_error("sampled setup: setup culled a triangle the pre-pass kept");
     if (scene.alpha) setups[i].alpha = scene.alpha[i];
@@ -168,7 +204,8 @@ inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const Sce
     if (s.bx0 != q.bx0 || s.by0 != q.by0 || s.bx1 != q.bx1 || s.by1 != q.by1)
       throw std::logic_error("sampled setup: the bounds pre-pass differs from setup for triangle " + std::to_string(i));
     --c[Counter::setup_triangles];  // counted above for every triangle
-    const int home = k_of[cy0 * bins_x + cx0];
+    int home = k_of[cy0 * bins_x + cx0];
+    if (!dense.empty() && dense.of_bin[cy0 * bins_x + cx0] >= 0) home = unit_k[dense.unit_of(cy0 * bins_x + cx0, i)];
     if (home >= 0) {
       homed[home].merge(c);
       frame_setup.merge(c);
@@ -177,13 +214,19 @@ inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const Sce
       for (int bx = cx0; bx < cx1; ++bx)
         if (const int k = k_of[by * bins_x + bx]; k >= 0) reach[k].push_back(static_cast<std::uint32_t>(i));
   }
+  for (std::size_t d = 0; d < dense.bin.size(); ++d)  // the drawn units' triangles, in submission order
+    for (std::size_t j = dense.first[d]; j < dense.first[d + 1]; ++j)
+      if (const int k = unit_k[dense.unit[j]]; k >= 0) reach[k].push_back(dense.tri[j]);
+  if (!dense.empty())
+    for (std::size_t k = 0; k < drawn.size(); ++k)
+      if (drawn[k] >= n_bins) split->lists[k] = reach[k];
 
   // ---- the drawn bins' auxiliaries ----
-  out.bin_aux.assign(static_cast<std::size_t>(n_bins) * kBinAux, std::numeric_limits<double>::quiet_NaN());
+  out.bin_aux.assign(out.bin_work.size() * kBinAux, std::numeric_limits<double>::quiet_NaN());
   std::vector<TriangleCovariates> cov;
   std::vector<int> cov_of(reach.empty() ? 0 : n, -1);
   for (std::size_t k = 0; k < drawn.size(); ++k) {
-    const int b = drawn[k];
+    const int b = dense.empty() ? drawn[k] : split->bins[k];
     const int bx = b % bins_x, by = b / bins_x;
     const double x0 = bx * B, y0 = by * B;
     const double x1 = std::min<double>(p.width, x0 + B), y1 = std::min<double>(p.height, y0 + B);
@@ -192,7 +235,7 @@ inline void sampled_setup(const RenderParams& p, const FrameConst& fc, const Sce
       if (cov_of[i] < 0) cov_of[i] = static_cast<int>(cov.size()), cov.push_back(triangle_covariates(setups[i], B));
       bin_covariate_terms(setups[i], cov[cov_of[i]], x0, y0, x1, y1, a);
     }
-    a.store(out.bin_aux, static_cast<std::size_t>(b), spp);
+    a.store(out.bin_aux, static_cast<std::size_t>(drawn[k]), spp);
   }
 }
 
