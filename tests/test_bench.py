@@ -108,8 +108,10 @@ def test_bench_rate(tmp_path):
     quick = os.environ.get("RAST5D_BENCH_QUICK", "") not in ("", "0")
     out = tmp_path if quick else bench_core.REPO / "reports" / "bench"
     got = bench_rate.run(out=out, repeats=2 if quick else 5)
-    assert "# bench_rate" in got["page"].read_text()
+    page = got["page"].read_text()
+    assert "# bench_rate" in page and "Where the render's CPU time goes" in page
     assert got["classes"]["4d"] == got["tested"]
+    assert 0 <= got["fixed_python"] <= got["fixed"] and got["kernel_s"] > 0
 
 
 def test_bench_overhead(tmp_path):

@@ -7,9 +7,18 @@ stratified), `bruteforce`, one thread, timing model off. Rate: samples tested / 
 `sim.render` (the minimum of the repeats), and the same over the engine's wall time (Python's share
 left out); the kernels alone: sim._core.simd_batch_bench (1024-sample batches).
 
+Where the render's CPU time goes: the sample-test kernels (samples tested of each class / the
+kernels-alone rate of that class), the per-render fixed cost (the CPU time of the same render with one
+triangle of the workload: image and bin buffers, clearing and resolve, the engine call and the Python
+around it, of which the Python side is that render's CPU time outside the engine call), and the rest
+(triangle set-up, binning, gathering the samples into batches, the backend's depth test and colour)
+as the remainder.
+
 Writes reports/bench/bench_rate.md. `python -m experiments.bench.bench_rate --help`."""
 from __future__ import annotations
 
+import contextlib
+import importlib
 import os
 import platform
 import time
@@ -46,6 +55,32 @@ def workload(n: int = N_TRIANGLES, edge: float = EDGE, seed: int = 1):
     return Scene.from_arrays(pos, colors=colors)
 
 
+@contextlib.contextmanager
+def _engine_cpu():
+    """Within the block, [process CPU seconds spent inside the engine call] of every sim.render (the
+    engine's worker threads included)."""
+    module = importlib.import_module("sim.render")
+    core = module._core
+    spent = [0.0]
+
+    class Timed:
+        def __getattr__(self, name):
+            return getattr(core, name)
+
+        def render(self, *args, **kwargs):
+            c0 = time.process_time()
+            try:
+                return core.render(*args, **kwargs)
+            finally:
+                spent[0] += time.process_time() - c0
+
+    module._core = Timed()
+    try:
+        yield spent
+    finally:
+        module._core = core
+
+
 def measure(repeats: int = 5, threads: int = 1) -> dict:
     import sim
 
@@ -61,10 +96,23 @@ def measure(repeats: int = 5, threads: int = 1) -> dict:
         cpu, wall = min(cpu, time.process_time() - c0), min(wall, time.perf_counter() - t0)
         engine = min(engine, r.flat_stats["time.wall_s"])
     tested = r.flat_stats["raster.samples_tested"]
+    one = workload(n=1)
+    sim.render(one, cam, table, cfg, timing=False)
+    fixed = fixed_python = float("inf")
+    with _engine_cpu() as engine_cpu:
+        for _ in range(repeats):
+            c0, e0 = time.process_time(), engine_cpu[0]
+            sim.render(one, cam, table, cfg, timing=False)
+            c1 = time.process_time() - c0
+            fixed, fixed_python = min(fixed, c1), min(fixed_python, c1 - (engine_cpu[0] - e0))
     kernels = {c: sim._core.simd_batch_bench(k, 1024, 2000)[:2] for c, k in (("4D", 2), ("5D", 3))}
+    classes = {k: r.flat_stats[f"raster.samples_tested_{k}"] for k in ("2d", "3d", "4d", "5d")}
+    # the 4D and 5D kernels' own rates; 2D and 3D samples are charged at the 4D kernel's (an upper bound)
+    kernel_s = sum(n / kernels["5D" if k == "5d" else "4D"][1] for k, n in classes.items())
     return dict(tested=tested, cpu=cpu, wall=wall, engine=engine, rate_cpu=tested / cpu / 1e6,
                 rate_engine=tested / engine / 1e6, hit=r.flat_stats["raster.samples_hit"], kernels=kernels,
-                classes={k: r.flat_stats[f"raster.samples_tested_{k}"] for k in ("2d", "3d", "4d", "5d")})
+                classes=classes, kernel_s=kernel_s, fixed=fixed, fixed_python=fixed_python,
+                rest=max(0.0, cpu - kernel_s - fixed))
 
 
 def run(out=None, repeats: int = 5) -> dict:
@@ -85,6 +133,15 @@ def run(out=None, repeats: int = 5) -> dict:
              "| class | M tests/s |", "|---|---|"]
     for c, (_, rate) in m["kernels"].items():  # (scalar, explicit SIMD): the engine's fast path is the latter
         lines.append(f"| {c} | {rate / 1e6:.0f} |")
+    parts = [("sample-test kernels (samples tested / the kernels-alone rate)", m["kernel_s"]),
+             ("per-render fixed cost (the same render with one triangle)", m["fixed"]),
+             ("of which outside the engine call (Python)", m["fixed_python"]),
+             ("the rest: triangle set-up, binning, batching, depth test and colour", m["rest"])]
+    lines += ["", " ".join(__doc__.split("\n\n")[2].split()) + " The first, second and fourth rows add up to the "
+              "render's CPU time; the second includes the third.", "",
+              "| part | CPU [ms] | share of the render |", "|---|---|---|"]
+    for what, t in parts:
+        lines.append(f"| {what} | {t * 1e3:.1f} | {t / m['cpu']:.2f} |")
     page = write_page(out, "bench_rate.md", lines)
     return {"page": page, **m}
 

@@ -45,6 +45,15 @@ class BinBuffers {
     return (static_cast<std::size_t>(py - rect_.y0) * w_ + (px - rect_.x0)) * spp_ + s;
   }
   float& depth(std::size_t slot) { return depth_[slot]; }
+  // Whole-buffer views for the backend's vectorised path (backend/sample_backend.h): depth and triangle
+  // index per slot, colour 3 floats per slot; the bin's rectangle, row width and samples per pixel.
+  float* depth_data() { return depth_.data(); }
+  float* color_data() { return color_.data(); }
+  std::int32_t* triangle_data() { return tri_.data(); }
+  std::size_t slots() const { return depth_.size(); }
+  const BinRect& rect() const { return rect_; }
+  int row_pixels() const { return w_; }
+  int spp() const { return spp_; }
   float* color(std::size_t slot) { return &color_[slot * 3]; }
   void set_triangle(std::size_t slot, std::int32_t index) { tri_[slot] = index; }
 

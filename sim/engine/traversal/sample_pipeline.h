@@ -625,6 +625,41 @@ class SamplePipeline {
       }
     };
 #if defined(__AVX512F__) && defined(__AVX512BW__)
+    if (backend_.lanes_ready(tri)) {
+      // The covered samples 16 lanes at a time through the backend's vectorised path, then the ties
+      // (settled one by one). Their depth slots are distinct, so the order of the two does not show.
+      const __m128i one = _mm_set1_epi8(1), two = _mm_set1_epi8(2);
+      const __m512i iota = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+      std::uint64_t ties = 0;
+      for (int w = 0; w < n; w += 16) {
+        const __mmask16 live = n - w >= 16 ? __mmask16(0xffff) : static_cast<__mmask16>((1u << (n - w)) - 1);
+        const __m128i f = _mm_maskz_loadu_epi8(live, flags + w);
+        const __mmask16 cov = _mm_test_epi8_mask(f, one);
+        ties |= static_cast<std::uint64_t>(_mm_test_epi8_mask(f, two)) << (w & 63);
+        if (cov) {
+          __m512i vpx, vpy, vs;
+          if (uniform) {
+            vpx = _mm512_set1_epi32(uniform_px_), vpy = _mm512_set1_epi32(uniform_py_);
+            vs = _mm512_add_epi32(iota, _mm512_set1_epi32(w));
+          } else {
+            vpx = _mm512_maskz_loadu_epi32(cov, bpx_.data() + w), vpy = _mm512_maskz_loadu_epi32(cov, bpy_.data() + w);
+            vs = _mm512_maskz_loadu_epi32(cov, bs_.data() + w);
+          }
+          backend_.covered_lanes(tri, cov, _mm512_maskz_loadu_ps(cov, e + w), _mm512_maskz_loadu_ps(cov, e + n + w),
+                                 _mm512_maskz_loadu_ps(cov, e + 2 * n + w), _mm512_maskz_loadu_ps(cov, d + w), vpx,
+                                 vpy, vs);
+        }
+        if ((w & 63) == 48 || w + 16 >= n) {  // the ties of these 64 lanes, lowest first
+          const int base = w & ~63;
+          for (; ties; ties &= ties - 1) {
+            const int i = base + __builtin_ctzll(ties);
+            tie_break_sample(tri, i, uniform ? uniform_px_ : bpx_[i], uniform ? uniform_py_ : bpy_[i],
+                             uniform ? i : bs_[i]);
+          }
+        }
+      }
+      return;
+    }
     // The nonzero flags, 64 at a time, as a bit mask walked lowest first: the same samples in the
     // same order as the byte walk below, without a branch per flag.
     for (int w = 0; w < n; w += 64) {
