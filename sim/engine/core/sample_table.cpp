@@ -77,6 +77,8 @@ void SampleTable::set_time_strata(int S) {
   const int buckets = grid_ * grid_ * S;
   ct_order_.resize(npix * spp_);
   ct_offsets_.assign(npix * (buckets + 1), 0);
+  ct_cell_.resize(npix * spp_);
+  ct_stratum_.resize(npix * spp_);
   std::vector<int> key(spp_);
   for (std::size_t p = 0; p < npix; ++p) {
     const std::size_t base = p * spp_;
@@ -85,6 +87,11 @@ void SampleTable::set_time_strata(int S) {
     for (int s = 0; s < spp_; ++s)
       key[s] = cell_of(u_[base + s], v_[base + s], grid_) * S + stratum_of(t_[base + s], S);
     bucket_samples(key.data(), spp_, buckets, order, off);
+    for (int i = 0; i < spp_; ++i) {
+      const int k = key[order[i]];
+      ct_cell_[base + i] = static_cast<std::uint8_t>(k / S);
+      ct_stratum_[base + i] = static_cast<std::uint8_t>(k % S);
+    }
   }
 }
 

@@ -36,6 +36,8 @@ struct PixelSamples {
   // ct_order[ct_offsets[c * S + k] .. ct_offsets[c * S + k + 1]).
   const std::int32_t* ct_order;      // spp entries
   const std::int32_t* ct_offsets;    // G*G*S + 1 entries
+  const std::uint8_t* ct_cell;       // spp entries, in ct_order's order: each entry's lens-grid cell
+  const std::uint8_t* ct_stratum;    // spp entries, in ct_order's order: each entry's time stratum
 };
 
 class SampleTable {
@@ -71,6 +73,8 @@ class SampleTable {
     ps.cell_offsets = &cell_offsets_[pi * (grid_ * grid_ + 1)];
     ps.ct_order = ct_order_.empty() ? nullptr : &ct_order_[base];
     ps.ct_offsets = ct_offsets_.empty() ? nullptr : &ct_offsets_[pi * (grid_ * grid_ * strata_ + 1)];
+    ps.ct_cell = ct_cell_.empty() ? nullptr : &ct_cell_[base];
+    ps.ct_stratum = ct_stratum_.empty() ? nullptr : &ct_stratum_[base];
     if (n_lens_ > 0) {
       ps.lens_index = &lens_index_[base];
       ps.lens_order = &lens_order_[base];
@@ -108,6 +112,7 @@ class SampleTable {
   int pow2_mask_ = -1;  // period - 1 when the period is a power of two, else -1
   int strata_ = 0;
   std::vector<std::int32_t> ct_order_, ct_offsets_;
+  std::vector<std::uint8_t> ct_cell_, ct_stratum_;
   std::vector<float> x_, y_, u_, v_, t_;
   std::vector<std::int32_t> cell_order_, cell_offsets_;
   std::vector<std::uint8_t> cell_idx_;

@@ -414,6 +414,9 @@ class Tile final : public Traversal {
         if (p.halfspace_H5 && h5_.sub[k].usable && !cells.none()) h5_cull(k, x0, x1, y0, y1, ti, cells, h5_culled);
         n_cells[k] = cells.list(list, G);
         total_cells += n_cells[k];
+        std::uint8_t* sel = &cell_sel_[static_cast<std::size_t>(k) * 256];  // the listed cells, for the pixels
+        std::fill_n(sel, G * G, std::uint8_t{0});
+        for (int q = 0; q < n_cells[k]; ++q) sel[list[q]] = 1;
         // Time strata of the table index that overlap t̂_k: samples outside are never touched.
         const D slo = D(ti.tlo[k]) * D(NT), shi = D(ti.thi[k]) * D(NT);
         charge<A>(c_[Counter::ops_tile], cost::kTimeStrata);
@@ -446,12 +449,17 @@ class Tile final : public Traversal {
             const std::uint64_t per = cost::kSampleTime + (lens ? sx.n_cmp + sy.n_cmp : 0) +
                                       (cu ? cost::kSampleClipAxis : 0) + (cv ? cost::kSampleClipAxis : 0);
             const int* list = &cell_lists_[static_cast<std::size_t>(k) * 256];
+            const std::uint8_t* sel = &cell_sel_[static_cast<std::size_t>(k) * 256];
             int checked = 0;
             const int j0 = strata_lo_[k], j1 = strata_hi_[k];
-            for (int q = 0; q < n_cells[k]; ++q)
-              for (int j = j0; j <= j1; ++j) {
-              const int b = list[q] * NT + j;
-              for (int idx = ps.ct_offsets[b]; idx < ps.ct_offsets[b + 1]; ++idx) {
+            // The samples of the buckets (listed cell, stratum j0..j1), in bucket order: the table
+            // lists them by (cell, stratum), so they are the entries of the span from the first such
+            // bucket to the last whose cell is listed and whose stratum is in range.
+            if (n_cells[k] > 0 && j0 <= j1) {
+              const int lo = ps.ct_offsets[list[0] * NT + j0], hi = ps.ct_offsets[list[n_cells[k] - 1] * NT + j1 + 1];
+              for (int idx = lo; idx < hi; ++idx) {
+                const int j = ps.ct_stratum[idx];
+                if (!sel[ps.ct_cell[idx]] || j < j0 || j > j1) continue;
                 const int smp = ps.ct_order[idx];
                 ++checked;
                 const F t(ps.t[smp]);
@@ -542,6 +550,7 @@ class Tile final : public Traversal {
   iv::TileIntervals ti_;
   int strata_lo_[iv::kMaxSplits], strata_hi_[iv::kMaxSplits];
   std::vector<int> cell_lists_ = std::vector<int>(256 * iv::kMaxSplits);
+  std::vector<std::uint8_t> cell_sel_ = std::vector<std::uint8_t>(256 * iv::kMaxSplits);  // 1: a listed cell
   const Footprint fp_dummy_{};  // in_exact_region reads no footprint for moving triangles
 };
 
