@@ -9,6 +9,9 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
+#if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512VL__)
+#include <immintrin.h>
+#endif
 
 #include "tiletest/halfspace_lens.h"
 
@@ -77,5 +80,78 @@ inline int compact_flags(const std::uint8_t* flags, int n, int* out) {
   }
   return m;
 }
+
+// A moving triangle's region of one pixel and one time sub-interval, in the bounds its fast path
+// compares against (floats: the scalar loop's F(...) conversions).
+struct MotionRegion {
+  const std::uint8_t* cell_sel = nullptr;  // 1 for a listed lens cell (G * G entries, readable 3 past)
+  int j0 = 0, j1 = -1;                     // the time strata of the sub-interval that its t̂ overlaps
+  float t_lo = 0, t_hi = 0;                // t̂
+  bool lens = false;                       // compare u, v against the axis sets
+  const AxisSet* su = nullptr;
+  const AxisSet* sv = nullptr;
+  bool cu = false, cv = false;             // the clipped lens axes
+  float u_lo = 0, u_hi = 0, v_lo = 0, v_hi = 0;
+};
+
+#if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512VL__)
+inline constexpr bool kMotionSelectVector = true;
+// The entries [lo, hi) of a pixel's (cell, stratum) order (PixelSamples::ct_order, ct_cell,
+// ct_stratum) whose cell is listed and stratum in [j0, j1], 16 at a time: returns how many (the
+// samples compared); appends the ones inside t̂, outside the lens cuts and inside the clipped axes to
+// out[n..], in order. The same float comparisons as the scalar loop of Tile::raster_motion.
+inline int select_motion(const std::int32_t* __restrict order, const std::uint8_t* __restrict cell,
+                         const std::uint8_t* __restrict stratum, const float* __restrict t,
+                         const float* __restrict u, const float* __restrict v, int lo, int hi,
+                         const MotionRegion& r, int* __restrict out, int& n) {
+  int checked = 0;
+  const __m512i vj0 = _mm512_set1_epi32(r.j0), vj1 = _mm512_set1_epi32(r.j1), byte = _mm512_set1_epi32(0xFF);
+  const __m512 tlo = _mm512_set1_ps(r.t_lo), thi = _mm512_set1_ps(r.t_hi);
+  const __m512 a0 = _mm512_set1_ps(r.lens ? r.su->fl_lo[0] : 0.f), b0 = _mm512_set1_ps(r.lens ? r.su->fl_hi[0] : 0.f);
+  const __m512 a1 = _mm512_set1_ps(r.lens ? r.su->fl_lo[1] : 0.f), b1 = _mm512_set1_ps(r.lens ? r.su->fl_hi[1] : 0.f);
+  const __m512 c0 = _mm512_set1_ps(r.lens ? r.sv->fl_lo[0] : 0.f), d0 = _mm512_set1_ps(r.lens ? r.sv->fl_hi[0] : 0.f);
+  const __m512 c1 = _mm512_set1_ps(r.lens ? r.sv->fl_lo[1] : 0.f), d1 = _mm512_set1_ps(r.lens ? r.sv->fl_hi[1] : 0.f);
+  const __m512 ulo = _mm512_set1_ps(r.u_lo), uhi = _mm512_set1_ps(r.u_hi), vlo = _mm512_set1_ps(r.v_lo),
+               vhi = _mm512_set1_ps(r.v_hi);
+  const bool need_u = r.lens || r.cu, need_v = r.lens || r.cv;
+  for (int idx = lo; idx < hi; idx += 16) {
+    const int left = hi - idx;
+    const __mmask16 m0 = left >= 16 ? __mmask16(0xFFFF) : static_cast<__mmask16>((1u << left) - 1u);
+    const __m512i ce = _mm512_cvtepu8_epi32(_mm_maskz_loadu_epi8(m0, cell + idx));
+    const __m512i st = _mm512_cvtepu8_epi32(_mm_maskz_loadu_epi8(m0, stratum + idx));
+    const __m512i listed = _mm512_mask_i32gather_epi32(_mm512_setzero_si512(), m0, ce, r.cell_sel, 1);
+    __mmask16 m = _mm512_mask_test_epi32_mask(m0, listed, byte);
+    m &= _mm512_cmpge_epi32_mask(st, vj0) & _mm512_cmple_epi32_mask(st, vj1);
+    if (!m) continue;
+    checked += __builtin_popcount(m);
+    const __m512i smp = _mm512_maskz_loadu_epi32(m, order + idx);
+    const __m512 tv = _mm512_mask_i32gather_ps(_mm512_setzero_ps(), m, smp, t, 4);
+    __mmask16 pass = _mm512_mask_cmp_ps_mask(m, tv, tlo, _CMP_GE_OQ) & _mm512_cmp_ps_mask(tv, thi, _CMP_LE_OQ);
+    if (need_u) {
+      const __m512 uv = _mm512_mask_i32gather_ps(_mm512_setzero_ps(), m, smp, u, 4);
+      if (r.lens) {
+        const __mmask16 in0 = _mm512_cmp_ps_mask(uv, a0, _CMP_GT_OQ) & _mm512_cmp_ps_mask(uv, b0, _CMP_LT_OQ);
+        const __mmask16 in1 = _mm512_cmp_ps_mask(uv, a1, _CMP_GT_OQ) & _mm512_cmp_ps_mask(uv, b1, _CMP_LT_OQ);
+        pass &= static_cast<__mmask16>(~(in0 | in1));
+      }
+      if (r.cu) pass &= _mm512_cmp_ps_mask(uv, ulo, _CMP_GE_OQ) & _mm512_cmp_ps_mask(uv, uhi, _CMP_LE_OQ);
+    }
+    if (need_v) {
+      const __m512 vv = _mm512_mask_i32gather_ps(_mm512_setzero_ps(), m, smp, v, 4);
+      if (r.lens) {
+        const __mmask16 in0 = _mm512_cmp_ps_mask(vv, c0, _CMP_GT_OQ) & _mm512_cmp_ps_mask(vv, d0, _CMP_LT_OQ);
+        const __mmask16 in1 = _mm512_cmp_ps_mask(vv, c1, _CMP_GT_OQ) & _mm512_cmp_ps_mask(vv, d1, _CMP_LT_OQ);
+        pass &= static_cast<__mmask16>(~(in0 | in1));
+      }
+      if (r.cv) pass &= _mm512_cmp_ps_mask(vv, vlo, _CMP_GE_OQ) & _mm512_cmp_ps_mask(vv, vhi, _CMP_LE_OQ);
+    }
+    _mm512_mask_compressstoreu_epi32(out + n, pass, smp);
+    n += __builtin_popcount(pass);
+  }
+  return checked;
+}
+#else
+inline constexpr bool kMotionSelectVector = false;
+#endif
 
 }  // namespace rast5d::tiletest

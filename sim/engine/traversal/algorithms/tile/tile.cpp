@@ -457,6 +457,13 @@ class Tile final : public Traversal {
             // bucket to the last whose cell is listed and whose stratum is in range.
             if (n_cells[k] > 0 && j0 <= j1) {
               const int lo = ps.ct_offsets[list[0] * NT + j0], hi = ps.ct_offsets[list[n_cells[k] - 1] * NT + j1 + 1];
+              if constexpr (!A::counting && tiletest::kMotionSelectVector) {
+                tiletest::MotionRegion r;
+                r.cell_sel = sel, r.j0 = j0, r.j1 = j1, r.t_lo = tk_lo, r.t_hi = tk_hi, r.lens = lens, r.su = &sx, r.sv = &sy;
+                r.cu = cu, r.cv = cv, r.u_lo = cul, r.u_hi = cuh, r.v_lo = cvl, r.v_hi = cvh;
+                checked = tiletest::select_motion(ps.ct_order, ps.ct_cell, ps.ct_stratum, ps.t, ps.u, ps.v, lo, hi, r,
+                                                  cand_.data(), n);
+              } else
               for (int idx = lo; idx < hi; ++idx) {
                 const int j = ps.ct_stratum[idx];
                 if (!sel[ps.ct_cell[idx]] || j < j0 || j > j1) continue;
@@ -550,7 +557,7 @@ class Tile final : public Traversal {
   iv::TileIntervals ti_;
   int strata_lo_[iv::kMaxSplits], strata_hi_[iv::kMaxSplits];
   std::vector<int> cell_lists_ = std::vector<int>(256 * iv::kMaxSplits);
-  std::vector<std::uint8_t> cell_sel_ = std::vector<std::uint8_t>(256 * iv::kMaxSplits);  // 1: a listed cell
+  std::vector<std::uint8_t> cell_sel_ = std::vector<std::uint8_t>(256 * iv::kMaxSplits + 4);  // 1: a listed cell
   const Footprint fp_dummy_{};  // in_exact_region reads no footprint for moving triangles
 };
 
