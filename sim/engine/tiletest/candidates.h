@@ -152,6 +152,10 @@ inline int select_motion(const std::int32_t* __restrict order, const std::uint8_
 }
 #else
 inline constexpr bool kMotionSelectVector = false;
+// Defined where AVX-512 is compiled in; a caller tests kMotionSelectVector first (if constexpr), so
+// without it the call is discarded and never made.
+int select_motion(const std::int32_t* order, const std::uint8_t* cell, const std::uint8_t* stratum, const float* t,
+                  const float* u, const float* v, int lo, int hi, const MotionRegion& r, int* out, int& n);
 #endif
 
 }  // namespace rast5d::tiletest
