@@ -96,6 +96,25 @@ struct MotionRegion {
 
 #if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512VL__)
 inline constexpr bool kMotionSelectVector = true;
+
+// The lanes of m whose lens coordinate (gathered from src at smp) passes one axis: outside both cuts
+// of `cuts` (axis_pass's fast form) when `lens`, and inside [lo, hi] when the axis is clipped.
+inline __mmask16 motion_axis_pass(__mmask16 m, __m512i smp, const float* src, bool lens, const AxisSet* cuts,
+                                  bool clipped, float lo, float hi) {
+  const __m512 x = _mm512_mask_i32gather_ps(_mm512_setzero_ps(), m, smp, src, 4);
+  __mmask16 pass = m;
+  if (lens) {
+    const __mmask16 in0 = _mm512_cmp_ps_mask(x, _mm512_set1_ps(cuts->fl_lo[0]), _CMP_GT_OQ) &
+                          _mm512_cmp_ps_mask(x, _mm512_set1_ps(cuts->fl_hi[0]), _CMP_LT_OQ);
+    const __mmask16 in1 = _mm512_cmp_ps_mask(x, _mm512_set1_ps(cuts->fl_lo[1]), _CMP_GT_OQ) &
+                          _mm512_cmp_ps_mask(x, _mm512_set1_ps(cuts->fl_hi[1]), _CMP_LT_OQ);
+    pass &= static_cast<__mmask16>(~(in0 | in1));
+  }
+  if (clipped)
+    pass &= _mm512_cmp_ps_mask(x, _mm512_set1_ps(lo), _CMP_GE_OQ) & _mm512_cmp_ps_mask(x, _mm512_set1_ps(hi), _CMP_LE_OQ);
+  return pass;
+}
+
 // The entries [lo, hi) of a pixel's (cell, stratum) order (PixelSamples::ct_order, ct_cell,
 // ct_stratum) whose cell is listed and stratum in [j0, j1], 16 at a time: returns how many (the
 // samples compared); appends the ones inside t̂, outside the lens cuts and inside the clipped axes to
@@ -107,13 +126,6 @@ inline int select_motion(const std::int32_t* __restrict order, const std::uint8_
   int checked = 0;
   const __m512i vj0 = _mm512_set1_epi32(r.j0), vj1 = _mm512_set1_epi32(r.j1), byte = _mm512_set1_epi32(0xFF);
   const __m512 tlo = _mm512_set1_ps(r.t_lo), thi = _mm512_set1_ps(r.t_hi);
-  const __m512 a0 = _mm512_set1_ps(r.lens ? r.su->fl_lo[0] : 0.f), b0 = _mm512_set1_ps(r.lens ? r.su->fl_hi[0] : 0.f);
-  const __m512 a1 = _mm512_set1_ps(r.lens ? r.su->fl_lo[1] : 0.f), b1 = _mm512_set1_ps(r.lens ? r.su->fl_hi[1] : 0.f);
-  const __m512 c0 = _mm512_set1_ps(r.lens ? r.sv->fl_lo[0] : 0.f), d0 = _mm512_set1_ps(r.lens ? r.sv->fl_hi[0] : 0.f);
-  const __m512 c1 = _mm512_set1_ps(r.lens ? r.sv->fl_lo[1] : 0.f), d1 = _mm512_set1_ps(r.lens ? r.sv->fl_hi[1] : 0.f);
-  const __m512 ulo = _mm512_set1_ps(r.u_lo), uhi = _mm512_set1_ps(r.u_hi), vlo = _mm512_set1_ps(r.v_lo),
-               vhi = _mm512_set1_ps(r.v_hi);
-  const bool need_u = r.lens || r.cu, need_v = r.lens || r.cv;
   for (int idx = lo; idx < hi; idx += 16) {
     const int left = hi - idx;
     const __mmask16 m0 = left >= 16 ? __mmask16(0xFFFF) : static_cast<__mmask16>((1u << left) - 1u);
@@ -127,24 +139,8 @@ inline int select_motion(const std::int32_t* __restrict order, const std::uint8_
     const __m512i smp = _mm512_maskz_loadu_epi32(m, order + idx);
     const __m512 tv = _mm512_mask_i32gather_ps(_mm512_setzero_ps(), m, smp, t, 4);
     __mmask16 pass = _mm512_mask_cmp_ps_mask(m, tv, tlo, _CMP_GE_OQ) & _mm512_cmp_ps_mask(tv, thi, _CMP_LE_OQ);
-    if (need_u) {
-      const __m512 uv = _mm512_mask_i32gather_ps(_mm512_setzero_ps(), m, smp, u, 4);
-      if (r.lens) {
-        const __mmask16 in0 = _mm512_cmp_ps_mask(uv, a0, _CMP_GT_OQ) & _mm512_cmp_ps_mask(uv, b0, _CMP_LT_OQ);
-        const __mmask16 in1 = _mm512_cmp_ps_mask(uv, a1, _CMP_GT_OQ) & _mm512_cmp_ps_mask(uv, b1, _CMP_LT_OQ);
-        pass &= static_cast<__mmask16>(~(in0 | in1));
-      }
-      if (r.cu) pass &= _mm512_cmp_ps_mask(uv, ulo, _CMP_GE_OQ) & _mm512_cmp_ps_mask(uv, uhi, _CMP_LE_OQ);
-    }
-    if (need_v) {
-      const __m512 vv = _mm512_mask_i32gather_ps(_mm512_setzero_ps(), m, smp, v, 4);
-      if (r.lens) {
-        const __mmask16 in0 = _mm512_cmp_ps_mask(vv, c0, _CMP_GT_OQ) & _mm512_cmp_ps_mask(vv, d0, _CMP_LT_OQ);
-        const __mmask16 in1 = _mm512_cmp_ps_mask(vv, c1, _CMP_GT_OQ) & _mm512_cmp_ps_mask(vv, d1, _CMP_LT_OQ);
-        pass &= static_cast<__mmask16>(~(in0 | in1));
-      }
-      if (r.cv) pass &= _mm512_cmp_ps_mask(vv, vlo, _CMP_GE_OQ) & _mm512_cmp_ps_mask(vv, vhi, _CMP_LE_OQ);
-    }
+    if (r.lens || r.cu) pass &= motion_axis_pass(m, smp, u, r.lens, r.su, r.cu, r.u_lo, r.u_hi);
+    if (r.lens || r.cv) pass &= motion_axis_pass(m, smp, v, r.lens, r.sv, r.cv, r.v_lo, r.v_hi);
     _mm512_mask_compressstoreu_epi32(out + n, pass, smp);
     n += __builtin_popcount(pass);
   }
