@@ -391,6 +391,39 @@ def test_retime_point_is_timing_estimate_on_one_stored_render(tmp_path, store):
         xc.load_config(write(tmp_path, "bad.yaml", BASE + "point: {hardware: {cores: 2}}\n"))
 
 
+def test_retime_points_read_their_records_file_once_per_process(tmp_path, store, monkeypatch):
+    """Re-timing one render at several hardware points in one process reads its records file once (the
+    process keeps what it read while the file keeps its identity); a file rewritten since is read again,
+    and a damaged one is a StoreWarning and a render again, not the kept records."""
+    import numpy as np
+
+    from experiments.run import store as result_store
+
+    text = (BASE.replace("quad}", "quad, params: {translation_t1: [0.2, 0, 0]}}") + "point: {kind: retime}\n"
+            "sweep:\n  point.hardware: [{}, {dram: {bytes_per_clock: 4}}, {sample_test: {throughput: 1}}, "
+            "{cores: 2}]\n")
+    cfg = xc.load_config(write(tmp_path, "r.yaml", text))
+    loads = []
+    real_load = np.load
+    monkeypatch.setattr(np, "load", lambda *a, **k: loads.append(a[0].name) or real_load(*a, **k))
+    first = runner.run_sweep(cfg, workers=0, progress=False)
+    assert (first["status"] == "ok").all(), first["error"].tolist()
+    assert loads == []  # the render that stored them handed its records on
+    result_store._RECORDS.clear()
+    again = runner.run_sweep(cfg, workers=0, progress=False, force=True)
+    (records,) = list((store / "records").glob("*.npz"))
+    assert again["timing.cycles"].tolist() == first["timing.cycles"].tolist()
+    assert loads == [str(records)]  # four points re-timed, one read
+    h = records.name.split("-")[0]
+    for _ in range(3):
+        assert result_store.cached_records(h) is not None
+    assert len(loads) == 1
+    records.write_bytes(records.read_bytes()[:-100])  # damaged: another size, read again and refused
+    with pytest.warns(result_store.StoreWarning, match="unreadable"):
+        assert result_store.cached_records(h) is None
+    assert len(loads) == 2
+
+
 def test_retime_of_a_render_time_key_renders_that_hardware(tmp_path, store):
     """A retime variant of a cache size (a render-time key: sim.timing.split_hardware) is its own render:
     its row equals a render with that cache, not the re-timed records of the default cache (which kept

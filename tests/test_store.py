@@ -305,6 +305,28 @@ def test_a_row_is_stored_with_the_column_types_of_its_dataframe_and_read_back_as
         assert type(read[k]) is type(expect[k]) and (read[k] == expect[k] or (read[k] is None and expect[k] is None)), k
 
 
+def test_the_row_checksum_is_json_of_each_column_as_documented(tmp_path, store):
+    """A point file's checksum (its Parquet metadata) is sha256 over json.dumps([name, type, values],
+    default=repr) column after column, computed here with json itself: every value kind a row holds
+    (floats with their infinities, NaN stored as missing, ints past 2**53, text with quotes and
+    non-ASCII, numpy scalars) gives the bytes json gives, so stores written before keep their checksums."""
+    import hashlib
+
+    import pyarrow.parquet as pq
+
+    row = {"config_hash": "00ff", "status": "ok", "x": 0.1, "big": 2 ** 62 + 1, "neg": -3, "tiny": 5e-324,
+           "inf": float("inf"), "ninf": -float("inf"), "nan": float("nan"), "flag": False, "none": None,
+           "text": 'quote " back \\ tab\t \u00e9 \u2207 \U0001F600', "f32": np.float32(1.1), "n64": np.int64(-9),
+           "b": np.bool_(True), "exp": 1e300}
+    path = tmp_path / "p.parquet"
+    result_store.write_point_file(dict(row), path)
+    table = pq.ParquetFile(path).read()
+    h = hashlib.sha256()
+    for name, col in zip(table.column_names, table.columns):
+        h.update(json.dumps([name, str(col.type), col.to_pylist()], default=repr).encode())
+    assert table.schema.metadata[b"rast5d.sha256"].decode() == h.hexdigest()
+
+
 def test_a_row_read_again_is_served_from_memory_until_its_file_is_replaced(tmp_path, store, monkeypatch):
     h = "00aa11bb22cc33dd"
     result_store.store_point({"config_hash": h, "status": "ok", "x": 1.0})

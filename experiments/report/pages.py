@@ -192,6 +192,16 @@ def _with_keys(df, config):
     return df
 
 
+def _once(memo: dict, key, make):
+    """A function returning make()'s value, made on its first call and kept in memo[key]."""
+    def get():
+        if key not in memo:
+            memo[key] = make()
+        return memo[key]
+
+    return get
+
+
 def fill_prose(lines: list[str], names: list[str]) -> tuple[list[str], int]:
     """The page's lines with each section's summary and text filled from the page's data: a section's own
     rows (derived columns included), the other sections of the page by config name, the section's named
@@ -200,6 +210,7 @@ def fill_prose(lines: list[str], names: list[str]) -> tuple[list[str], int]:
     from .prose import ProseError, Sources, fill
 
     frames = {n: _with_keys(ok_rows(PROSE_DATA[n][2]), PROSE_DATA[n][0]) for n in names if n in PROSE_DATA}
+    memo: dict = {}  # a named value table is computed once per section, however often its prose quotes it
     out, errors = [], 0
     for line in lines:
         if not line.startswith("\x00prose:"):
@@ -208,7 +219,8 @@ def fill_prose(lines: list[str], names: list[str]) -> tuple[list[str], int]:
         name, part = line.strip("\x00").split(":")[1:3]
         config, df, dfd = PROSE_DATA[name]
         template = (config.outputs.summary if part == "summary" else config.outputs.text or "").strip()
-        values = {k: (lambda fn=fn: fn(ok_rows(dfd), config)) for k, fn in VALUES.items()}
+        values = {k: _once(memo, (name, k), lambda fn=fn, dfd=dfd, config=config: fn(ok_rows(dfd), config))
+                  for k, fn in VALUES.items()}
         sources = Sources(frames.get(name, _with_keys(ok_rows(dfd), config)), {n: f for n, f in frames.items() if n != name},
                           values)
         try:

@@ -317,32 +317,76 @@ _CHECKSUM_KEY = b"rast5d.sha256"
 
 def _table_digest(table, values: list | None = None) -> str:
     """sha256 of a pyarrow table's column names, types and values (not of its file bytes: the same
-    row read back gives the same digest). ``values``: the columns' to_pylist(), when already made."""
+    row read back gives the same digest). ``values``: the columns' to_pylist(), when already made.
+    The hashed text is, column after column, json.dumps([name, str(type), values], default=repr);
+    _json_value writes the common values as json does, without a call into json per column."""
     import hashlib
     import json
 
-    h = hashlib.sha256()
-    for i, (name, col) in enumerate(zip(table.column_names, table.columns)):
-        h.update(json.dumps([name, str(col.type), col.to_pylist() if values is None else values[i]],
-                            default=repr).encode())
-    return h.hexdigest()
+    encode = json.JSONEncoder(default=repr).encode
+    types = [encode(str(t)) for t in table.schema.types]
+    if values is None:
+        values = [col.to_pylist() for col in table.columns]
+    text = "".join(f"[{encode(name)}, {types[i]}, [{', '.join(_json_value(v, encode) for v in values[i])}]]"
+                   for i, name in enumerate(table.column_names))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _json_value(v, encode) -> str:
+    """json.dumps(v, default=repr) for one value."""
+    t = type(v)
+    if v is None:
+        return "null"
+    if t is bool:
+        return "true" if v else "false"
+    if t is int:
+        return int.__repr__(v)
+    if t is float:
+        if v != v:
+            return "NaN"
+        if v in (math.inf, -math.inf):
+            return "Infinity" if v > 0 else "-Infinity"
+        return float.__repr__(v)
+    return encode(v)
 
 
 def row_table(row: dict):
     """The one-row pyarrow table of a result row, with the column types that pandas gives it
     (to_frame([row]) through pyarrow: float64, int64, bool, string, null for a missing value; NaN is
-    stored as missing), built column by column without a DataFrame (a row has hundreds of columns)."""
+    stored as missing), built without a DataFrame (a row has hundreds of columns); None for a row
+    with a value of another type (it takes the DataFrame path)."""
+    made = _row_columns(row)
+    return None if made is None else made[0]
+
+
+def _row_columns(row: dict):
+    """(row_table(row), its columns' to_pylist()) or None. The Python values of one type share one
+    arrow array, sliced per column (one array per value costs ten times as long); a numpy scalar
+    keeps its own array (its dtype: float32 stays float32)."""
     import pyarrow as pa
 
-    names, arrays = [], []
+    names, arrays, values, groups = [], [], [], {}
     for k, v in row.items():
         if isinstance(v, float) and math.isnan(v):
             v = None
-        if v is not None and not isinstance(v, (bool, int, float, str, np_scalar_types())):
-            return None  # anything else takes the DataFrame path
+        t = type(v)
+        if v is not None and t not in (bool, int, float, str):
+            if not isinstance(v, np_scalar_types()):
+                return None
+            arrays.append(pa.array([v]))
+            v = v.item()
+        else:
+            arrays.append(None)
+            if v is not None:
+                groups.setdefault(t, []).append(len(names))
         names.append(k)
-        arrays.append(pa.array([v], type=_text_type()) if isinstance(v, str) else pa.array([v]))
-    return pa.Table.from_arrays(arrays, names=names)
+        values.append([v])
+    for t, where in groups.items():
+        shared = pa.array([values[i][0] for i in where], type=_text_type() if t is str else None)
+        for j, i in enumerate(where):
+            arrays[i] = shared.slice(j, 1)
+    arrays = [pa.nulls(1) if a is None else a for a in arrays]
+    return pa.Table.from_arrays(arrays, names=names), values
 
 
 _TEXT_TYPE = []
@@ -371,18 +415,21 @@ def write_point_file(df, path: Path, keep=None) -> bool:
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    table = row_table(df) if isinstance(df, dict) else None
-    if table is None:
+    made = _row_columns(df) if isinstance(df, dict) else None
+    if made is None:
         table = pa.Table.from_pandas(to_frame([df]) if isinstance(df, dict) else df, preserve_index=False)
+        values = [col.to_pylist() for col in table.columns]
+    else:
+        table, values = made
     meta = dict(table.schema.metadata or {})
-    meta[_CHECKSUM_KEY] = _table_digest(table).encode()
+    meta[_CHECKSUM_KEY] = _table_digest(table, values).encode()
     table = table.replace_schema_metadata(meta)
     # One row of a few hundred columns: no compression and no dictionary pages write it in about half
     # the time (the column chunks are a few bytes each; the file is as small).
     installed = atomic_write(path, lambda tmp: pq.write_table(table, tmp, write_page_checksum=True, compression="none",
                                                               use_dictionary=False), keep=keep)
     if installed:
-        _remember(path, _table_row(table, [col.to_pylist() for col in table.columns]))
+        _remember(path, _table_row(table, values))
     return installed
 
 
@@ -682,15 +729,35 @@ def records_path(h: str) -> Path:
     return results_dir() / "records" / f"{h}-{engine_id()}.npz"
 
 
+# The timing records this process stored or read last, by file (a retime sweep re-times one render's
+# records at many hardware points: each worker reads the file once, not once per point), while their
+# file keeps its identity (mtime, size, inode), within _RECORDS_BUDGET bytes, least recently used out.
+_RECORDS: dict = {}
+_RECORDS_BUDGET = 256 * 2 ** 20
+
+
+def _remember_records(path: Path, records, stats: dict) -> None:
+    try:
+        st = os.stat(path)
+    except OSError:
+        return
+    records.setflags(write=False)  # shared by every point that re-times them
+    _RECORDS.pop(str(path), None)
+    _RECORDS[str(path)] = ((st.st_mtime_ns, st.st_size, st.st_ino), records, stats)
+    while sum(r.nbytes for _, r, _ in _RECORDS.values()) > _RECORDS_BUDGET and len(_RECORDS) > 1:
+        del _RECORDS[next(iter(_RECORDS))]
+
+
 def store_records(h: str, records, stats: dict) -> None:
     """The timing records and flat counters of one render, for retime points."""
     import json
 
     import numpy as np
 
-    atomic_write(records_path(h),
-                 lambda tmp: np.savez(tmp, records=records, stats=np.array(json.dumps(stats, default=str))),
+    path = records_path(h)
+    atomic_write(path, lambda tmp: np.savez(tmp, records=records, stats=np.array(json.dumps(stats, default=str))),
                  suffix=".npz")
+    _remember_records(path, records, json.loads(json.dumps(stats, default=str)))
 
 
 def cached_records(h: str):
@@ -704,15 +771,23 @@ def cached_records(h: str):
     from ..config.inputs import unchanged
 
     p = records_path(h)
-    if not p.exists():
-        return None
     try:
-        with np.load(p) as f:  # an npz member carries a CRC-32, checked on read
-            records, stats = f["records"], json.loads(str(f["stats"]))
-    except Exception as e:  # noqa: BLE001 - a corrupt file is recomputed
-        warnings.warn(f"{p}: unreadable ({type(e).__name__}: {e}); the render is recomputed", StoreWarning,
-                      stacklevel=2)
+        st = os.stat(p)
+    except OSError:
         return None
+    kept = _RECORDS.get(str(p))
+    if kept is not None and kept[0] == (st.st_mtime_ns, st.st_size, st.st_ino):
+        _RECORDS[str(p)] = _RECORDS.pop(str(p))  # most recently used
+        records, stats = kept[1], kept[2]
+    else:
+        try:
+            with open(p, "rb") as fh, np.load(fh) as f:  # an npz member carries a CRC-32, checked on read
+                records, stats = f["records"], json.loads(str(f["stats"]))
+        except Exception as e:  # noqa: BLE001 - a corrupt file is recomputed
+            warnings.warn(f"{p}: unreadable ({type(e).__name__}: {e}); the render is recomputed", StoreWarning,
+                          stacklevel=2)
+            return None
+        _remember_records(p, records, stats)
     files = stats.get("inputs.files")
     if isinstance(files, str) and files and unchanged(json.loads(files)) is not None:
         return None
