@@ -607,6 +607,42 @@ def test_report_pool_computes_each_point_once_and_writes_the_pages_of_the_sequen
     assert pages_out[2] == pages_out[0]
 
 
+def test_report_writes_a_section_as_soon_as_its_points_are_in(monkeypatch):
+    """The report writes the section of the first config whose pooled points are all stored, not the
+    first in config order (the pool runs the largest points first); once the pool has ended, the next
+    in order (its sweep computes what is left)."""
+    import threading
+
+    from experiments.run import schedule
+
+    run = schedule.PoolRun({}, [], {}, {"a1", "a2", "b1"}, 2, False, 0)
+    run.by_config = {"A": {"a1", "a2"}, "B": {"b1"}, "C": set()}
+    gate = threading.Event()
+    run._thread = threading.Thread(target=gate.wait)
+    run._thread.start()
+    try:
+        assert run.wait_ready(["A", "B", "C"]) == 2  # C has nothing pooled
+        order = []
+
+        def store(h):
+            with run._stored:
+                run.claimed.discard(h)
+                run._stored.notify_all()
+
+        waiter = threading.Thread(target=lambda: order.append(run.wait_ready(["A", "B"])))
+        waiter.start()
+        store("a1")
+        waiter.join(0.3)
+        assert waiter.is_alive()  # A still waits for a2, B for b1
+        store("b1")
+        waiter.join(5)
+        assert order == [1]
+    finally:
+        gate.set()
+        run._thread.join()
+    assert run.wait_ready(["A"]) == 0  # the pool ended with a2 unstored: A's sweep computes it
+
+
 def test_rast5d_run_writes_the_config_page(tmp_path, store):
     p = write(tmp_path, "tiny.yaml", PAGE)
     r = subprocess.run([sys.executable, "-m", "experiments.cli", "run", str(p), "--workers", "0",

@@ -18,6 +18,7 @@ import json
 import os
 import resource
 import shutil
+import subprocess
 import sys
 import tempfile
 import threading
@@ -149,6 +150,32 @@ def _load_sampler(samples: list, stop: threading.Event, every: float = 10.0):
         samples.append(os.getloadavg()[0])
 
 
+_PROBE = """
+import time, models, sim
+scene = models.named("bunny")
+cam = sim.Camera.for_scene(scene, width=512, height=512, coc_px=10)
+table = sim.SampleTable.create("stratified", spp=64, seed=1)
+pipe = sim.PipelineConfig(algorithm="tile", threads=1)
+best = []
+for _ in range(5):
+    c0 = time.process_time()
+    sim.render(scene, cam, table, pipe, timing=False)
+    best.append(time.process_time() - c0)
+print(min(best))
+"""
+
+
+def machine_probe() -> float | None:
+    """CPU seconds of one fixed render (the bunny, 512x512, CoC 10, 64 spp, `tile`, one thread, timing
+    off; the least of five) in a fresh process: the machine's speed at the time, so that runs made
+    at different times (a shared machine's speed varies) can be compared."""
+    r = subprocess.run([sys.executable, "-c", _PROBE], capture_output=True, text=True)
+    try:
+        return float(r.stdout.strip().splitlines()[-1])
+    except (ValueError, IndexError):
+        return None
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--workers", type=int, default=2)
@@ -174,6 +201,7 @@ def main(argv=None) -> int:
     stop = threading.Event()
     sampler = threading.Thread(target=_load_sampler, args=(loads, stop), daemon=True)
     sampler.start()
+    probe = [machine_probe()]
     c0 = _cpu(resource.RUSAGE_SELF) + _cpu(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     started = time.strftime("%Y-%m-%d %H:%M:%S")
@@ -181,12 +209,13 @@ def main(argv=None) -> int:
     wall = time.perf_counter() - t0
     cpu = _cpu(resource.RUSAGE_SELF) + _cpu(resource.RUSAGE_CHILDREN) - c0
     stop.set()
+    probe.append(machine_probe())
     loads.append(os.getloadavg()[0])
     jobs = [json.loads(line) for line in point_log.read_text().splitlines()] if point_log.exists() else []
     if args.json:
         Path(args.json).write_text(json.dumps({"configs": log, "jobs": jobs, "cpu": cpu, "wall": wall,
-                                               "loads": loads, "rc": rc}, indent=1))
-    lines = _page(log, jobs, cpu, wall, loads, args, started, rc)
+                                               "loads": loads, "rc": rc, "probe": probe}, indent=1))
+    lines = _page(log, jobs, cpu, wall, loads, args, started, rc, probe)
     if args.compare:
         lines += compare(json.loads(Path(args.compare).read_text()), {"configs": log, "jobs": jobs, "cpu": cpu})
     from experiments.bench import write_page
@@ -200,7 +229,7 @@ def main(argv=None) -> int:
     return rc
 
 
-def _page(log, jobs, cpu, wall, loads, args, started, rc) -> list[str]:
+def _page(log, jobs, cpu, wall, loads, args, started, rc, probe=(None, None)) -> list[str]:
     from experiments.report.tables import md_table
 
     n = args.workers
@@ -272,7 +301,11 @@ def _page(log, jobs, cpu, wall, loads, args, started, rc) -> list[str]:
                                         f"`{longest['name']}`)" if longest else ""),
            f"- real wall: {wall:.0f} s ({wall / 60:.1f} min) at load average {min(loads):.1f}-{max(loads):.1f} "
            f"(mean {sum(loads) / len(loads):.1f}; 1-minute load sampled every 10 s, machine has "
-           f"{os.cpu_count()} cores); exit code {rc}", "",
+           f"{os.cpu_count()} cores); exit code {rc}",
+           "- the machine's speed (machine_probe: CPU of one fixed render, the bunny at 512x512, CoC 10, 64 spp, "
+           "`tile`, one thread, timing off, the least of five): "
+           + " before the run, ".join(f"{p:.3f} s" if p is not None else "not measured" for p in probe)
+           + " after it", "",
            "Per config, in the order the report runs them. *points CPU*: CPU seconds of the points this "
            "config computed (a point shared with an earlier config is computed once, by the first); "
            "*references*: CPU seconds of the reference images rendered for its image metrics (count); "

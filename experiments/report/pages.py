@@ -392,7 +392,7 @@ def _main(only, workers, scheduler, force, quick, configs_dir, reports_dir, retr
     t_all = time.perf_counter()
 
     source = _source
-    # One pool over every config's missing points, largest first (experiments/run/schedule.py), in a
+    # One pool over every config's missing points, costliest config first (experiments/run/schedule.py), in a
     # thread: the sweeps below wait for their points' rows (the pool holds their store locks) and each
     # page section is written as soon as its rows are in, while the pool works on. Dask-run configs and
     # workers=0 (in-process) skip it.
@@ -442,8 +442,14 @@ def _main(only, workers, scheduler, force, quick, configs_dir, reports_dir, retr
 
 def _sweeps_and_sections(loaded, pool, chosen, sections, counts, out_root, quick, workers, scheduler, force,
                          retry_failed, keep_records, source, pictures=None):
-    """Each config's sweep (from the store, or waiting for the pool's rows) and its page section."""
-    for p, config, overrides, lines in loaded:
+    """Each config's sweep (from the store, or waiting for the pool's rows) and its page section, in the
+    order the pool finishes the configs' points (the pool runs the largest points first; a section
+    written as soon as its rows are in keeps this process busy while the pool works on, instead of
+    leaving every section to the end). Sections are placed on their pages by outputs.order."""
+    remaining = list(loaded)
+    while remaining:
+        i = pool.wait_ready([c.name for _, c, _, _ in remaining]) if pool is not None else 0
+        p, config, overrides, lines = remaining.pop(i)
         t0 = time.perf_counter()
         pooled = pool is not None and config.executor.kind != "dask"
         df = run_sweep(config, source=source(p), workers=workers, scheduler=scheduler,

@@ -1,20 +1,22 @@
 """One local process pool over the points of many sweeps (``rast5d report``): every missing point of
 every config, each distinct point once (points shared between configs hash alike), and the reference
-images their image metrics need, run largest first, so that no core idles at the tail of each sweep
-while the next waits. Rows go to the result store as they finish; the sweeps then read them from it
-(run_sweep), so pages and tables are built exactly as without this pass.
+images their image metrics need. Rows go to the result store as they finish; the sweeps then read them
+from it (run_sweep), so pages and tables are built exactly as without this pass.
 
-Order: reference images first (their points wait for them), then points by an estimate of their work
-(pixels x samples per pixel x the blur and the algorithm's weight; estimate_cost). Only the order
-depends on the estimate, never a result. Retime points run after the render whose records they re-time
-(kept for them: ``keep_records``). A pool broken by a crashing point stops this pass; the sweeps then
-compute what is left, isolating the crash as they do.
+Order: reference images first (their points wait for them); then config after config, the costliest
+first, and each config's largest points first, by an estimate of their work (pixels x samples per pixel
+x the blur and the algorithm's weight; estimate_cost). Configs complete one after the other while their
+sections are written (PoolRun.wait_ready), and the small points of the lightest configs fill the end,
+so no core idles there. Only the order depends on the estimate, never a result. Retime points run after
+the render whose records they re-time (kept for them: ``keep_records``). A pool broken by a crashing
+point stops this pass; the sweeps then compute what is left, isolating the crash as they do.
 """
 from __future__ import annotations
 
 import functools
 import heapq
 import itertools
+import threading
 
 import sim
 
@@ -31,7 +33,7 @@ _ALGORITHM_WEIGHT = {"bruteforce": 2.0, "interleave": 3.0, "hinterleave": 3.0, "
 
 
 def estimate_cost(config: RenderConfig, spp: int | None = None) -> float:
-    """A rough, relative estimate of a point's CPU time, for ordering the pool (largest first)."""
+    """A rough, relative estimate of a point's CPU time, for ordering the pool."""
     cam, params = config.camera, (config.scene.params or {})
     w = cam.width or params.get("width") or 640
     h = cam.height or params.get("height") or round(w * 9 / 16)
@@ -71,7 +73,8 @@ def pool_label(configs, width: int = 40) -> str:
 def run_all(sweeps, *, workers: int, keep_records=frozenset(), force=frozenset(), retry_failed: bool = False,
             progress: bool = True, background: bool = False, pictures: dict | None = None) -> "PoolRun":
     """Compute every missing point of ``sweeps`` [(config, source, lines)] on one pool of ``workers``
-    processes, largest first; configs named in ``force`` are recomputed. Every job's point is claimed
+    processes, config after config (the costliest first, its largest points first; see PoolRun._push);
+    configs named in ``force`` are recomputed. Every job's point is claimed
     (locked in the store) before this returns, so a sweep run meanwhile waits for its rows instead of
     computing them. ``background``: the pool runs in a thread (PoolRun.join waits for it).
     ``keep_records`` and ``pictures`` as for run_sweep."""
@@ -83,9 +86,17 @@ def run_all(sweeps, *, workers: int, keep_records=frozenset(), force=frozenset()
     timeouts: dict[str, float] = {}  # executor.point_timeout_s of the points whose config sets it
     rendering: set[str] = set()  # render points of this pool (their hashes)
     retimes = []
+    by_config: dict[str, set[str]] = {}  # every point of each config (a point shared by two: in both)
+    group: dict = {}  # a job's key (point hash, reference path) -> the config that listed it first
+    group_cost: dict[str, float] = {}  # the estimated cost of each config's jobs
+
+    def listed(key, name: str, cost: float) -> None:
+        group[key] = name
+        group_cost[name] = group_cost.get(name, 0.0) + cost
     for config, source, lines in sweeps:
         img_dir = store_images_dir(config.name) if config.outputs.images else None
         for _, cfg, h in hashed_sweep(config, source, lines):
+            by_config.setdefault(config.name, set()).add(h)
             if h in seen:
                 continue
             seen.add(h)
@@ -97,9 +108,10 @@ def run_all(sweeps, *, workers: int, keep_records=frozenset(), force=frozenset()
             if config.executor.point_timeout_s is not None:
                 timeouts[h] = config.executor.point_timeout_s
             if config.point.kind == "retime":
-                retimes.append((h, cfg))
+                retimes.append((h, cfg, config.name))
                 continue
             job = ("point", h, point_args(h, cfg, img_dir, 1, keep_records, pictures), estimate_cost(cfg), h)
+            listed(h, config.name, job[3])
             rendering.add(h)
             if cfg.outputs.metrics is not None:
                 ref = reference_config(cfg)
@@ -108,14 +120,17 @@ def run_all(sweeps, *, workers: int, keep_records=frozenset(), force=frozenset()
                     if path not in refs:
                         refs[path] = ("reference", path, (cfg.model_dump_json(),),
                                       estimate_cost(ref, cfg.outputs.metrics.reference_spp), path)
+                        listed(path, config.name, refs[path][3])
                     waits.setdefault(path, []).append(job)
                     continue
             jobs.append(job)
     # Retime points re-time their render's stored records: after that render (a point of this pool, or
     # the first retime point of the render, which renders and stores it).
     leads: set[str] = set()
-    for h, cfg in retimes:
+    for h, cfg, name in retimes:
         rh = render_hash(cfg)
+        listed(h, name, estimate_cost(cfg) if rh not in rendering and rh not in leads
+               and not records_path(rh).exists() else 1.0)
         if rh in rendering or rh in leads:
             waits.setdefault(rh, []).append(("point", h, point_args(h, cfg, None, 1), 1.0, None))
         elif records_path(rh).exists():
@@ -125,7 +140,8 @@ def run_all(sweeps, *, workers: int, keep_records=frozenset(), force=frozenset()
             jobs.append(("point", h, point_args(h, cfg, None, 1), estimate_cost(cfg), rh))
     total = len(jobs) + len(refs) + sum(len(v) for v in waits.values())
     run = PoolRun(refs, jobs, waits, claimed, workers, progress, total, label=pool_label([c for c, _, _ in sweeps]),
-                  timeouts=timeouts)
+                  timeouts=timeouts, groups=(group, group_cost))
+    run.by_config = {name: hashes & run.hashes for name, hashes in by_config.items()}
     if background:
         run.start()
     else:
@@ -139,10 +155,13 @@ class PoolRun:
     stored; ``complete``: every job ran (after a broken pool the sweeps compute what is left)."""
 
     def __init__(self, refs, jobs, waits, claimed, workers, progress, total, label: str = "report",
-                 timeouts: dict | None = None):
+                 timeouts: dict | None = None, groups: tuple = ({}, {})):
         self.waits, self.claimed, self.workers = waits, claimed, max(1, workers)
+        self._group, self._group_cost = groups
         self.timeouts = timeouts or {}
         self.hashes = frozenset(claimed)  # the points this pool computes (the sweeps wait for their rows)
+        self.by_config: dict[str, set[str]] = {}  # of each config's points, those this pool computes
+        self._stored = threading.Condition()  # notified as the pool stores a row, and when it ends
         self.computed, self.complete, self.total = 0, True, total
         self._order = itertools.count()
         self._ready: list = []
@@ -166,19 +185,39 @@ class PoolRun:
             self._fill()  # forks the workers now, before the caller's thread does anything else
 
     def _push(self, job, first: bool = False):
-        heapq.heappush(self._ready, (0 if first else 1, -job[3], next(self._order), job))
+        # The references first; then config after config, the costliest config first, and within one
+        # its largest points first: configs complete one after the other (their sections are written
+        # while the pool works on), and the smallest points of the lightest configs fill the end.
+        name = self._group.get(job[1], "")
+        heapq.heappush(self._ready, (0 if first else 1, -self._group_cost.get(name, 0.0), name, -job[3],
+                                     next(self._order), job))
 
     def _fill(self):
         while self._ready and len(self._running) < self.workers and not self._stop:
-            job = heapq.heappop(self._ready)[3]
+            job = heapq.heappop(self._ready)[-1]
             fn = reference_job if job[0] == "reference" else run_point
             if job[0] == "point" and job[1] in self.timeouts:
                 fn = functools.partial(timed_point, self.timeouts[job[1]])
             self._running[self._pool.submit(fn, *job[2])] = job
 
-    def start(self):
-        import threading
+    def ready(self, name: str) -> bool:
+        """Every point of config ``name`` that this pool computes is stored (or the pool has ended)."""
+        return not (self.by_config.get(name, set()) & self.claimed) or not self.running()
 
+    def running(self) -> bool:
+        return self._thread is not None and self._thread.is_alive()
+
+    def wait_ready(self, names: list[str]) -> int:
+        """The index in ``names`` of the first config that is ready, waiting for the pool's rows until
+        one is (0 once the pool has ended: its sweep then computes what is left itself)."""
+        with self._stored:
+            while True:
+                for i, name in enumerate(names):
+                    if self.ready(name):
+                        return i
+                self._stored.wait(1.0)
+
+    def start(self):
         self._thread = threading.Thread(target=self.loop, name="rast5d-report-pool", daemon=True)
         self._thread.start()
 
@@ -221,7 +260,9 @@ class PoolRun:
                     if job[0] == "point" and result is not None:
                         store_point(result)
                         release(job[1])
-                        self.claimed.discard(job[1])
+                        with self._stored:
+                            self.claimed.discard(job[1])
+                            self._stored.notify_all()
                         self.computed += 1
                     if self._bar is not None:
                         self._bar.update(1)
@@ -232,7 +273,9 @@ class PoolRun:
         finally:
             if self._stop:
                 self.complete = False
-            self._release_all()
+            with self._stored:
+                self._release_all()
+                self._stored.notify_all()
             if self._bar is not None:
                 self._bar.close()
             if self._pool is not None:
