@@ -615,8 +615,8 @@ def test_report_writes_a_section_as_soon_as_its_points_are_in(monkeypatch):
 
     from experiments.run import schedule
 
-    run = schedule.PoolRun({}, [], {}, {"a1", "a2", "b1"}, 2, False, 0)
-    run.by_config = {"A": {"a1", "a2"}, "B": {"b1"}, "C": set()}
+    run = schedule.PoolRun({}, [], {}, {"a1", "a2", "b1"}, 2, False, 0,
+                           by_config={"A": {"a1", "a2"}, "B": {"b1"}, "C": {"c1"}})  # c1: stored before
     gate = threading.Event()
     run._thread = threading.Thread(target=gate.wait)
     run._thread.start()

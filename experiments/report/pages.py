@@ -10,6 +10,7 @@ Configs whose file name starts with `_` are bases for `extends:` and are not run
 """
 from __future__ import annotations
 
+import functools
 import json
 import os
 import shlex
@@ -192,16 +193,6 @@ def _with_keys(df, config):
     return df
 
 
-def _once(memo: dict, key, make):
-    """A function returning make()'s value, made on its first call and kept in memo[key]."""
-    def get():
-        if key not in memo:
-            memo[key] = make()
-        return memo[key]
-
-    return get
-
-
 def fill_prose(lines: list[str], names: list[str]) -> tuple[list[str], int]:
     """The page's lines with each section's summary and text filled from the page's data: a section's own
     rows (derived columns included), the other sections of the page by config name, the section's named
@@ -210,7 +201,7 @@ def fill_prose(lines: list[str], names: list[str]) -> tuple[list[str], int]:
     from .prose import ProseError, Sources, fill
 
     frames = {n: _with_keys(ok_rows(PROSE_DATA[n][2]), PROSE_DATA[n][0]) for n in names if n in PROSE_DATA}
-    memo: dict = {}  # a named value table is computed once per section, however often its prose quotes it
+    section_values: dict = {}  # a named value table is computed once per section, however often it is quoted
     out, errors = [], 0
     for line in lines:
         if not line.startswith("\x00prose:"):
@@ -219,8 +210,10 @@ def fill_prose(lines: list[str], names: list[str]) -> tuple[list[str], int]:
         name, part = line.strip("\x00").split(":")[1:3]
         config, df, dfd = PROSE_DATA[name]
         template = (config.outputs.summary if part == "summary" else config.outputs.text or "").strip()
-        values = {k: _once(memo, (name, k), lambda fn=fn, dfd=dfd, config=config: fn(ok_rows(dfd), config))
-                  for k, fn in VALUES.items()}
+        if name not in section_values:
+            section_values[name] = {k: functools.cache(lambda fn=fn, dfd=dfd, config=config: fn(ok_rows(dfd), config))
+                                    for k, fn in VALUES.items()}
+        values = section_values[name]
         sources = Sources(frames.get(name, _with_keys(ok_rows(dfd), config)), {n: f for n, f in frames.items() if n != name},
                           values)
         try:
@@ -443,9 +436,9 @@ def _main(only, workers, scheduler, force, quick, configs_dir, reports_dir, retr
 def _sweeps_and_sections(loaded, pool, chosen, sections, counts, out_root, quick, workers, scheduler, force,
                          retry_failed, keep_records, source, pictures=None):
     """Each config's sweep (from the store, or waiting for the pool's rows) and its page section, in the
-    order the pool finishes the configs' points (the pool runs the largest points first; a section
-    written as soon as its rows are in keeps this process busy while the pool works on, instead of
-    leaving every section to the end). Sections are placed on their pages by outputs.order."""
+    order the pool completes the configs (PoolRun.wait_ready): a section written as soon as its rows
+    are in keeps this process busy while the pool works on, instead of leaving every section to the
+    end. Sections are placed on their pages by outputs.order."""
     remaining = list(loaded)
     while remaining:
         i = pool.wait_ready([c.name for _, c, _, _ in remaining]) if pool is not None else 0

@@ -129,19 +129,20 @@ def run_all(sweeps, *, workers: int, keep_records=frozenset(), force=frozenset()
     leads: set[str] = set()
     for h, cfg, name in retimes:
         rh = render_hash(cfg)
-        listed(h, name, estimate_cost(cfg) if rh not in rendering and rh not in leads
-               and not records_path(rh).exists() else 1.0)
         if rh in rendering or rh in leads:
-            waits.setdefault(rh, []).append(("point", h, point_args(h, cfg, None, 1), 1.0, None))
+            job = ("point", h, point_args(h, cfg, None, 1), 1.0, None)
+            waits.setdefault(rh, []).append(job)
         elif records_path(rh).exists():
-            jobs.append(("point", h, point_args(h, cfg, None, 1), 1.0, None))
+            job = ("point", h, point_args(h, cfg, None, 1), 1.0, None)
+            jobs.append(job)
         else:
             leads.add(rh)
-            jobs.append(("point", h, point_args(h, cfg, None, 1), estimate_cost(cfg), rh))
+            job = ("point", h, point_args(h, cfg, None, 1), estimate_cost(cfg), rh)
+            jobs.append(job)
+        listed(h, name, job[3])
     total = len(jobs) + len(refs) + sum(len(v) for v in waits.values())
     run = PoolRun(refs, jobs, waits, claimed, workers, progress, total, label=pool_label([c for c, _, _ in sweeps]),
-                  timeouts=timeouts, groups=(group, group_cost))
-    run.by_config = {name: hashes & run.hashes for name, hashes in by_config.items()}
+                  timeouts=timeouts, groups=(group, group_cost), by_config=by_config)
     if background:
         run.start()
     else:
@@ -155,12 +156,13 @@ class PoolRun:
     stored; ``complete``: every job ran (after a broken pool the sweeps compute what is left)."""
 
     def __init__(self, refs, jobs, waits, claimed, workers, progress, total, label: str = "report",
-                 timeouts: dict | None = None, groups: tuple = ({}, {})):
+                 timeouts: dict | None = None, groups: tuple = ({}, {}), by_config: dict | None = None):
         self.waits, self.claimed, self.workers = waits, claimed, max(1, workers)
         self._group, self._group_cost = groups
         self.timeouts = timeouts or {}
         self.hashes = frozenset(claimed)  # the points this pool computes (the sweeps wait for their rows)
-        self.by_config: dict[str, set[str]] = {}  # of each config's points, those this pool computes
+        # of each config's points, those this pool computes (wait_ready)
+        self.by_config = {name: hashes & self.hashes for name, hashes in (by_config or {}).items()}
         self._stored = threading.Condition()  # notified as the pool stores a row, and when it ends
         self.computed, self.complete, self.total = 0, True, total
         self._order = itertools.count()

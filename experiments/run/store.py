@@ -350,19 +350,13 @@ def _json_value(v, encode) -> str:
     return encode(v)
 
 
-def row_table(row: dict):
-    """The one-row pyarrow table of a result row, with the column types that pandas gives it
-    (to_frame([row]) through pyarrow: float64, int64, bool, string, null for a missing value; NaN is
-    stored as missing), built without a DataFrame (a row has hundreds of columns); None for a row
-    with a value of another type (it takes the DataFrame path)."""
-    made = _row_columns(row)
-    return None if made is None else made[0]
-
-
 def _row_columns(row: dict):
-    """(row_table(row), its columns' to_pylist()) or None. The Python values of one type share one
-    arrow array, sliced per column (one array per value costs ten times as long); a numpy scalar
-    keeps its own array (its dtype: float32 stays float32)."""
+    """(the one-row pyarrow table of a result row, its columns' to_pylist()), or None for a row with a
+    value of another type (it takes the DataFrame path). The table has the column types that pandas
+    gives the row (to_frame([row]) through pyarrow: float64, int64, bool, string, null for a missing
+    value; NaN is stored as missing) without building a DataFrame (a row has hundreds of columns). The
+    Python values of one type share one arrow array, sliced per column (one array per value costs ten
+    times as long); a numpy scalar keeps its own array (its dtype: float32 stays float32)."""
     import pyarrow as pa
 
     names, arrays, values, groups = [], [], [], {}
@@ -440,11 +434,16 @@ def write_point_file(df, path: Path, keep=None) -> bool:
 _ROWS: dict = {}
 
 
+def _stat_identity(path: Path) -> tuple:
+    """(mtime, size, inode) of a file; OSError if it is not there."""
+    st = os.stat(path)
+    return st.st_mtime_ns, st.st_size, st.st_ino
+
+
 def _identity(path: Path):
     import hashlib
 
-    st = os.stat(path)
-    return st.st_mtime_ns, st.st_size, st.st_ino, hashlib.blake2b(path.read_bytes(), digest_size=16).digest()
+    return (*_stat_identity(path), hashlib.blake2b(path.read_bytes(), digest_size=16).digest())
 
 
 def _remember(path: Path, row: dict) -> None:
@@ -736,14 +735,10 @@ _RECORDS: dict = {}
 _RECORDS_BUDGET = 256 * 2 ** 20
 
 
-def _remember_records(path: Path, records, stats: dict) -> None:
-    try:
-        st = os.stat(path)
-    except OSError:
-        return
+def _remember_records(path: Path, identity: tuple, records, stats: dict) -> None:
     records.setflags(write=False)  # shared by every point that re-times them
     _RECORDS.pop(str(path), None)
-    _RECORDS[str(path)] = ((st.st_mtime_ns, st.st_size, st.st_ino), records, stats)
+    _RECORDS[str(path)] = (identity, records, stats)
     while sum(r.nbytes for _, r, _ in _RECORDS.values()) > _RECORDS_BUDGET and len(_RECORDS) > 1:
         del _RECORDS[next(iter(_RECORDS))]
 
@@ -754,10 +749,12 @@ def store_records(h: str, records, stats: dict) -> None:
 
     import numpy as np
 
-    path = records_path(h)
-    atomic_write(path, lambda tmp: np.savez(tmp, records=records, stats=np.array(json.dumps(stats, default=str))),
-                 suffix=".npz")
-    _remember_records(path, records, json.loads(json.dumps(stats, default=str)))
+    path, text = records_path(h), json.dumps(stats, default=str)
+    atomic_write(path, lambda tmp: np.savez(tmp, records=records, stats=np.array(text)), suffix=".npz")
+    try:
+        _remember_records(path, _stat_identity(path), records, json.loads(text))  # as a reader gets them
+    except OSError:
+        pass
 
 
 def cached_records(h: str):
@@ -772,11 +769,11 @@ def cached_records(h: str):
 
     p = records_path(h)
     try:
-        st = os.stat(p)
+        identity = _stat_identity(p)
     except OSError:
         return None
     kept = _RECORDS.get(str(p))
-    if kept is not None and kept[0] == (st.st_mtime_ns, st.st_size, st.st_ino):
+    if kept is not None and kept[0] == identity:
         _RECORDS[str(p)] = _RECORDS.pop(str(p))  # most recently used
         records, stats = kept[1], kept[2]
     else:
@@ -787,7 +784,7 @@ def cached_records(h: str):
             warnings.warn(f"{p}: unreadable ({type(e).__name__}: {e}); the render is recomputed", StoreWarning,
                           stacklevel=2)
             return None
-        _remember_records(p, records, stats)
+        _remember_records(p, identity, records, stats)
     files = stats.get("inputs.files")
     if isinstance(files, str) and files and unchanged(json.loads(files)) is not None:
         return None
