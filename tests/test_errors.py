@@ -132,3 +132,25 @@ def test_unknown_yaml_key(tmp_path):
         load_config(cfg)
     with pytest.raises(ConfigError, match="file not found"):
         load_config(tmp_path / "missing.yaml")
+
+
+def test_config_files_read_as_the_python_yaml_parser_reads_them(tmp_path):
+    """Config files are parsed once (by libyaml where PyYAML has it): every bundled config gives the
+    data and the line of every key that PyYAML's pure-Python SafeLoader gives, parsed on its own; a
+    syntax error quotes the offending line under a caret, as the Python parser words it."""
+    import yaml
+
+    from experiments.config import ConfigError, load, load_config
+    from experiments.paths import bundled_configs
+
+    files = sorted(bundled_configs().rglob("*.yaml"))
+    assert len(files) > 50
+    for f in files:
+        text = f.read_text()
+        want = (yaml.load(text, Loader=yaml.SafeLoader),  # noqa: S506 - the reference parser
+                load._node_lines(yaml.compose(text, Loader=yaml.SafeLoader), str(f)))
+        assert load._read_yaml(f) == want, f
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("scene: {name: quad}\ncamera: [1, 2\nsamples: {spp: 4}\n")
+    with pytest.raises(ConfigError, match=r"(?s)not valid YAML: while parsing a flow sequence.*line 3.*samples: \{spp: 4\}\n +\^"):
+        load_config(bad)

@@ -36,6 +36,7 @@ def _cpu(kind) -> float:
 
 _RENDER_CPU = [0.0]  # CPU seconds inside sim.render in this process (_count_render)
 _STARTED = [False]
+_REFERENCE_CPU = [0.0]  # CPU seconds of reference images rendered in this process (counted as their jobs)
 
 
 def _count_render():
@@ -67,7 +68,8 @@ def _timed_run_point(config_json, *args, **kwargs):
     startup = None
     if not _STARTED[0]:
         _STARTED[0] = True
-        startup = time.process_time()  # a forked worker's CPU clock starts at 0: its start-up
+        # a forked worker's CPU clock starts at 0: its start-up, less the reference jobs it ran first
+        startup = time.process_time() - _REFERENCE_CPU[0]
         _count_render()
     r0 = _RENDER_CPU[0]
     c0, t0 = time.process_time(), time.perf_counter()
@@ -115,6 +117,7 @@ def _instrument(log: list, point_log: Path):
         existed = path.exists()
         image = orig_ref(config, threads)
         if not existed:
+            bench_report._REFERENCE_CPU[0] += time.process_time() - c0
             with open(point_log, "a") as f:
                 f.write(json.dumps({"name": config.name, "hash": path.name, "cpu": time.process_time() - c0,
                                     "wall": time.perf_counter() - t0, "kind": "reference",
@@ -287,10 +290,11 @@ def _page(log, jobs, cpu, wall, loads, args, started, rc, probe=(None, None)) ->
            f"started {started}." + (f" {args.label}" if args.label else ""), "",
            f"- CPU, whole run (RUSAGE_SELF + RUSAGE_CHILDREN): **{cpu:.0f} s**; of it in computed points and "
            f"reference images (per job, in the process that ran it): {job_cpu:.0f} s over {len(jobs)} jobs",
-           f"- per point job outside sim.render (config validation and hashing, metrics, the store's row, "
-           f"records and pictures): {job_cpu - render_cpu - sum(j['cpu'] for j in jobs if j['kind'] == 'reference'):.1f} s "
+           f"- per point job outside sim.render (config validation and hashing, the point's other computing, "
+           f"metrics, records and pictures; the parent stores the row): {job_cpu - render_cpu - sum(j['cpu'] for j in jobs if j['kind'] == 'reference'):.1f} s "
            f"over {len(points)} points ({(sum(j['cpu'] - j.get('render_cpu', 0.0) for j in points)) / max(1, len(points)) * 1e3:.0f} ms each); "
-           f"worker start-up before the first point: {sum(startup):.1f} s over {len(startup)} workers",
+           f"worker start-up before its first point (the reference images it rendered first not included): "
+           f"{sum(startup):.1f} s over {len(startup)} workers",
            f"- the parent process, writing the page sections: {page_cpu:.0f} s (figures and tables in the "
            f"writing thread: {page_thread:.0f} s; pictures rendered there because the store had none: "
            f"{page_render:.0f} s); reading each sweep's rows from the store and waiting for them: "

@@ -7,7 +7,7 @@ from typing import Any
 
 import yaml
 
-from models.loader import UniqueKeyLoader
+from models.loader import UniqueKeyLoader, python_parser_error
 
 from .columns import validate
 from .schema import ConfigError, RenderConfig, deep_merge
@@ -35,14 +35,19 @@ def _read_yaml(path: Path) -> tuple[dict, dict]:
         raise ConfigError(f"config: file not found: {path}")
     text = path.read_text()
     try:
-        data = yaml.load(text, Loader=UniqueKeyLoader)  # noqa: S506 (a SafeLoader subclass)
-        lines = _node_lines(yaml.compose(text, Loader=yaml.SafeLoader), str(path))
+        loader = UniqueKeyLoader(text)  # a SafeLoader subclass: parsed once, then built from its nodes
+        try:
+            node = loader.get_single_node()
+            data = loader.construct_document(node) if node is not None else None
+        finally:
+            loader.dispose()
+        lines = _node_lines(node, str(path)) if node is not None else {}
     except yaml.constructor.ConstructorError as e:
         if not (e.problem or "").startswith("duplicate key"):
             raise ConfigError(f"{path}: not valid YAML: {e}") from None
         raise ConfigError(f"{path}: {e.problem} at line {e.problem_mark.line + 1}") from None
     except yaml.YAMLError as e:
-        raise ConfigError(f"{path}: not valid YAML: {e}") from None
+        raise ConfigError(f"{path}: not valid YAML: {python_parser_error(text) or e}") from None
     if not isinstance(data, dict):
         raise ConfigError(f"{path}: expected a mapping at the top level, got {type(data).__name__}")
     return data, lines

@@ -411,7 +411,9 @@ def _scatter_legend(spec, hues, styles):
 
 
 def _save(fig, out_base: Path | None, dpi: int | None = None) -> list[Path]:
-    """Write the figure as out_base.png and out_base.pdf (no creation date: reproducible PDFs)."""
+    """Write the figure as out_base.png and out_base.pdf (no creation date: reproducible PDFs). The
+    layout the PNG's drawing computed is kept for the PDF (the same axes positions; a layout pass is
+    a third of a figure's saving time)."""
     files = []
     if out_base is not None:
         out_base.parent.mkdir(parents=True, exist_ok=True)
@@ -419,6 +421,8 @@ def _save(fig, out_base: Path | None, dpi: int | None = None) -> list[Path]:
             p = out_base.with_suffix(f".{ext}")
             fig.savefig(p, **({"dpi": dpi} if dpi else {}), metadata={"CreationDate": None} if ext == "pdf" else None)
             files.append(p)
+            if fig.get_layout_engine() is not None:
+                fig.set_layout_engine("none")  # keeps the positions constrained layout set
     return files
 
 

@@ -129,11 +129,13 @@ def fmt(v, spec: str | None = None) -> str:
 
 
 def cell(df, keys: dict, y: str):
-    """Mean of y over the rows matching keys; (value, number of rows)."""
-    sub = df
+    """Mean of y over the rows matching keys; (value, number of rows). The keys select row positions
+    and only column y is taken (a report frame has hundreds of columns)."""
+    rows = range(len(df))
     for k, v in keys.items():
-        sub = sub[[same(a, v) for a in sub[k]]]
-    vals = sub[y].dropna()
+        col = list(df[k])
+        rows = [i for i in rows if same(col[i], v)]
+    vals = df[y].iloc[list(rows)].dropna()
     if not len(vals):
         return math.nan, 0
     if vals.dtype == object or vals.dtype.kind not in "biufc":  # strings, e.g. timing.bottleneck (Arrow)
