@@ -1,8 +1,8 @@
 """The explicit-SIMD batch sample tests (sampletest/simd_batch.h) are bit-identical to the scalar
 batch kernels (sampletest/kernels.h): edge functions, determinant and decision flags, on
 random triangles and samples, on exact ties (e_i == 0 on purpose), signed zeros, NaN and huge or
-tiny magnitudes, for every batch length around the vector width (a batch's last n mod 16 samples
-are one masked vector with AVX-512, the scalar kernels otherwise)."""
+tiny magnitudes, for every batch length around the vector width (a batch's last n mod 16 samples with AVX-512,
+n mod 8 with AVX2, are one masked vector; builds without either use the scalar kernels)."""
 import numpy as np
 import pytest
 

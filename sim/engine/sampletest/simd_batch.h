@@ -1,7 +1,7 @@
 // Explicit-SIMD batch sample tests: the 4D and 5D batch kernels of sampletest/kernels.h (batch_edges_4d /
 // batch_edges_5d followed by batch_flags) fused into one pass over the batch, with AVX-512 or AVX2
-// intrinsics where the compiler targets them and the scalar kernels otherwise. With AVX-512 (VL) a
-// batch's last n % 16 samples are one masked vector; elsewhere they take the scalar kernels.
+// intrinsics where the compiler targets them and the scalar kernels otherwise. A batch's last n % 16
+// (AVX-512 with VL) or n % 8 (AVX2) samples are one masked vector; without either, the scalar kernels.
 //
 // Why: the auto-vectorised path runs two loops (edge functions to memory, then the flags reading
 // them back); the fused kernel keeps e_0..e_2 and det in registers for the flags and stores each
@@ -13,6 +13,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstring>
 
 #if defined(__AVX512F__) && defined(__AVX512BW__) || defined(__AVX2__)
 #include <immintrin.h>
@@ -67,8 +68,18 @@ using M = unsigned;
 inline M gt0(V a) { return static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(a, _mm256_setzero_ps(), _CMP_GT_OQ))); }
 inline M lt0(V a) { return static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(a, _mm256_setzero_ps(), _CMP_LT_OQ))); }
 inline M eq0(V a) { return static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(a, _mm256_setzero_ps(), _CMP_EQ_OQ))); }
+// The 8 bits of a lane mask spread to 8 bytes (0 or 1 each, lane i in byte i).
+struct ByteSpread {
+  std::uint64_t v[256];
+  constexpr ByteSpread() : v() {
+    for (int m = 0; m < 256; ++m)
+      for (int i = 0; i < 8; ++i) v[m] |= static_cast<std::uint64_t>((m >> i) & 1) << (8 * i);
+  }
+};
+inline constexpr ByteSpread kByteSpread{};
 inline void store_flags(std::uint8_t* out, M cov, M und) {
-  for (int i = 0; i < 8; ++i) out[i] = static_cast<std::uint8_t>(((cov >> i) & 1u) | (((und >> i) & 1u) << 1));
+  const std::uint64_t f = kByteSpread.v[cov & 0xffu] | (kByteSpread.v[und & 0xffu] << 1);
+  std::memcpy(out, &f, 8);  // little-endian x86: byte i = lane i
 }
 #endif
 
@@ -103,22 +114,38 @@ inline void flags_of(V a, V b, V c, V d, bool bfc, std::uint8_t* out) {
 }
 #endif
 
+// The last n % kW samples of a batch as one masked vector (lanes k < n only are loaded and stored; the
+// others load as 0 and are never stored): per lane the same operations as the full vectors, so the
+// same bits as the scalar kernels. AVX-512 with VL; AVX2 (vmaskmovps). Small batches (a timing or
+// memory model closes the batch at every shading visit) are mostly tail.
 #if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512VL__)
-// The last n % 16 samples of a batch as one masked vector (lanes k < n only are loaded and stored):
-// per lane the same operations as the full vectors, so the same bits as the scalar kernels.
-inline __mmask16 tail_mask(int n) { return static_cast<__mmask16>((1u << n) - 1); }
-inline V load_tail(__mmask16 k, const float* p) { return _mm512_maskz_loadu_ps(k, p); }
-inline void store_tail(__mmask16 k, float* p, V v) { _mm512_mask_storeu_ps(p, k, v); }
-inline void flags_tail(__mmask16 k, V a, V b, V c, V d, bool bfc, std::uint8_t* out) {
+#define RAST5D_SIMD_TAIL 1
+using K = __mmask16;
+inline K tail_mask(int n) { return static_cast<__mmask16>((1u << n) - 1); }
+inline V load_tail(K k, const float* p) { return _mm512_maskz_loadu_ps(k, p); }
+inline void store_tail(K k, float* p, V v) { _mm512_mask_storeu_ps(p, k, v); }
+inline void flags_tail(K k, int, V a, V b, V c, V d, bool bfc, std::uint8_t* out) {
   M cov, und;
   flag_masks(a, b, c, d, bfc, cov, und);
   const __m128i f = _mm_or_si128(_mm_maskz_mov_epi8(cov, _mm_set1_epi8(1)), _mm_maskz_mov_epi8(und, _mm_set1_epi8(2)));
   _mm_mask_storeu_epi8(out, k, f);
 }
+#elif defined(__AVX2__) && !(defined(__AVX512F__) && defined(__AVX512BW__))
+#define RAST5D_SIMD_TAIL 1
+using K = __m256i;
+inline K tail_mask(int n) { return _mm256_cmpgt_epi32(_mm256_set1_epi32(n), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)); }
+inline V load_tail(K k, const float* p) { return _mm256_maskload_ps(p, k); }
+inline void store_tail(K k, float* p, V v) { _mm256_maskstore_ps(p, k, v); }
+inline void flags_tail(K, int n, V a, V b, V c, V d, bool bfc, std::uint8_t* out) {
+  M cov, und;
+  flag_masks(a, b, c, d, bfc, cov, und);
+  const std::uint64_t f = kByteSpread.v[cov & 0xffu] | (kByteSpread.v[und & 0xffu] << 1);
+  std::memcpy(out, &f, static_cast<std::size_t>(n));  // lanes k < n only
+}
 #endif
 
-// 4D (static, defocused): e, det and flags of n samples; with AVX-512 VL the tail (n mod the vector
-// width) is one masked vector, otherwise it and builds without AVX2 use the scalar kernels.
+// 4D (static, defocused): e, det and flags of n samples; the tail (n mod the vector width) is one
+// masked vector (RAST5D_SIMD_TAIL), and builds without AVX2 use the scalar kernels.
 inline void batch_test_4d(int n, const BatchTri& T, const float* __restrict bx, const float* __restrict by,
                           const float* __restrict bu, const float* __restrict bv, float* __restrict e0,
                           float* __restrict e1, float* __restrict e2, float* __restrict dt, bool bfc,
@@ -141,13 +168,13 @@ inline void batch_test_4d(int n, const BatchTri& T, const float* __restrict bx, 
     flags_of(a, b, c, d, bfc, flags + i);
   }
 #endif
-#if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512VL__)
+#ifdef RAST5D_SIMD_TAIL
   if (i < n) {
-    const __mmask16 k = tail_mask(n - i);
+    const K k = tail_mask(n - i);
     V a, b, c, d;
     lanes(load_tail(k, bu + i), load_tail(k, bv + i), load_tail(k, bx + i), load_tail(k, by + i), a, b, c, d);
     store_tail(k, e0 + i, a), store_tail(k, e1 + i, b), store_tail(k, e2 + i, c), store_tail(k, dt + i, d);
-    flags_tail(k, a, b, c, d, bfc, flags + i);
+    flags_tail(k, n - i, a, b, c, d, bfc, flags + i);
     return;
   }
 #endif
@@ -187,14 +214,14 @@ inline void batch_test_5d(int n, const BatchTri& T, const float* __restrict bx, 
     flags_of(a, b, c, d, bfc, flags + i);
   }
 #endif
-#if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512VL__)
+#ifdef RAST5D_SIMD_TAIL
   if (i < n) {
-    const __mmask16 k = tail_mask(n - i);
+    const K k = tail_mask(n - i);
     V a, b, c, d;
     lanes(load_tail(k, bt + i), load_tail(k, bu + i), load_tail(k, bv + i), load_tail(k, bx + i),
           load_tail(k, by + i), a, b, c, d);
     store_tail(k, e0 + i, a), store_tail(k, e1 + i, b), store_tail(k, e2 + i, c), store_tail(k, dt + i, d);
-    flags_tail(k, a, b, c, d, bfc, flags + i);
+    flags_tail(k, n - i, a, b, c, d, bfc, flags + i);
     return;
   }
 #endif
