@@ -15,6 +15,25 @@ def scene_camera(scene, w: int, h: int, coc: float):
                       focus_distance=hint["focus_distance"], coc_px=coc)
 
 
+def machine() -> str:
+    """The machine a benchmark ran on, as its page names it: the architecture, the processor's model
+    name, the hardware threads and the instruction set of the engine's explicit-SIMD sample tests in
+    this build (sim._core.simd_isa: 'avx512', 'avx2' or 'scalar'; its rates and ratios depend on it)."""
+    import platform
+
+    import sim
+
+    model = ""
+    try:
+        with open("/proc/cpuinfo") as f:
+            model = next((line.split(":", 1)[1].strip() for line in f if line.startswith("model name")), "")
+    except OSError:
+        pass
+    model = model or platform.processor()
+    return (f"{platform.machine()}{f' ({model})' if model else ''}, {os.cpu_count()} hardware threads, "
+            f"engine SIMD {sim._core.simd_isa()}")
+
+
 def write_page(out, name: str, lines: list[str]) -> Path:
     """Write a benchmark page (markdown lines) as out/name, creating out, and say where. A header line that
     gives the load average " at the start." gets the load at the end beside it."""

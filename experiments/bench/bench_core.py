@@ -9,12 +9,10 @@ experiments.bench.bench_core` runs it directly."""
 from __future__ import annotations
 
 import argparse
-import os
-import platform
 import sys
 from pathlib import Path
 
-from experiments.bench import write_page
+from experiments.bench import machine, write_page
 
 REPO = Path(__file__).resolve().parents[2]
 from experiments.paths import bundled_configs, reports_dir, results_dir  # noqa: E402,F401
@@ -65,8 +63,8 @@ def run(size: int = 512, spp: int = 16, threads=(1, 2), repeats: int = 1, quick:
 
     table = sim.SampleTable.stratified(spp=spp, seed=1)
     lines = [f"# bench_core: brute-force throughput", "",
-             f"`make bench` (`python -m experiments.bench.bench_core`), {platform.processor() or platform.machine()}, "
-             f"{os.cpu_count()} hardware threads, {size}^2, {spp} spp, best of {repeats}.", "",
+             f"`make bench` (`python -m experiments.bench.bench_core`), {machine()}, "
+             f"{size}^2, {spp} spp, best of {repeats}.", "",
              "| scene | motion | CoC | threads | samples tested | Msamples/s | ns/test | class mix (2D/3D/4D/5D tests) |",
              "|---|---|---|---|---|---|---|---|"]
     per_class: dict[str, list[tuple[float, int]]] = {"2d": [], "3d": [], "4d": [], "5d": []}

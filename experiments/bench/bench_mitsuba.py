@@ -32,13 +32,12 @@ from __future__ import annotations
 import glob
 import math
 import os
-import platform
 import time
 from pathlib import Path
 
 import numpy as np
 
-from experiments.bench import bench_parser, write_page
+from experiments.bench import machine, bench_parser, write_page
 from experiments.paths import reports_dir
 
 # (label, scene name, subdivide, motion): about 400 to 124k triangles.
@@ -284,8 +283,8 @@ def run(quick: bool = False, out=None) -> dict:
     hd = None if quick else hd_frame()
     load1 = os.getloadavg()[0]
     lines = ["# bench_mitsuba: rast5d against Mitsuba 3", "",
-             f"`python -m experiments.bench.bench_mitsuba` (part of `make bench`), {platform.machine()}, "
-             f"{os.cpu_count()} hardware threads, load average {load0:.1f} at the start and {load1:.1f} at the end, "
+             f"`python -m experiments.bench.bench_mitsuba` (part of `make bench`), {machine()}, "
+             f"load average {load0:.1f} at the start and {load1:.1f} at the end, "
              f"{time.perf_counter() - t_start:.0f} s. Compare the ratios (measured in one run), not the seconds.", ""]
     consts = {"REFERENCE_SPP_FACTOR": f"{REFERENCE_SPP_FACTOR}", "REFERENCE_SLICES_MAX": f"{REFERENCE_SLICES_MAX}"}
     for para in __doc__.split("\n\n")[1:4]:  # what is compared and how, from this module's own text

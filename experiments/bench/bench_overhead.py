@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import json
 import os
-import platform
 import statistics
 import subprocess
 import sys
@@ -23,7 +22,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from experiments.bench import bench_parser, write_page
+from experiments.bench import machine, bench_parser, write_page
 from experiments.paths import reports_dir
 
 SIZE = (160, 120)
@@ -125,8 +124,8 @@ def run(out=None, repeats: int = 15) -> dict:
     fc = fixed_cost(repeats)
     st = startup()
     lines = ["# bench_overhead: what a render and a run cost outside the engine", "",
-             f"`python -m experiments.bench.bench_overhead` (part of `make bench`), {platform.machine()}, "
-             f"{os.cpu_count()} hardware threads, load average {load:.1f} at the start.", "",
+             f"`python -m experiments.bench.bench_overhead` (part of `make bench`), {machine()}, "
+             f"load average {load:.1f} at the start.", "",
              "Fixed cost: `sim.render`'s wall time minus the engine call's (flat stat time.wall_s: setup, traversal, "
              "resolve), once on a fresh table (its lens mapping and engine index are built in the render) and as the "
              "median of repeated renders on the same table (a sweep that reuses one table: they are cached on it, "

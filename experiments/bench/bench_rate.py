@@ -20,13 +20,12 @@ from __future__ import annotations
 import contextlib
 import importlib
 import os
-import platform
 import time
 from pathlib import Path
 
 import numpy as np
 
-from experiments.bench import bench_parser, write_page
+from experiments.bench import machine, bench_parser, write_page
 from experiments.paths import reports_dir
 
 N_TRIANGLES = 2000
@@ -121,8 +120,8 @@ def run(out=None, repeats: int = 5) -> dict:
     m = measure(repeats)
     load1 = os.getloadavg()[0]
     lines = ["# bench_rate: the whole render's sample-test rate", "",
-             f"`python -m experiments.bench.bench_rate` (part of `make bench`), {platform.machine()}, {os.cpu_count()} "
-             f"hardware threads, load average {load0:.1f} at the start and {load1:.1f} at the end. Rates are from "
+             f"`python -m experiments.bench.bench_rate` (part of `make bench`), {machine()}, "
+             f"load average {load0:.1f} at the start and {load1:.1f} at the end. Rates are from "
              f"the minima of {repeats} renders; compare rates measured in one run.", "",
              " ".join(__doc__.split("\n\n")[1].split()), "",
              "| samples tested | 4D share | CPU [s] | engine wall [s] | M tests/s (CPU) | M tests/s (engine) |",

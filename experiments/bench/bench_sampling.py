@@ -23,11 +23,10 @@ from __future__ import annotations
 
 import argparse
 import os
-import platform
 import time
 from pathlib import Path
 
-from experiments.bench import scene_camera as _camera, write_page
+from experiments.bench import machine, scene_camera as _camera, write_page
 
 REPO = Path(__file__).resolve().parents[2]
 from experiments.paths import bundled_configs, reports_dir, results_dir  # noqa: E402,F401
@@ -323,8 +322,8 @@ def run(threads: int = 2, seeds: int = 5, draws: int = 200, spp: int = 64, bin_s
     grows = granularity_table(spp, quick)
     xrows = split_table(threads, spp, quick, bin_size, draws)
     lines = ["# bench_sampling: sampled simulation and timing granularity, cost against error", "",
-             f"`python -m experiments.bench.bench_sampling` (part of `make bench`), {platform.processor() or platform.machine()}, "
-             f"{os.cpu_count()} hardware threads, load average {load:.1f} at the start. Compare the ratios (measured in "
+             f"`python -m experiments.bench.bench_sampling` (part of `make bench`), {machine()}, "
+             f"load average {load:.1f} at the start. Compare the ratios (measured in "
              "one run), not the seconds; CPU is the process CPU time (all threads, Python included), which other "
              "processes' load disturbs less than wall time.", "",
              f"## Sampled simulation: speed against estimate error ({spp} spp, tile, CoC 10 px, bin_size {bin_size}, "

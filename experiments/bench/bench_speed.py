@@ -16,12 +16,11 @@ from __future__ import annotations
 
 import argparse
 import os
-import platform
 import sys
 import time
 from pathlib import Path
 
-from experiments.bench import scene_camera as _camera, write_page
+from experiments.bench import machine, scene_camera as _camera, write_page
 
 REPO = Path(__file__).resolve().parents[2]
 from experiments.paths import bundled_configs, reports_dir, results_dir  # noqa: E402,F401
@@ -137,8 +136,8 @@ def run(hall_scale: float = 0.5, threads=(1, 2), repeats: int = 3, spp: int = 64
         repeats, spp = 1, 16
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     lines = ["# bench_speed: simulator speed against simulated work", "",
-             f"`make bench` (`python -m experiments.bench.bench_speed`), {platform.processor() or platform.machine()}, "
-             f"{os.cpu_count()} hardware threads, load average {load:.1f} at the start. Wall times are minima over "
+             f"`make bench` (`python -m experiments.bench.bench_speed`), {machine()}, "
+             f"load average {load:.1f} at the start. Wall times are minima over "
              f"{repeats} interleaved repeats; compare the ratios (measured in one run), not the seconds.", "",
              f"## Wall time against operations ({spp} spp; one thread and two)", "",
              "`tile+optimal` is `tile` with `count_optimal: true` (the exact-region instrumentation of [Akenine-Möller 2012] "

@@ -16,12 +16,11 @@ from __future__ import annotations
 
 import json
 import os
-import platform
 import subprocess
 import sys
 import time
 
-from experiments.bench import bench_parser, write_page
+from experiments.bench import machine, bench_parser, write_page
 from experiments.paths import reports_dir
 
 FLAT = {"depth_buffer": {"enabled": False, "compression": "none"}, "color_buffer": {"enabled": False}}
@@ -150,8 +149,8 @@ def run(quick: bool = False, out=None) -> dict:
     rrows = refusal_table(render_first=not quick)
     labels = [lab for lab, _, _ in VARIANTS[1:]]
     lines = ["# bench_timing: what the timing and memory model costs", "",
-             f"`python -m experiments.bench.bench_timing` (part of `make bench`), {platform.processor() or platform.machine()}, "
-             f"{os.cpu_count()} hardware threads, load average {load:.1f} at the start. Compare the ratios (measured in one "
+             f"`python -m experiments.bench.bench_timing` (part of `make bench`), {machine()}, "
+             f"load average {load:.1f} at the start. Compare the ratios (measured in one "
              "run), not the seconds.", "",
              "## CPU time, timed over untimed (64 spp, tile)", "",
              "Process CPU time (all threads, Python included), the minimum of interleaved repeats. Timed: the "
