@@ -15,6 +15,8 @@
 #include <cstdint>
 #include <cstring>
 
+#include "core/byte_spread.h"
+
 #if defined(__AVX512F__) && defined(__AVX512BW__) || defined(__AVX2__)
 #include <immintrin.h>
 #endif
@@ -68,15 +70,6 @@ using M = unsigned;
 inline M gt0(V a) { return static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(a, _mm256_setzero_ps(), _CMP_GT_OQ))); }
 inline M lt0(V a) { return static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(a, _mm256_setzero_ps(), _CMP_LT_OQ))); }
 inline M eq0(V a) { return static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(a, _mm256_setzero_ps(), _CMP_EQ_OQ))); }
-// The 8 bits of a lane mask spread to 8 bytes (0 or 1 each, lane i in byte i).
-struct ByteSpread {
-  std::uint64_t v[256];
-  constexpr ByteSpread() : v() {
-    for (int m = 0; m < 256; ++m)
-      for (int i = 0; i < 8; ++i) v[m] |= static_cast<std::uint64_t>((m >> i) & 1) << (8 * i);
-  }
-};
-inline constexpr ByteSpread kByteSpread{};
 inline void store_flags(std::uint8_t* out, M cov, M und) {
   const std::uint64_t f = kByteSpread.v[cov & 0xffu] | (kByteSpread.v[und & 0xffu] << 1);
   std::memcpy(out, &f, 8);  // little-endian x86: byte i = lane i

@@ -9,10 +9,11 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
-#if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512VL__)
+#if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512VL__) || defined(__AVX2__)
 #include <immintrin.h>
 #endif
 
+#include "core/byte_spread.h"
 #include "tiletest/halfspace_lens.h"
 
 namespace rast5d::tiletest {
@@ -28,7 +29,38 @@ template <bool kCells>
   const float a0 = su.fl_lo[0], b0 = su.fl_hi[0], a1 = su.fl_lo[1], b1 = su.fl_hi[1];
   const float c0 = sv.fl_lo[0], d0 = sv.fl_hi[0], c1 = sv.fl_lo[1], d1 = sv.fl_hi[1];
   int in_cells = 0;
-  for (int s = 0; s < spp; ++s) {
+  int s = 0;
+#if defined(__AVX2__)
+  // 8 samples at a time: the same ordered compares (NaN false), the cell bit as a variable shift of
+  // the active mask's low or high half (a count past 31 shifts in zeros), the flags from the bit mask.
+  {
+    const __m256 A0 = _mm256_set1_ps(a0), B0 = _mm256_set1_ps(b0), A1 = _mm256_set1_ps(a1), B1 = _mm256_set1_ps(b1);
+    const __m256 C0 = _mm256_set1_ps(c0), D0 = _mm256_set1_ps(d0), C1 = _mm256_set1_ps(c1), D1 = _mm256_set1_ps(d1);
+    const __m256i lo = _mm256_set1_epi32(static_cast<int>(static_cast<std::uint32_t>(active)));
+    const __m256i hi = _mm256_set1_epi32(static_cast<int>(static_cast<std::uint32_t>(active >> 32)));
+    const __m256i k32 = _mm256_set1_epi32(32);
+    auto inside = [](__m256 x, __m256 lo0, __m256 hi0, __m256 lo1, __m256 hi1) {
+      return static_cast<unsigned>(_mm256_movemask_ps(_mm256_or_ps(
+          _mm256_and_ps(_mm256_cmp_ps(x, lo0, _CMP_GT_OQ), _mm256_cmp_ps(x, hi0, _CMP_LT_OQ)),
+          _mm256_and_ps(_mm256_cmp_ps(x, lo1, _CMP_GT_OQ), _mm256_cmp_ps(x, hi1, _CMP_LT_OQ)))));
+    };
+    for (; s + 8 <= spp; s += 8) {
+      const unsigned in_u = inside(_mm256_loadu_ps(u + s), A0, B0, A1, B1);
+      const unsigned in_v = inside(_mm256_loadu_ps(v + s), C0, D0, C1, D1);
+      unsigned act = 0xffu;
+      if constexpr (kCells) {
+        std::uint64_t bytes;
+        std::memcpy(&bytes, cell + s, 8);
+        const __m256i c = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(static_cast<long long>(bytes)));
+        const __m256i bit = _mm256_or_si256(_mm256_srlv_epi32(lo, c), _mm256_srlv_epi32(hi, _mm256_sub_epi32(c, k32)));
+        act = static_cast<unsigned>(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_slli_epi32(bit, 31))));
+      }
+      in_cells += __builtin_popcount(act);
+      store_spread(flags + s, act & ~in_u & ~in_v);
+    }
+  }
+#endif
+  for (; s < spp; ++s) {
     const float x = u[s], y = v[s];
     const int in_u = ((x > a0) & (x < b0)) | ((x > a1) & (x < b1));
     const int in_v = ((y > c0) & (y < d0)) | ((y > c1) & (y < d1));
