@@ -117,9 +117,10 @@ def _instrument(log: list, point_log: Path):
         existed = path.exists()
         image = orig_ref(config, threads)
         if not existed:
-            bench_report._REFERENCE_CPU[0] += time.process_time() - c0
+            cpu = time.process_time() - c0
+            bench_report._REFERENCE_CPU[0] += cpu
             with open(point_log, "a") as f:
-                f.write(json.dumps({"name": config.name, "hash": path.name, "cpu": time.process_time() - c0,
+                f.write(json.dumps({"name": config.name, "hash": path.name, "cpu": cpu,
                                     "wall": time.perf_counter() - t0, "kind": "reference",
                                     "spp": config.outputs.metrics.reference_spp,
                                     "threads": threads}) + "\n")

@@ -16,9 +16,12 @@ struct ByteSpread {
 };
 inline constexpr ByteSpread kByteSpread{};
 
-// The first n (<= 8) bytes of the spread of mask, written at out (little-endian x86: byte i = bit i).
+// The spread of mask's low 8 bits as one word (little-endian x86: byte i = bit i).
+inline std::uint64_t spread_bits(unsigned mask) { return kByteSpread.v[mask & 0xffu]; }
+
+// The first n (<= 8) bytes of the spread of mask, written at out.
 inline void store_spread(std::uint8_t* out, unsigned mask, std::size_t n = 8) {
-  const std::uint64_t f = kByteSpread.v[mask & 0xffu];
+  const std::uint64_t f = spread_bits(mask);
   std::memcpy(out, &f, n);
 }
 

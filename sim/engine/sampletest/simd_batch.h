@@ -70,9 +70,10 @@ using M = unsigned;
 inline M gt0(V a) { return static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(a, _mm256_setzero_ps(), _CMP_GT_OQ))); }
 inline M lt0(V a) { return static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(a, _mm256_setzero_ps(), _CMP_LT_OQ))); }
 inline M eq0(V a) { return static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(a, _mm256_setzero_ps(), _CMP_EQ_OQ))); }
-inline void store_flags(std::uint8_t* out, M cov, M und) {
-  const std::uint64_t f = kByteSpread.v[cov & 0xffu] | (kByteSpread.v[und & 0xffu] << 1);
-  std::memcpy(out, &f, 8);  // little-endian x86: byte i = lane i
+// flags[i] = bit i of cov | (bit i of undecided) << 1, the first n (<= 8) bytes.
+inline void store_flags(std::uint8_t* out, M cov, M und, std::size_t n = 8) {
+  const std::uint64_t f = spread_bits(cov) | (spread_bits(und) << 1);
+  std::memcpy(out, &f, n);
 }
 #endif
 
@@ -132,8 +133,7 @@ inline void store_tail(K k, float* p, V v) { _mm256_maskstore_ps(p, k, v); }
 inline void flags_tail(K, int n, V a, V b, V c, V d, bool bfc, std::uint8_t* out) {
   M cov, und;
   flag_masks(a, b, c, d, bfc, cov, und);
-  const std::uint64_t f = kByteSpread.v[cov & 0xffu] | (kByteSpread.v[und & 0xffu] << 1);
-  std::memcpy(out, &f, static_cast<std::size_t>(n));  // lanes k < n only
+  store_flags(out, cov, und, static_cast<std::size_t>(n));  // lanes k < n only
 }
 #endif
 
