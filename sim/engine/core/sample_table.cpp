@@ -79,6 +79,7 @@ void SampleTable::set_time_strata(int S) {
   ct_offsets_.assign(npix * (buckets + 1), 0);
   ct_cell_.resize(npix * spp_);
   ct_stratum_.resize(npix * spp_);
+  ct_tuv_.resize(npix * spp_ * 3);
   std::vector<int> key(spp_);
   for (std::size_t p = 0; p < npix; ++p) {
     const std::size_t base = p * spp_;
@@ -87,10 +88,12 @@ void SampleTable::set_time_strata(int S) {
     for (int s = 0; s < spp_; ++s)
       key[s] = cell_of(u_[base + s], v_[base + s], grid_) * S + stratum_of(t_[base + s], S);
     bucket_samples(key.data(), spp_, buckets, order, off);
+    float* tuv = &ct_tuv_[3 * base];
     for (int i = 0; i < spp_; ++i) {
       const int k = key[order[i]];
       ct_cell_[base + i] = static_cast<std::uint8_t>(k / S);
       ct_stratum_[base + i] = static_cast<std::uint8_t>(k % S);
+      tuv[i] = t_[base + order[i]], tuv[spp_ + i] = u_[base + order[i]], tuv[2 * spp_ + i] = v_[base + order[i]];
     }
   }
 }

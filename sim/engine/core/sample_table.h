@@ -38,6 +38,9 @@ struct PixelSamples {
   const std::int32_t* ct_offsets;    // G*G*S + 1 entries
   const std::uint8_t* ct_cell;       // spp entries, in ct_order's order: each entry's lens-grid cell
   const std::uint8_t* ct_stratum;    // spp entries, in ct_order's order: each entry's time stratum
+  const float* ct_t;                 // spp entries, in ct_order's order: t, u, v of each entry's sample
+  const float* ct_u;                 //   (the same floats as t[ct_order[i]], ...: read without a gather)
+  const float* ct_v;
 };
 
 class SampleTable {
@@ -75,6 +78,9 @@ class SampleTable {
     ps.ct_offsets = ct_offsets_.empty() ? nullptr : &ct_offsets_[pi * (grid_ * grid_ * strata_ + 1)];
     ps.ct_cell = ct_cell_.empty() ? nullptr : &ct_cell_[base];
     ps.ct_stratum = ct_stratum_.empty() ? nullptr : &ct_stratum_[base];
+    ps.ct_t = ct_tuv_.empty() ? nullptr : &ct_tuv_[3 * base];
+    ps.ct_u = ct_tuv_.empty() ? nullptr : &ct_tuv_[3 * base + spp_];
+    ps.ct_v = ct_tuv_.empty() ? nullptr : &ct_tuv_[3 * base + 2 * spp_];
     if (n_lens_ > 0) {
       ps.lens_index = &lens_index_[base];
       ps.lens_order = &lens_order_[base];
@@ -113,6 +119,7 @@ class SampleTable {
   int strata_ = 0;
   std::vector<std::int32_t> ct_order_, ct_offsets_;
   std::vector<std::uint8_t> ct_cell_, ct_stratum_;
+  std::vector<float> ct_tuv_;  // per pixel: spp t, then spp u, then spp v, in ct_order's order
   std::vector<float> x_, y_, u_, v_, t_;
   std::vector<std::int32_t> cell_order_, cell_offsets_;
   std::vector<std::uint8_t> cell_idx_;

@@ -117,6 +117,8 @@ inline int compact_flags(const std::uint8_t* flags, int n, int* out) {
 // compares against (floats: the scalar loop's F(...) conversions).
 struct MotionRegion {
   const std::uint8_t* cell_sel = nullptr;  // 1 for a listed lens cell (G * G entries, readable 3 past)
+  bool cell_bits_on = false;               // G * G <= 64: the listed cells are also the bits of cell_bits
+  std::uint64_t cell_bits = 0;
   int j0 = 0, j1 = -1;                     // the time strata of the sub-interval that its t̂ overlaps
   float t_lo = 0, t_hi = 0;                // t̂
   bool lens = false;                       // compare u, v against the axis sets
@@ -129,11 +131,10 @@ struct MotionRegion {
 #if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512VL__)
 inline constexpr bool kMotionSelectVector = true;
 
-// The lanes of m whose lens coordinate (gathered from src at smp) passes one axis: outside both cuts
-// of `cuts` (axis_pass's fast form) when `lens`, and inside [lo, hi] when the axis is clipped.
-inline __mmask16 motion_axis_pass(__mmask16 m, __m512i smp, const float* src, bool lens, const AxisSet* cuts,
-                                  bool clipped, float lo, float hi) {
-  const __m512 x = _mm512_mask_i32gather_ps(_mm512_setzero_ps(), m, smp, src, 4);
+// The lanes of m whose lens coordinate x passes one axis: outside both cuts of `cuts` (axis_pass's
+// fast form) when `lens`, and inside [lo, hi] when the axis is clipped.
+inline __mmask16 motion_axis_pass(__mmask16 m, __m512 x, bool lens, const AxisSet* cuts, bool clipped, float lo,
+                                  float hi) {
   __mmask16 pass = m;
   if (lens) {
     const __mmask16 in0 = _mm512_cmp_ps_mask(x, _mm512_set1_ps(cuts->fl_lo[0]), _CMP_GT_OQ) &
@@ -148,9 +149,11 @@ inline __mmask16 motion_axis_pass(__mmask16 m, __m512i smp, const float* src, bo
 }
 
 // The entries [lo, hi) of a pixel's (cell, stratum) order (PixelSamples::ct_order, ct_cell,
-// ct_stratum) whose cell is listed and stratum in [j0, j1], 16 at a time: returns how many (the
-// samples compared); appends the ones inside t̂, outside the lens cuts and inside the clipped axes to
-// out[n..], in order. The same float comparisons as the scalar loop of Tile::raster_motion.
+// ct_stratum, and the samples' t, u, v in that order: ct_t, ct_u, ct_v) whose cell is listed and
+// stratum in [j0, j1], 16 at a time: returns how many (the samples compared); appends the ones inside
+// t̂, outside the lens cuts and inside the clipped axes to out[n..], in order, writing up to 16
+// entries past the last (out needs that slack). The same float comparisons as the scalar loop of
+// Tile::raster_motion, on the same floats.
 inline int select_motion(const std::int32_t* __restrict order, const std::uint8_t* __restrict cell,
                          const std::uint8_t* __restrict stratum, const float* __restrict t,
                          const float* __restrict u, const float* __restrict v, int lo, int hi,
@@ -158,22 +161,34 @@ inline int select_motion(const std::int32_t* __restrict order, const std::uint8_
   int checked = 0;
   const __m512i vj0 = _mm512_set1_epi32(r.j0), vj1 = _mm512_set1_epi32(r.j1), byte = _mm512_set1_epi32(0xFF);
   const __m512 tlo = _mm512_set1_ps(r.t_lo), thi = _mm512_set1_ps(r.t_hi);
+  // Up to 64 cells: cell c is listed when bit c of cell_bits is set (its 32-bit half shifted by c mod 32).
+  const __m512i bits_lo = _mm512_set1_epi32(static_cast<int>(static_cast<std::uint32_t>(r.cell_bits)));
+  const __m512i bits_hi = _mm512_set1_epi32(static_cast<int>(static_cast<std::uint32_t>(r.cell_bits >> 32)));
+  const __m512i one = _mm512_set1_epi32(1), c31 = _mm512_set1_epi32(31);
   for (int idx = lo; idx < hi; idx += 16) {
     const int left = hi - idx;
     const __mmask16 m0 = left >= 16 ? __mmask16(0xFFFF) : static_cast<__mmask16>((1u << left) - 1u);
     const __m512i ce = _mm512_cvtepu8_epi32(_mm_maskz_loadu_epi8(m0, cell + idx));
     const __m512i st = _mm512_cvtepu8_epi32(_mm_maskz_loadu_epi8(m0, stratum + idx));
-    const __m512i listed = _mm512_mask_i32gather_epi32(_mm512_setzero_si512(), m0, ce, r.cell_sel, 1);
-    __mmask16 m = _mm512_mask_test_epi32_mask(m0, listed, byte);
+    __mmask16 m;
+    if (r.cell_bits_on) {
+      const __m512i half = _mm512_mask_blend_epi32(_mm512_cmpgt_epi32_mask(ce, c31), bits_lo, bits_hi);
+      m = _mm512_mask_test_epi32_mask(m0, _mm512_srlv_epi32(half, _mm512_and_si512(ce, c31)), one);
+    } else {
+      const __m512i listed = _mm512_mask_i32gather_epi32(_mm512_setzero_si512(), m0, ce, r.cell_sel, 1);
+      m = _mm512_mask_test_epi32_mask(m0, listed, byte);
+    }
     m &= _mm512_cmpge_epi32_mask(st, vj0) & _mm512_cmple_epi32_mask(st, vj1);
     if (!m) continue;
     checked += __builtin_popcount(m);
     const __m512i smp = _mm512_maskz_loadu_epi32(m, order + idx);
-    const __m512 tv = _mm512_mask_i32gather_ps(_mm512_setzero_ps(), m, smp, t, 4);
+    const __m512 tv = _mm512_maskz_loadu_ps(m, t + idx);
     __mmask16 pass = _mm512_mask_cmp_ps_mask(m, tv, tlo, _CMP_GE_OQ) & _mm512_cmp_ps_mask(tv, thi, _CMP_LE_OQ);
-    if (r.lens || r.cu) pass &= motion_axis_pass(m, smp, u, r.lens, r.su, r.cu, r.u_lo, r.u_hi);
-    if (r.lens || r.cv) pass &= motion_axis_pass(m, smp, v, r.lens, r.sv, r.cv, r.v_lo, r.v_hi);
-    _mm512_mask_compressstoreu_epi32(out + n, pass, smp);
+    if (r.lens || r.cu) pass &= motion_axis_pass(m, _mm512_maskz_loadu_ps(m, u + idx), r.lens, r.su, r.cu, r.u_lo, r.u_hi);
+    if (r.lens || r.cv) pass &= motion_axis_pass(m, _mm512_maskz_loadu_ps(m, v + idx), r.lens, r.sv, r.cv, r.v_lo, r.v_hi);
+    // Compressed in a register and stored whole (out has 16 entries of slack): a masked compressing
+    // store to memory is microcoded on some processors, many times slower.
+    _mm512_storeu_si512(out + n, _mm512_maskz_compress_epi32(pass, smp));
     n += __builtin_popcount(pass);
   }
   return checked;

@@ -416,7 +416,11 @@ class Tile final : public Traversal {
         total_cells += n_cells[k];
         std::uint8_t* sel = &cell_sel_[static_cast<std::size_t>(k) * 256];  // the listed cells, for the pixels
         std::fill_n(sel, G * G, std::uint8_t{0});
-        for (int q = 0; q < n_cells[k]; ++q) sel[list[q]] = 1;
+        cell_bits_[k] = 0;
+        for (int q = 0; q < n_cells[k]; ++q) {
+          sel[list[q]] = 1;
+          if (list[q] < 64) cell_bits_[k] |= std::uint64_t(1) << list[q];
+        }
         // Time strata of the table index that overlap t̂_k: samples outside are never touched.
         const D slo = D(ti.tlo[k]) * D(NT), shi = D(ti.thi[k]) * D(NT);
         charge<A>(c_[Counter::ops_tile], cost::kTimeStrata);
@@ -461,8 +465,9 @@ class Tile final : public Traversal {
                 tiletest::MotionRegion r;
                 r.cell_sel = sel, r.j0 = j0, r.j1 = j1, r.t_lo = tk_lo, r.t_hi = tk_hi, r.lens = lens, r.su = &sx, r.sv = &sy;
                 r.cu = cu, r.cv = cv, r.u_lo = cul, r.u_hi = cuh, r.v_lo = cvl, r.v_hi = cvh;
-                checked = tiletest::select_motion(ps.ct_order, ps.ct_cell, ps.ct_stratum, ps.t, ps.u, ps.v, lo, hi, r,
-                                                  cand_.data(), n);
+                r.cell_bits_on = G * G <= 64, r.cell_bits = cell_bits_[k];
+                checked = tiletest::select_motion(ps.ct_order, ps.ct_cell, ps.ct_stratum, ps.ct_t, ps.ct_u, ps.ct_v, lo,
+                                                  hi, r, cand_.data(), n);
               } else
               for (int idx = lo; idx < hi; ++idx) {
                 const int j = ps.ct_stratum[idx];
@@ -490,7 +495,7 @@ class Tile final : public Traversal {
           charge<A>(c_[Counter::ops_sample_region], region_ops);
           if (p.count_optimal)
             c_[Counter::tile_samples_optimal] += tiletest::count_exact_region(tri, fp_dummy_, f_.fc, ps, cand_.data(), n, tx, ty, T);
-          for (int i = 0; i < n; ++i) pipe_.push(px, py, ps, cand_[i]);
+          pipe_.push_list(px, py, ps, cand_.data(), n);  // push() of each, the batch checked once
         }
     });
     pipe_.flush();
@@ -540,7 +545,7 @@ class Tile final : public Traversal {
   DepthCull<A, SamplePipeline<A>> zcull_;
   tiletest::CellMask lens_mask_;
   std::vector<int> cell_list_ = std::vector<int>(256);
-  std::vector<int> cand_ = std::vector<int>(f_.table.spp());  // one pixel's candidates
+  std::vector<int> cand_ = std::vector<int>(f_.table.spp() + 16);  // one pixel's candidates (+ select_motion's slack)
   tiletest::CellMask low64_;
   std::uint64_t lens_mask64_ = 0;
   std::vector<std::uint8_t> sel_ =
@@ -558,6 +563,7 @@ class Tile final : public Traversal {
   int strata_lo_[iv::kMaxSplits], strata_hi_[iv::kMaxSplits];
   std::vector<int> cell_lists_ = std::vector<int>(256 * iv::kMaxSplits);
   std::vector<std::uint8_t> cell_sel_ = std::vector<std::uint8_t>(256 * iv::kMaxSplits + 4);  // 1: a listed cell
+  std::uint64_t cell_bits_[iv::kMaxSplits] = {};  // the listed cells as bits (grids up to 8 x 8)
   const Footprint fp_dummy_{};  // in_exact_region reads no footprint for moving triangles
 };
 
