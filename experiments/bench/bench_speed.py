@@ -1,8 +1,9 @@
 """`make bench`: simulator speed against the work it simulates, and the explicit-SIMD sample tests.
 
 1. Wall time per algorithm, scene and thread count, timing model off and on, beside the operations each counts, as ratios
-   to brute force measured in one run: bunny 512^2 at CoC 10 and 50 px and modern_hall (a
-   1920x1080 frame scaled by --hall-scale, default 1/2), 64 spp. The renders of one (scene,
+   to brute force measured in one run: bunny 512^2 at CoC 10 and 50 px, modern_hall (a
+   1920x1080 frame scaled by --hall-scale, default 1/2) and motion_field (400 moving triangles,
+   640x480, CoC 10 px: the moving, defocused triangles of the 5D paths), 64 spp. The renders of one (scene,
    threads) cell are interleaved (A, B, C, A, B, C, ...) over several repeats and the minimum is
    kept, so load from other processes shifts all of them alike; no figure is compared against a
    fixed time. ``tile+optimal`` is tile with ``count_optimal: true`` (the Table 1 instrumentation).
@@ -50,6 +51,8 @@ def _scenes(hall_scale: float, quick: bool):
     scenes = [("bunny", bunny, size, size, 10.0), ("bunny", bunny, size, size, 50.0), ("modern_hall", hall, hw, hh, 10.0)]
     if not quick and (hw, hh) != (1920, 1080):  # the large interior at 1080p (modern_hall stands in)
         scenes.append(("modern_hall", hall, 1920, 1080, 10.0))
+    mw, mh = (320, 240) if quick else (640, 480)
+    scenes.append(("motion_field", models.named("motion_field"), mw, mh, 10.0))
     return scenes
 
 

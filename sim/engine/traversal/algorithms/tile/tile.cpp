@@ -400,6 +400,9 @@ class Tile final : public Traversal {
       int n_cells[iv::kMaxSplits];
       int total_cells = 0;
       bool h5_culled = false;  // H5 removed the last cells of some sub-interval
+      // Grids up to 8 x 8 on the vectorised path: the listed cells are the bits of cell_bits_[k].
+      constexpr bool kVectorSelect = !A::counting && tiletest::kMotionSelectVector;
+      const bool bits_only = kVectorSelect && G * G <= 64;
       for (int k = 0; k < S; ++k) {
         n_cells[k] = 0;
         if (!ti.active[k]) continue;
@@ -412,15 +415,18 @@ class Tile final : public Traversal {
         }
         ActiveCells cells = active_cells(bx, by, G, lens_mask_, lens_mask64_);
         if (p.halfspace_H5 && h5_.sub[k].usable && !cells.none()) h5_cull(k, x0, x1, y0, y1, ti, cells, h5_culled);
-        n_cells[k] = cells.list(list, G);
-        total_cells += n_cells[k];
-        std::uint8_t* sel = &cell_sel_[static_cast<std::size_t>(k) * 256];  // the listed cells, for the pixels
-        std::fill_n(sel, G * G, std::uint8_t{0});
-        cell_bits_[k] = 0;
-        for (int q = 0; q < n_cells[k]; ++q) {
-          sel[list[q]] = 1;
-          if (list[q] < 64) cell_bits_[k] |= std::uint64_t(1) << list[q];
+        if (bits_only) {  // the vectorised selection reads the cells as bits: no list, no flags
+          cell_bits_[k] = cells.bits64;
+          n_cells[k] = __builtin_popcountll(cells.bits64);
+          if (n_cells[k]) first_cell_[k] = __builtin_ctzll(cells.bits64), last_cell_[k] = 63 - __builtin_clzll(cells.bits64);
+        } else {
+          n_cells[k] = cells.list(list, G);
+          if (n_cells[k]) first_cell_[k] = list[0], last_cell_[k] = list[n_cells[k] - 1];
+          std::uint8_t* sel = &cell_sel_[static_cast<std::size_t>(k) * 256];  // the listed cells, for the pixels
+          std::fill_n(sel, G * G, std::uint8_t{0});
+          for (int q = 0; q < n_cells[k]; ++q) sel[list[q]] = 1;
         }
+        total_cells += n_cells[k];
         // Time strata of the table index that overlap t̂_k: samples outside are never touched.
         const D slo = D(ti.tlo[k]) * D(NT), shi = D(ti.thi[k]) * D(NT);
         charge<A>(c_[Counter::ops_tile], cost::kTimeStrata);
@@ -452,7 +458,6 @@ class Tile final : public Traversal {
             // per sample: t̂, the lens cuts (5D), each clipped lens axis
             const std::uint64_t per = cost::kSampleTime + (lens ? sx.n_cmp + sy.n_cmp : 0) +
                                       (cu ? cost::kSampleClipAxis : 0) + (cv ? cost::kSampleClipAxis : 0);
-            const int* list = &cell_lists_[static_cast<std::size_t>(k) * 256];
             const std::uint8_t* sel = &cell_sel_[static_cast<std::size_t>(k) * 256];
             int checked = 0;
             const int j0 = strata_lo_[k], j1 = strata_hi_[k];
@@ -460,12 +465,12 @@ class Tile final : public Traversal {
             // lists them by (cell, stratum), so they are the entries of the span from the first such
             // bucket to the last whose cell is listed and whose stratum is in range.
             if (n_cells[k] > 0 && j0 <= j1) {
-              const int lo = ps.ct_offsets[list[0] * NT + j0], hi = ps.ct_offsets[list[n_cells[k] - 1] * NT + j1 + 1];
+              const int lo = ps.ct_offsets[first_cell_[k] * NT + j0], hi = ps.ct_offsets[last_cell_[k] * NT + j1 + 1];
               if constexpr (!A::counting && tiletest::kMotionSelectVector) {
                 tiletest::MotionRegion r;
                 r.cell_sel = sel, r.j0 = j0, r.j1 = j1, r.t_lo = tk_lo, r.t_hi = tk_hi, r.lens = lens, r.su = &sx, r.sv = &sy;
                 r.cu = cu, r.cv = cv, r.u_lo = cul, r.u_hi = cuh, r.v_lo = cvl, r.v_hi = cvh;
-                r.cell_bits_on = G * G <= 64, r.cell_bits = cell_bits_[k];
+                r.cell_bits_on = bits_only, r.cell_bits = cell_bits_[k];
                 checked = tiletest::select_motion(ps.ct_order, ps.ct_cell, ps.ct_stratum, ps.ct_t, ps.ct_u, ps.ct_v, lo,
                                                   hi, r, cand_.data(), n);
               } else
@@ -563,7 +568,8 @@ class Tile final : public Traversal {
   int strata_lo_[iv::kMaxSplits], strata_hi_[iv::kMaxSplits];
   std::vector<int> cell_lists_ = std::vector<int>(256 * iv::kMaxSplits);
   std::vector<std::uint8_t> cell_sel_ = std::vector<std::uint8_t>(256 * iv::kMaxSplits + 4);  // 1: a listed cell
-  std::uint64_t cell_bits_[iv::kMaxSplits] = {};  // the listed cells as bits (grids up to 8 x 8)
+  std::uint64_t cell_bits_[iv::kMaxSplits] = {};  // the listed cells as bits (grids up to 8 x 8, vectorised path)
+  int first_cell_[iv::kMaxSplits] = {}, last_cell_[iv::kMaxSplits] = {};  // the lowest and highest listed cell
   const Footprint fp_dummy_{};  // in_exact_region reads no footprint for moving triangles
 };
 
