@@ -37,11 +37,16 @@ def vertex_normals(positions: np.ndarray) -> np.ndarray:
     face = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])  # length = 2 x area
     flat = p.reshape(-1, 3)
     scale = max(float(np.abs(flat).max()), 1e-30) if len(flat) else 1.0
-    keys = np.round(flat / scale * 2**20).astype(np.int64)
-    _, inverse = np.unique(keys, axis=0, return_inverse=True)
+    # Each coordinate rounds to an integer in [-2^20, 2^20]; the three fit one uint64 key (base 2^21 + 1),
+    # so positions group by a 1-D unique (a row-wise unique sorts structured rows: ten times as long).
+    keys = (np.round(flat / scale * 2**20).astype(np.int64) + 2**20).astype(np.uint64)
+    base = np.uint64(2**21 + 1)
+    _, inverse = np.unique((keys[:, 0] * base + keys[:, 1]) * base + keys[:, 2], return_inverse=True)
     inverse = inverse.reshape(-1)
-    acc = np.zeros((inverse.max() + 1 if len(inverse) else 0, 3))
-    np.add.at(acc, inverse, np.repeat(face, 3, axis=0))
+    # Per group, the face normals summed in vertex order (as np.add.at adds them), one axis at a time.
+    face3 = np.repeat(face, 3, axis=0)
+    groups = inverse.max() + 1 if len(inverse) else 0
+    acc = np.stack([np.bincount(inverse, weights=face3[:, k], minlength=groups) for k in range(3)], axis=1)
     n = acc[inverse].reshape(-1, 3, 3)
     length = np.linalg.norm(n, axis=-1, keepdims=True)
     fallback = np.repeat(face[:, None, :], 3, axis=1)

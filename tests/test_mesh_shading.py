@@ -30,6 +30,40 @@ def test_headlight_matches_the_closed_form_on_a_plane():
     np.testing.assert_allclose(lit.colors[..., 0], 0.5 * (shading.AMBIENT + (1 - shading.AMBIENT) * cos), rtol=1e-6)
 
 
+def _smooth_normals_by_loops(p: np.ndarray) -> np.ndarray:
+    """vertex_normals' definition, vertex by vertex: the area-weighted face normals of every triangle with
+    a corner at the same position, summed in corner order, made unit (+z for no area, the face's own
+    normal where the sum cancels)."""
+    face = [np.cross(t[1] - t[0], t[2] - t[0]) for t in p]
+    corners = [(i, k) for i in range(len(p)) for k in range(3)]
+    out = np.zeros_like(p)
+    for i, k in corners:
+        acc = np.zeros(3)
+        for j, m in corners:
+            if np.array_equal(p[j, m], p[i, k]):
+                acc = acc + face[j]
+        n = acc if np.linalg.norm(acc) > 0 else face[i]
+        out[i, k] = n / np.linalg.norm(n) if np.linalg.norm(n) > 0 else (0.0, 0.0, 1.0)
+    return out
+
+
+def test_vertex_normals_sum_the_faces_at_each_shared_position():
+    """Smooth normals against a loop over every pair of corners: a closed octahedron (every position
+    shared by four faces), a fan whose faces differ in area, a degenerate triangle and a pair of
+    faces whose normals cancel; positions up to 10^4 on an axis and as small as 10^-4."""
+    rng = np.random.default_rng(5)
+    v = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], float)
+    octa = [[v[a], v[c], v[e]] for a in (0, 1) for c in (2, 3) for e in (4, 5)]
+    octa = [t if np.dot(np.cross(t[1] - t[0], t[2] - t[0]), t[0] + t[1] + t[2]) > 0 else t[::-1] for t in octa]
+    fan = [[np.zeros(3), [np.cos(a), np.sin(a), rng.uniform(0, 1)], [np.cos(b), np.sin(b), rng.uniform(0, 1)]]
+           for a, b in zip(np.linspace(0, 5, 6), np.linspace(1, 6, 6))]
+    flat = [[[5, 5, 5], [6, 5, 5], [7, 5, 5]]]  # no area
+    cancel = [[[9, 0, 0], [10, 0, 0], [9, 1, 0]], [[9, 0, 0], [9, 1, 0], [10, 0, 0]]]
+    for scale in (1.0, 1e4, 1e-4):
+        p = np.asarray(octa + fan + flat + cancel, float) * scale + rng.uniform(-3, 3, size=3).round() * scale
+        np.testing.assert_allclose(shading.vertex_normals(p), _smooth_normals_by_loops(p), rtol=1e-12, atol=1e-12)
+
+
 def test_the_bunny_reads_as_a_shape_and_flat_switches_it_off():
     shaded = models.named("bunny", width=64, height=64)
     flat = models.named("bunny", width=64, height=64, shading="flat")
