@@ -123,6 +123,88 @@ inline std::uint64_t line_interval(const LinePoint<F>& q, F c, F s, bool near_fn
   return cost::line_interval_cost(n_fns, n_flat);
 }
 
+// line_point_setup() and line_interval() for a batch of lines on the fast path (float, no counting):
+// the same IEEE operations in the same order, without branches, so that the compiler vectorises the
+// loop over lines and every figure keeps its bits (tests/test_lines.py compares the counting path,
+// which runs the functions above, on every counter and the image). Lines sharing a screen point
+// each repeat its setup (the same arithmetic; cost::kLinePointSetup is charged once per wheel
+// by the caller). Per line i: nseg[i] intervals [lo[k][i], hi[k][i]] (the first holds the
+// det > 0 interval when both exist, as line_interval's order), nflat[i] for line_interval_cost(),
+// and the functions of p in fn[...][i] (LineFns: e0[3], eg[3], d0, dg, s0, sg).
+struct LineBatch {
+  static constexpr int kLanes = 64;
+  float sx[kLanes], sy[kLanes], c[kLanes], s[kLanes];
+  float lo[2][kLanes], hi[2][kLanes];
+  float fn[10][kLanes];
+  int nseg[kLanes], nflat[kLanes];
+};
+
+template <bool kNear>
+inline void line_intervals_batch(const float X[3], const float Y[3], const float W[3], const float cx[3],
+                                 const float cy[3], float neg_near, bool back_face_cull, int n, LineBatch& b) {
+#pragma GCC ivdep
+  for (int i = 0; i < n; ++i) {
+    LinePoint<float> q;
+    line_point_setup(X, Y, W, cx, cy, b.sx[i], b.sy[i], neg_near, q);
+    const float c = b.c[i], s = b.s[i];
+    float g[5], f0[5];
+    for (int k = 0; k < 3; ++k) {
+      f0[k] = q.e0[k], g[k] = madd(s, q.ev[k], c * q.eu[k]);
+      b.fn[k][i] = q.e0[k], b.fn[3 + k][i] = g[k];
+    }
+    const float dg = madd(s, q.dv, c * q.du), sg = madd(s, q.sv, c * q.su);
+    b.fn[6][i] = q.d0, b.fn[7][i] = dg, b.fn[8][i] = q.s0, b.fn[9][i] = sg;
+    f0[3] = q.d0, g[3] = dg;
+    if constexpr (kNear) f0[4] = q.h0, g[4] = madd(s, q.hv, c * q.hu);
+    constexpr int n_fns = kNear ? 5 : 4;
+    float lo_p = -1.0f, hi_p = 1.0f, lo_n = -1.0f, hi_n = 1.0f;
+    // Bitwise logic and selects only (no && or ||): a loop without branches.
+    int empty_p = back_face_cull, empty_n = 0, n_flat = 0;
+    for (int k = 0; k < n_fns; ++k) {
+      const int up = g[k] > 0.0f, down = g[k] < 0.0f, flat = 1 ^ (up | down);  // sign_of(g) == 0: NaN too
+      n_flat += flat;
+      empty_p |= flat & (1 ^ int(f0[k] > 0.0f));  // sign_of(f0) <= 0
+      empty_n |= flat & (1 ^ int(f0[k] < 0.0f));  // sign_of(f0) >= 0
+      const float r = -f0[k] * rcp(g[k]);  // only used where g has a sign
+      lo_p = up ? vmax(lo_p, r) : lo_p;
+      hi_n = up ? vmin(hi_n, r) : hi_n;
+      hi_p = down ? vmin(hi_p, r) : hi_p;
+      lo_n = down ? vmax(lo_n, r) : lo_n;
+    }
+    const int seg_p = int(lo_p < hi_p) & (1 ^ empty_p), seg_n = int(lo_n < hi_n) & (1 ^ empty_n);
+    b.lo[0][i] = seg_p ? lo_p : lo_n, b.hi[0][i] = seg_p ? hi_p : hi_n;
+    b.lo[1][i] = lo_n, b.hi[1][i] = hi_n;
+    b.nseg[i] = seg_p + seg_n;
+    b.nflat[i] = n_flat;
+  }
+}
+
+// The tile clip's test of lines against the pseudo-angle intervals of up to four uv-boxes, for a batch
+// of lines on the fast path: pseudo_angle() of each direction and the box tests, both sides of every
+// choice computed and one selected (the same figures as pseudo_angle() and the caller's scalar loop,
+// without branches, so that the loop vectorises). meets[i]: a box's interval holds line i's angle;
+// tested[i]: the boxes tested until the first that holds it (all of them when none does), as the
+// scalar loop stops there (cost::kLineAngleTest each).
+inline void lines_meet_boxes(const float* c, const float* s, int n, int n_boxes, const float lo[4], const float hi[4],
+                             const bool shifted[4], int* meets, int* tested) {
+#pragma GCC ivdep
+  for (int i = 0; i < n; ++i) {
+    const int fold = s[i] < 0.0f;
+    const float x = fold ? -c[i] : c[i], y = fold ? -s[i] : s[i];
+    const float a_right = y * rcp(x + y), a_left = 1.0f - x * rcp(y - x);
+    float a = x >= 0.0f ? a_right : a_left;
+    a = a >= 2.0f ? a - 2.0f : a;
+    int met = 0, count = 0;
+    for (int k = 0; k < 4; ++k) {
+      const int live = int(k < n_boxes) & (1 ^ met);  // the scalar loop tests box k
+      const float la = (int(shifted[k]) & int(a < 1.0f)) ? a + 2.0f : a;
+      count += live;
+      met |= live & int(lo[k] <= la) & int(la <= hi[k]);
+    }
+    meets[i] = met, tested[i] = count;
+  }
+}
+
 // Evaluate the segment's shading point p: the hit depth z = 1 - near·sum/det and the perspective
 // barycentrics' colour (as backend/sample_backend.h does for a point sample); with `bary`, the
 // barycentrics themselves (texture coordinates, the shading cache's grid point).

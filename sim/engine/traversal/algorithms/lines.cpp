@@ -127,8 +127,8 @@ class Lines final : public Traversal {
   struct Boxes {
     int n = 0;
     bool all_lines = false;  // a box holds the lens centre
-    float lo[4], hi[4];      // pseudo-angle interval of the lines meeting each box
-    bool shifted[4];
+    float lo[4]{}, hi[4]{};  // pseudo-angle interval of the lines meeting each box
+    bool shifted[4]{};
   };
 
   void open_bin(const BinRect& bin) {
@@ -167,6 +167,10 @@ class Lines final : public Traversal {
   }
 
   void pixel(const TriSetup& tri, int px, int py, const Boxes* boxes) {
+    if constexpr (!A::counting) {
+      pixel_batched(tri, px, py, boxes);
+      return;
+    }
     const PixelSamples ps = f_.table.pixel(px, py);
     const int spp = f_.table.spp();
     const F neg_near = F(f_.fc.neg_near);
@@ -207,6 +211,63 @@ class Lines final : public Traversal {
       charge<A>(c_[Counter::ops_sample_inside], test_ops);
       ++c_[Counter::lines_tests];
       for (int k = 0; k < cov.n; ++k) offer(tri, cov, cov.lo[k], cov.hi[k], px, py, s, k);
+    }
+  }
+
+  // pixel() on the fast path: the tile clip's angle test per line as there, then the lines that pass,
+  // up to LineBatch::kLanes at a time, through line_intervals_batch (vectorised over lines; the same
+  // figures), then their segments offered in line order.
+  void pixel_batched(const TriSetup& tri, int px, int py, const Boxes* boxes) {
+    const PixelSamples ps = f_.table.pixel(px, py);
+    const int spp = f_.table.spp();
+    const float neg_near = f_.fc.neg_near;
+    bool have_q = false;
+    float qx = 0.0f, qy = 0.0f;
+    int line[LineBatch::kLanes], meets[LineBatch::kLanes], tested[LineBatch::kLanes];
+    std::uint64_t setups = 0, test_ops = 0, box_ops = 0, culled = 0;
+    for (int base = 0; base < spp; base += LineBatch::kLanes) {
+      const int m = std::min(LineBatch::kLanes, spp - base);
+      if (boxes) {  // tile clip: does the line's direction fall in a box's interval?
+        lines_meet_boxes(ps.u + base, ps.v + base, m, boxes->n, boxes->lo, boxes->hi, boxes->shifted, meets, tested);
+        for (int j = 0; j < m; ++j) box_ops += cost::kLineAngleTest * static_cast<std::uint64_t>(tested[j]);
+      }
+      int n = 0;
+      for (int j = 0; j < m; ++j) {
+        if (boxes && !meets[j]) {
+          ++culled;
+          continue;
+        }
+        const int s = base + j;
+        const float sx = static_cast<float>(px) + ps.x[s], sy = static_cast<float>(py) + ps.y[s];
+        if (!have_q || sx != qx || sy != qy) ++setups, have_q = true, qx = sx, qy = sy;  // a new wheel
+        batch_.sx[n] = sx, batch_.sy[n] = sy, batch_.c[n] = ps.u[s], batch_.s[n] = ps.v[s], line[n] = s;
+        ++n;
+      }
+      if (n) test_batch(tri, px, py, n, line, neg_near, test_ops);
+    }
+    charge<A>(c_[Counter::ops_sample_region], box_ops);
+    c_[Counter::lines_culled_tile] += culled;
+    charge<A>(c_[Counter::ops_sample_inside], setups * cost::kLinePointSetup + test_ops);
+    c_[Counter::lines_point_setups] += setups;
+  }
+
+  void test_batch(const TriSetup& tri, int px, int py, int n, const int* line, float neg_near, std::uint64_t& ops) {
+    if (tri.near_clipped)
+      line_intervals_batch<true>(tri.X, tri.Y, tri.W, tri.cx, tri.cy, neg_near, f_.p.backface_cull, n, batch_);
+    else
+      line_intervals_batch<false>(tri.X, tri.Y, tri.W, tri.cx, tri.cy, neg_near, f_.p.backface_cull, n, batch_);
+    const int n_fns = tri.near_clipped ? 5 : 4;
+    c_[Counter::lines_tests] += static_cast<std::uint64_t>(n);
+    for (int i = 0; i < n; ++i) {
+      ops += cost::line_interval_cost(n_fns, batch_.nflat[i]);
+      if (!batch_.nseg[i]) continue;
+      LineCoverage<F> cov;
+      cov.n = batch_.nseg[i];
+      for (int k = 0; k < 3; ++k) cov.fn.e0[k] = F(batch_.fn[k][i]), cov.fn.eg[k] = F(batch_.fn[3 + k][i]);
+      cov.fn.d0 = F(batch_.fn[6][i]), cov.fn.dg = F(batch_.fn[7][i]);
+      cov.fn.s0 = F(batch_.fn[8][i]), cov.fn.sg = F(batch_.fn[9][i]);
+      for (int k = 0; k < cov.n; ++k) cov.lo[k] = batch_.lo[k][i], cov.hi[k] = batch_.hi[k][i];
+      for (int k = 0; k < cov.n; ++k) offer(tri, cov, cov.lo[k], cov.hi[k], px, py, line[i], k);
     }
   }
 
@@ -312,6 +373,7 @@ class Lines final : public Traversal {
   BinRect bin_{};
   bool open_ = false;
   std::vector<std::vector<Segment>> segs_;
+  LineBatch batch_;  // pixel_batched: the lines of a pixel under test
   std::vector<float> scratch_;
 };
 
