@@ -218,7 +218,8 @@ def main(argv=None) -> int:
     jobs = [json.loads(line) for line in point_log.read_text().splitlines()] if point_log.exists() else []
     if args.json:
         Path(args.json).write_text(json.dumps({"configs": log, "jobs": jobs, "cpu": cpu, "wall": wall,
-                                               "loads": loads, "rc": rc, "probe": probe}, indent=1))
+                                               "loads": loads, "rc": rc, "probe": probe, "started": started,
+                                               "label": args.label}, indent=1))
     lines = _page(log, jobs, cpu, wall, loads, args, started, rc, probe)
     if args.compare:
         lines += compare(json.loads(Path(args.compare).read_text()), {"configs": log, "jobs": jobs, "cpu": cpu})
@@ -350,7 +351,9 @@ def compare(before: dict, after: dict) -> list[str]:
                      if b.get(name) else ""])
     both = [n for n in a if n in b]
     sb, sa = sum(b[n] for n in both), sum(a[n] for n in both)
-    return ["", "## Against an earlier run", "", before.get("label", ""), "",
+    said = before.get("label") or "no label"
+    when = f"started {before['started']}" if before.get("started") else "start time not recorded"
+    return ["", "## Against an earlier run", "", f"The earlier run: {said} ({when}).", "",
             f"Configs measured in both: {len(both)}; their points and references: {sb:.0f} CPU-s before, "
             f"{sa:.0f} after ({sa / sb:.2f}x). Whole earlier run: {before.get('cpu', float('nan')):.0f} CPU-s "
             f"(RUSAGE) for {len(b)} configs, {before.get('cpu', 0.0) - sum(b.values()):.0f} of them outside "
