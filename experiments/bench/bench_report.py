@@ -186,7 +186,7 @@ def main(argv=None) -> int:
     ap.add_argument("--only", nargs="*", default=None, help="configs or pages (default: the whole report)")
     ap.add_argument("--out", default=None, help="the page to write (default reports/bench/bench_report.md)")
     ap.add_argument("--json", default=None, help="also write the raw records here")
-    ap.add_argument("--label", default="", help="a line saying what was measured (code revision, state)")
+    ap.add_argument("--label", default="", help="a line saying what was measured (a state, not a revision: committed pages carry no revision)")
     ap.add_argument("--keep", action="store_true", help="keep the temporary store and pages")
     ap.add_argument("--compare", default=None,
                     help="the --json of an earlier run (another code revision): a per-config table of both")
